@@ -1,0 +1,1 @@
+"""Bundled vehicle model files (TOML); installed as ``profileopt.models``."""

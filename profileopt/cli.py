@@ -1,0 +1,77 @@
+"""The ``profileopt`` command: a thin layer that parses arguments, calls the library and
+formats its output.
+
+Every user mistake surfaces as :class:`~profileopt.errors.InputError`: one line on stderr,
+exit status 2, no traceback (``--debug`` shows one). Anything else is an internal error:
+one line, exit status 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import traceback
+from typing import Callable, Sequence
+
+from .errors import InputError
+
+__all__ = ["main", "build_parser"]
+
+# Each sub-command registers itself here: name -> (adds its arguments, runs it).
+# A runner takes the parsed arguments and returns the exit status.
+_COMMANDS: dict[str, tuple[str, Callable[[argparse.ArgumentParser], None], Callable[[argparse.Namespace], int]]] = {}
+
+
+def command(name: str, help_text: str):
+    """Register ``run(args) -> int`` as sub-command ``name``; ``run.arguments(parser)`` adds its options."""
+
+    def decorate(run: Callable[[argparse.Namespace], int]) -> Callable[[argparse.Namespace], int]:
+        _COMMANDS[name] = (help_text, getattr(run, "arguments", lambda p: None), run)
+        return run
+
+    return decorate
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every registered sub-command."""
+    parser = argparse.ArgumentParser(
+        prog="profileopt",
+        description="Terrain-force-limited, minimum-time speed profiles for ground vehicles.",
+    )
+    parser.add_argument("--debug", action="store_true", help="show a traceback on any error")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for name, (help_text, add_arguments, _run) in _COMMANDS.items():
+        p = sub.add_parser(name, help=help_text, description=help_text)
+        add_arguments(p)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; returns the exit status (0 ok, 1 internal error, 2 bad input)."""
+    from . import commands  # noqa: F401  (registers the sub-commands)
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return _COMMANDS[args.command][2](args)
+    except InputError as exc:
+        if args.debug:
+            traceback.print_exc()
+        print(f"profileopt {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"profileopt {args.command}: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # an internal error: still one line unless --debug
+        if args.debug:
+            traceback.print_exc()
+        print(
+            f"profileopt {args.command}: internal error: {type(exc).__name__}: {exc} "
+            "(run again with --debug for a traceback and report it)",
+            file=sys.stderr,
+        )
+        return 1
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,239 @@
+"""The four quarter-car force models, each written once as a CasADi expression.
+
+Every function here builds the force a model predicts when the vehicle drives at speed V
+over terrain of a given roughness. Thanks to :func:`profileopt._casadi.elementwise` each
+one takes plain numbers, numpy arrays, ``casadi.DM``, ``SX`` or ``MX`` and returns the same
+kind, so the planner, the constraint exports, the C code and the numeric evaluation all use
+these very expressions. The models know nothing of any optimisation problem.
+
+Equation numbers are those of Wilson et al. (``shared/paper``); ``NOTES.md`` holds the
+errata applied here. Quarter-car constants: k = m wn^2, c = 2 zeta m wn.
+
+Models
+------
+``prev_bem``
+    Prev:BEM, the base-excitation model of the paper's reference [11], as *reconstructed*
+    in NOTES.md (the text of [11] is not available): a sinusoid of amplitude
+    Y = sqrt(2) RI h at the estimated maximum terrain frequency f, F = k Y sqrt(1 + (2 zeta
+    w / wn)^2) with w = 2 pi f V. Limited by ``max_excitation_force_n``.
+``iecm``
+    Instantaneous Elevation Change Model (Eq. 6): F = k e (1 + 2 zeta V / (wn X_w)).
+    Limited by ``max_excitation_force_n``.
+``sbem_ef``
+    Sinusoidal Base Excitation Model, excitation force (Eq. 9-11, simplified exactly as in
+    NOTES.md): F = e sqrt(k^2 + (c w_b)^2), w_b = pi V / (2 X_w) (Eq. 12). Limited by
+    ``max_excitation_force_n``.
+``sbem_tf``
+    Sinusoidal Base Excitation Model, transmitted force (Eq. 12-13): F_T = k e r^2 sqrt((1 +
+    (2 zeta r)^2) / ((1 - r^2)^2 + (2 zeta r)^2)), r = w_b / wn. Not monotone in V for a
+    lightly damped suspension (resonance). Limited by ``max_transmitted_force_n``.
+
+For the three paper models e is the worst-case elevation e_max of Eq. (8); at e = 0
+(perfectly smooth ground, RI = 0) the force is 0 (NOTES.md: no force limit).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import TYPE_CHECKING, Any, Callable
+
+import casadi as ca
+
+from ._casadi import elementwise, is_symbolic
+from .terrain import _check_ri, step_width, worst_case_elevation
+
+if TYPE_CHECKING:
+    from .vehicle import Vehicle
+
+__all__ = [
+    "ForceModel",
+    "MODELS",
+    "get_model",
+    "force_n",
+    "iecm_force_n",
+    "sbem_ef_force_n",
+    "sbem_tf_force_n",
+    "prev_bem_force_n",
+    "base_frequency_radps",
+]
+
+
+@elementwise
+def base_frequency_radps(speed_mps: Any, e_max_m: Any, vehicle: "Vehicle") -> Any:
+    """SBEM base-excitation frequency w_b = pi V / (2 X_w) (Eq. 12), in rad/s.
+
+    The step of width X_w is climbed in a quarter period of the sinusoid (Fig. 4).
+    """
+    return math.pi * speed_mps / (2.0 * step_width(e_max_m, vehicle))
+
+
+def _smooth_ground_is_zero(e_max_m: Any, force: Any) -> Any:
+    # RI = 0 makes every formula 0/0; the limit is no force at all (NOTES.md).
+    return ca.if_else(e_max_m > 0, force, 0)
+
+
+@elementwise
+def iecm_force_n(speed_mps: Any, e_max_m: Any, vehicle: "Vehicle") -> Any:
+    """IECM excitation force F = k e (2 zeta V / (wn X_w) + 1) (Eq. 6, F_hat = F / k), in N.
+
+    Parameters
+    ----------
+    speed_mps : number, array, DM, SX or MX
+        Forward speed V (m/s).
+    e_max_m : number, array, DM, SX or MX
+        Step height e (m), usually e_max of Eq. (8).
+    vehicle : Vehicle
+        Quarter-car constants.
+    """
+    k, zeta, wn = vehicle.spring_n_per_m, vehicle.damping_ratio, vehicle.natural_frequency_radps
+    x_w = step_width(e_max_m, vehicle)
+    return _smooth_ground_is_zero(e_max_m, k * e_max_m * (2.0 * zeta * speed_mps / (wn * x_w) + 1.0))
+
+
+@elementwise
+def sbem_ef_force_n(speed_mps: Any, e_max_m: Any, vehicle: "Vehicle") -> Any:
+    """SBEM:EF peak excitation force F_max = e sqrt(k^2 + (c w_b)^2) (Eq. 11), in N.
+
+    Eq. (11) with t_max of Eq. (10) substituted reduces exactly to this form (NOTES.md),
+    which is defined at V = 0 as well (F = k e, the static force).
+
+    Parameters
+    ----------
+    speed_mps : number, array, DM, SX or MX
+        Forward speed V (m/s).
+    e_max_m : number, array, DM, SX or MX
+        Elevation amplitude e (m), usually e_max of Eq. (8).
+    vehicle : Vehicle
+        Quarter-car constants.
+    """
+    k, c = vehicle.spring_n_per_m, vehicle.damping_ns_per_m
+    w_b = base_frequency_radps(speed_mps, e_max_m, vehicle)
+    return _smooth_ground_is_zero(e_max_m, e_max_m * ca.sqrt(k**2 + (c * w_b) ** 2))
+
+
+@elementwise
+def sbem_tf_force_n(speed_mps: Any, e_max_m: Any, vehicle: "Vehicle") -> Any:
+    """SBEM:TF peak force transmitted to the frame (Eq. 13), in N.
+
+    F_T = k e r^2 sqrt((1 + (2 zeta r)^2) / ((1 - r^2)^2 + (2 zeta r)^2)), r = w_b / wn,
+    the textbook base-excitation force transmissibility (Inman, Engineering Vibration,
+    section 2.4), checked against a time-domain simulation (NOTES.md).
+
+    Parameters
+    ----------
+    speed_mps : number, array, DM, SX or MX
+        Forward speed V (m/s).
+    e_max_m : number, array, DM, SX or MX
+        Elevation amplitude e (m), usually e_max of Eq. (8).
+    vehicle : Vehicle
+        Quarter-car constants.
+    """
+    k, zeta, wn = vehicle.spring_n_per_m, vehicle.damping_ratio, vehicle.natural_frequency_radps
+    r = base_frequency_radps(speed_mps, e_max_m, vehicle) / wn
+    damping = (2.0 * zeta * r) ** 2
+    ratio = (1.0 + damping) / ((1.0 - r**2) ** 2 + damping)
+    return _smooth_ground_is_zero(e_max_m, k * e_max_m * r**2 * ca.sqrt(ratio))
+
+
+@elementwise
+def prev_bem_force_n(speed_mps: Any, ri: Any, vehicle: "Vehicle") -> Any:
+    """Prev:BEM excitation force, the project's reconstruction of reference [11], in N.
+
+    F = k Y sqrt(1 + (2 zeta w / wn)^2) with Y = sqrt(2) RI h (the amplitude of a sinusoid
+    whose RI is RI) and w = 2 pi f V at the estimated maximum terrain frequency f
+    (``terrain_frequency_cpm``). A reconstruction, labelled as such: see NOTES.md.
+
+    Parameters
+    ----------
+    speed_mps : number, array, DM, SX or MX
+        Forward speed V (m/s).
+    ri : number, array, DM, SX or MX
+        Roughness index (dimensionless).
+    vehicle : Vehicle
+        Quarter-car constants and f (cycles/m).
+    """
+    k, zeta, wn = vehicle.spring_n_per_m, vehicle.damping_ratio, vehicle.natural_frequency_radps
+    amplitude = math.sqrt(2.0) * ri * vehicle.ground_clearance_m
+    w = 2.0 * math.pi * vehicle.terrain_frequency_cpm * speed_mps
+    return k * amplitude * ca.sqrt(1.0 + (2.0 * zeta * w / wn) ** 2)
+
+
+def _of_e_max(force_of_e: Callable) -> Callable:
+    def builder(speed_mps: Any, ri: Any, vehicle: "Vehicle") -> Any:
+        return force_of_e(speed_mps, worst_case_elevation(ri, vehicle), vehicle)
+
+    builder.__name__ = force_of_e.__name__ + "_of_ri"
+    return builder
+
+
+@dataclasses.dataclass(frozen=True)
+class ForceModel:
+    """One of the four force models and the vehicle limit it is held to.
+
+    Attributes
+    ----------
+    key : str
+        ``"prev_bem"``, ``"iecm"``, ``"sbem_ef"`` or ``"sbem_tf"``.
+    label : str
+        The paper's name, e.g. ``"SBEM:TF"``.
+    limit_key : str
+        The vehicle attribute holding its force limit (N).
+    quantity : str
+        ``"excitation"`` or ``"transmitted"``.
+    of_ri : callable
+        ``of_ri(speed_mps, ri, vehicle)``: the force (N) against speed (m/s) and RI, for
+        any kind of argument (numbers, arrays, DM, SX, MX).
+    """
+
+    key: str
+    label: str
+    limit_key: str
+    quantity: str
+    of_ri: Callable
+
+    def limit_n(self, vehicle: "Vehicle") -> float:
+        """The force limit this model is held to (N)."""
+        return float(getattr(vehicle, self.limit_key))
+
+    def force_n(self, speed_mps: Any, ri: Any, vehicle: "Vehicle") -> Any:
+        """The predicted force (N) at speed (m/s) over terrain of roughness ``ri``."""
+        if not is_symbolic(ri):
+            _check_ri(ri)
+        return self.of_ri(speed_mps, ri, vehicle)
+
+
+MODELS: dict[str, ForceModel] = {
+    "prev_bem": ForceModel("prev_bem", "Prev:BEM", "max_excitation_force_n", "excitation", prev_bem_force_n),
+    "iecm": ForceModel("iecm", "IECM", "max_excitation_force_n", "excitation", elementwise(_of_e_max(iecm_force_n))),
+    "sbem_ef": ForceModel("sbem_ef", "SBEM:EF", "max_excitation_force_n", "excitation", elementwise(_of_e_max(sbem_ef_force_n))),
+    "sbem_tf": ForceModel("sbem_tf", "SBEM:TF", "max_transmitted_force_n", "transmitted", elementwise(_of_e_max(sbem_tf_force_n))),
+}
+
+
+def get_model(model: str) -> ForceModel:
+    """The :class:`ForceModel` called ``model``; ``ValueError`` naming the choices otherwise."""
+    try:
+        return MODELS[model]
+    except (KeyError, TypeError):
+        raise ValueError(f"model {model!r} is unknown; choose one of {', '.join(MODELS)}") from None
+
+
+def force_n(model: str, speed_mps: Any, ri: Any, vehicle: "Vehicle") -> Any:
+    """The force (N) that ``model`` predicts at ``speed_mps`` over terrain of RI ``ri``.
+
+    Parameters
+    ----------
+    model : str
+        ``"prev_bem"``, ``"iecm"``, ``"sbem_ef"`` or ``"sbem_tf"``.
+    speed_mps : number, array, DM, SX or MX
+        Forward speed (m/s); broadcast against ``ri``.
+    ri : number, array, DM, SX or MX
+        Roughness index (dimensionless), >= 0.
+    vehicle : Vehicle
+
+    Returns
+    -------
+    Same kind as the inputs: force (N).
+    """
+    return get_model(model).force_n(speed_mps, ri, vehicle)

@@ -1,0 +1,259 @@
+"""Allowable speeds: where a force model's prediction meets the vehicle's limit.
+
+For one terrain value (RI) the admissible speeds of a model are the V in [0, v_max] with
+F(V) <= F_limit. For a monotone model that is one interval [0, V*]; a lightly damped
+suspension (SBEM:TF near resonance) can split it into several *bands*. This module finds
+every band edge, for many RI values at once, with Newton's method on exact CasADi
+derivatives of the model's own expression, safeguarded by bracketing so that it always
+converges:
+
+1. evaluate g(V) = F(V) / F_limit - 1 and g'(V) on a grid of speeds (0 and a log-spaced
+   grid up to v_max, so that features at every speed scale are seen);
+2. where g' changes sign between grid points, find the extremum (safeguarded Newton on g'
+   with g''), so that between consecutive candidate points g is monotone and a peak above
+   the limit between two admissible grid points cannot be missed;
+3. every sign change of g between consecutive candidates brackets exactly one root;
+   refine it with safeguarded Newton on g.
+
+NOTES.md ("Which root") defines the two semantics of :func:`allowable_speed`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from typing import TYPE_CHECKING, Literal
+
+import casadi as ca
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .forces import get_model
+from .terrain import _check_ri
+
+if TYPE_CHECKING:
+    from .vehicle import Vehicle
+
+__all__ = ["SpeedBands", "speed_bands", "allowable_speed", "safeguarded_newton"]
+
+Semantics = Literal["first", "largest"]
+
+#: Points of the log-spaced search grid, spanning 6 decades below v_max (ratio 1.07 between
+#: neighbours): far finer than a resonance peak (relative width ~ zeta) for zeta >= 0.02.
+GRID_POINTS = 200
+GRID_DECADES = 6.0
+
+
+@dataclasses.dataclass(frozen=True)
+class SpeedBands:
+    """Admissible speed bands of a model for many terrain values.
+
+    Row i lists the disjoint intervals [lower_mps[i, j], upper_mps[i, j]] of speeds whose
+    predicted force is within the limit, in increasing order, padded with NaN.
+
+    Attributes
+    ----------
+    lower_mps, upper_mps : numpy.ndarray, shape (N, B)
+        Band edges (m/s); B is the largest number of bands of any row (at least 1).
+    count : numpy.ndarray of int, shape (N,)
+        Number of bands of each row (0: no admissible speed at all).
+    """
+
+    lower_mps: np.ndarray
+    upper_mps: np.ndarray
+    count: np.ndarray
+
+    def first(self) -> np.ndarray:
+        """Largest V with every speed in [0, V] admissible (m/s), shape (N,); 0 if none."""
+        starts_at_rest = (self.count > 0) & (self.lower_mps[:, 0] == 0.0)
+        return np.where(starts_at_rest, self.upper_mps[:, 0], 0.0)
+
+    def largest(self) -> np.ndarray:
+        """Largest admissible speed <= v_max (m/s), shape (N,); 0 if none."""
+        last = np.maximum(self.count - 1, 0)
+        top = self.upper_mps[np.arange(self.count.size), last]
+        return np.where(self.count > 0, top, 0.0)
+
+
+@functools.lru_cache(maxsize=64)
+def _constraint_derivatives(model: str, vehicle: "Vehicle") -> tuple[ca.Function, ca.Function]:
+    """g = F / F_limit - 1 with its speed derivative, and g' with g'' (exact, CasADi)."""
+    spec = get_model(model)
+    v, ri = ca.SX.sym("speed_mps"), ca.SX.sym("ri")
+    g = spec.force_n(v, ri, vehicle) / spec.limit_n(vehicle) - 1.0
+    dg = ca.jacobian(g, v)
+    d2g = ca.jacobian(dg, v)
+    return (
+        ca.Function(f"{model}_g", [v, ri], [g, dg], ["speed_mps", "ri"], ["g", "dg"]),
+        ca.Function(f"{model}_dg", [v, ri], [dg, d2g], ["speed_mps", "ri"], ["dg", "d2g"]),
+    )
+
+
+def _mapped(fun: ca.Function, x: np.ndarray, ri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Evaluate a two-output scalar Function at many points, shape (K,) each."""
+    if x.size == 0:
+        return np.empty(0), np.empty(0)
+    a, b = fun.map(x.size)(x[None, :], ri[None, :])
+    return np.asarray(a).ravel(), np.asarray(b).ravel()
+
+
+def safeguarded_newton(
+    fun, lo: np.ndarray, hi: np.ndarray, f_lo: np.ndarray, *, xtol: float, max_iter: int = 200
+) -> np.ndarray:
+    """Roots of many scalar functions, each bracketed in [lo, hi], by Newton with bisection.
+
+    Parameters
+    ----------
+    fun : callable
+        ``fun(x, idx) -> (f, df)``: f and its derivative at ``x`` for the problems
+        ``idx`` (indices into the K problems), all of shape ``idx.shape``.
+    lo, hi : numpy.ndarray, shape (K,)
+        Brackets with f(lo) and f(hi) of opposite sign (or one of them zero).
+    f_lo : numpy.ndarray, shape (K,)
+        f(lo).
+    xtol : float
+        Absolute tolerance on the root (same unit as x).
+    max_iter : int
+        Bisection alone halves the bracket each step, so 200 steps always suffice.
+
+    Returns
+    -------
+    numpy.ndarray, shape (K,)
+        The roots. A Newton step that would leave the bracket, or that does not shrink it
+        fast enough, is replaced by a bisection step, so the iteration always converges.
+    """
+    lo, hi = lo.astype(float).copy(), hi.astype(float).copy()
+    x = 0.5 * (lo + hi)
+    sign_lo = np.sign(f_lo)
+    active = np.ones(x.shape, dtype=bool)
+    for _ in range(max_iter):
+        if not active.any():
+            break
+        idx = np.flatnonzero(active)
+        f, df = fun(x[idx], idx)
+        same = np.sign(f) == sign_lo[idx]
+        lo[idx] = np.where(same, x[idx], lo[idx])
+        hi[idx] = np.where(same, hi[idx], x[idx])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            newton = x[idx] - f / df
+        inside = np.isfinite(newton) & (newton > lo[idx]) & (newton < hi[idx])
+        x_new = np.where(inside, newton, 0.5 * (lo[idx] + hi[idx]))
+        step = np.abs(x_new - x[idx])
+        x[idx] = x_new
+        done = (f == 0) | (step <= xtol) | (hi[idx] - lo[idx] <= xtol)
+        active[idx[done]] = False
+    return x
+
+
+def speed_bands(ri: ArrayLike, vehicle: "Vehicle", model: str = "sbem_tf") -> SpeedBands:
+    """Every band of admissible speeds of ``model`` for each RI value.
+
+    Parameters
+    ----------
+    ri : array_like, shape (N,) or scalar
+        Roughness index of each terrain patch (dimensionless), >= 0.
+    vehicle : Vehicle
+        Quarter car, force limits and top speed v_max.
+    model : str, default ``"sbem_tf"``
+        ``"prev_bem"``, ``"iecm"``, ``"sbem_ef"`` or ``"sbem_tf"``.
+
+    Returns
+    -------
+    SpeedBands
+        Band edges (m/s) within [0, v_max]; edges are roots to within 1e-12 v_max.
+    """
+    ri = np.atleast_1d(np.asarray(ri, dtype=float))
+    _check_ri(ri)
+    n = ri.size
+    vmax = vehicle.max_speed_mps
+    value_slope, slope_curvature = _constraint_derivatives(model, vehicle)
+    xtol = 1e-12 * vmax
+
+    grid = np.concatenate([[0.0], vmax * np.logspace(-GRID_DECADES, 0.0, GRID_POINTS)])
+    k = grid.size
+    v = np.broadcast_to(grid, (n, k))
+    rr = np.broadcast_to(ri[:, None], (n, k))
+    g, dg = (o.reshape(n, k) for o in _mapped(value_slope, v.ravel(), rr.ravel()))
+
+    # 2. interior extrema: g' changes sign inside a grid interval
+    cand = np.empty((n, 2 * k - 1))
+    cand[:, 0::2] = v
+    cand[:, 1::2] = v[:, :-1]  # placeholder: a duplicate of the left point changes nothing
+    gc = np.empty_like(cand)
+    gc[:, 0::2] = g
+    gc[:, 1::2] = g[:, :-1]
+    rows, cols = np.nonzero(dg[:, :-1] * dg[:, 1:] < 0)
+    if rows.size:
+        def slope(x: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            return _mapped(slope_curvature, x, ri[rows[idx]])
+
+        ext = safeguarded_newton(slope, v[rows, cols], v[rows, cols + 1], dg[rows, cols], xtol=xtol)
+        g_ext = _mapped(value_slope, ext, ri[rows])[0]
+        cand[rows, 2 * cols + 1] = ext
+        gc[rows, 2 * cols + 1] = g_ext
+
+    # 3. roots between consecutive candidates
+    ok = gc <= 0.0
+    change_r, change_c = np.nonzero(ok[:, :-1] != ok[:, 1:])
+    roots = np.empty(0)
+    if change_r.size:
+        def value(x: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            return _mapped(value_slope, x, ri[change_r[idx]])
+
+        roots = safeguarded_newton(
+            value, cand[change_r, change_c], cand[change_r, change_c + 1], gc[change_r, change_c], xtol=xtol
+        )
+    entering = ~ok[change_r, change_c]  # inadmissible -> admissible: a lower edge
+
+    # assemble bands: lower edges are 0 (if admissible at rest) and entering roots; upper
+    # edges are leaving roots and v_max (if admissible at top speed); both in order.
+    lower_r = np.concatenate([np.flatnonzero(ok[:, 0]), change_r[entering]])
+    lower_v = np.concatenate([np.zeros(int(ok[:, 0].sum())), roots[entering]])
+    upper_r = np.concatenate([change_r[~entering], np.flatnonzero(ok[:, -1])])
+    upper_v = np.concatenate([roots[~entering], np.full(int(ok[:, -1].sum()), vmax)])
+    count = np.bincount(lower_r, minlength=n)
+    width = max(int(count.max(initial=0)), 1)
+    lower = np.full((n, width), np.nan)
+    upper = np.full((n, width), np.nan)
+    for rows_, vals, out in ((lower_r, lower_v, lower), (upper_r, upper_v, upper)):
+        order = np.lexsort((vals, rows_))
+        rows_s, vals_s = rows_[order], vals[order]
+        first_of_row = np.searchsorted(rows_s, rows_s, side="left")
+        out[rows_s, np.arange(rows_s.size) - first_of_row] = vals_s
+    return SpeedBands(lower_mps=lower, upper_mps=upper, count=count)
+
+
+def allowable_speed(
+    ri: ArrayLike,
+    vehicle: "Vehicle",
+    model: str = "sbem_tf",
+    semantics: Semantics = "first",
+) -> np.ndarray | float:
+    """The fastest speed (m/s) that keeps ``model``'s force within the vehicle's limit.
+
+    Parameters
+    ----------
+    ri : array_like, any shape, or float
+        Roughness index (dimensionless), >= 0; NaN or negative raises ``ValueError``.
+    vehicle : Vehicle
+    model : str, default ``"sbem_tf"``
+        ``"prev_bem"``, ``"iecm"``, ``"sbem_ef"`` or ``"sbem_tf"``.
+    semantics : {"first", "largest"}, default ``"first"``
+        ``"first"`` (safe from rest): the largest V such that every speed in [0, V] keeps
+        the force within the limit. ``"largest"``: the largest speed <= v_max whose force is
+        within the limit (the root the paper's Newton iteration lands on; Fig. 6). They
+        coincide when the force grows monotonically with speed.
+
+    Returns
+    -------
+    float or numpy.ndarray of the shape of ``ri``
+        Speed in [0, v_max] (m/s). RI = 0 gives v_max; a limit below the force at rest
+        gives 0.
+    """
+    if semantics not in ("first", "largest"):
+        raise ValueError(f"semantics {semantics!r} is unknown; choose 'first' or 'largest'")
+    get_model(model)
+    values = np.asarray(ri, dtype=float)
+    bands = speed_bands(values.ravel(), vehicle, model)
+    out = (bands.first() if semantics == "first" else bands.largest()).reshape(values.shape)
+    return float(out) if values.ndim == 0 else out

@@ -1,0 +1,216 @@
+"""Vehicle model files: a frozen, validated quarter-car description loaded from TOML.
+
+A vehicle file (``models/*.toml``) holds exactly the keys of :class:`Vehicle`, in SI units.
+Bundled files are found by name (``load_vehicle("atv")``) both in a source checkout and in
+an installed wheel, where they ship as the package ``profileopt.models``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from importlib import resources
+from pathlib import Path
+
+from .errors import InputError
+
+__all__ = ["Vehicle", "load_vehicle", "bundled_vehicles"]
+
+# key -> (unit, what it is). Order is the order of the dataclass fields and of the files.
+_UNITS: dict[str, tuple[str, str]] = {
+    "quarter_mass_kg": ("kg", "sprung mass carried by one wheel"),
+    "ground_clearance_m": ("m", "ground clearance h"),
+    "wheel_radius_m": ("m", "wheel radius r"),
+    "natural_frequency_radps": ("rad/s", "suspension natural frequency wn"),
+    "damping_ratio": ("-", "suspension damping ratio zeta"),
+    "confidence": ("-", "probability Pe that e <= e_max, in (0.5, 1)"),
+    "max_excitation_force_n": ("N", "allowable excitation force"),
+    "max_transmitted_force_n": ("N", "allowable transmitted force"),
+    "max_speed_mps": ("m/s", "top speed"),
+    "terrain_frequency_cpm": ("cycles/m", "Prev:BEM's estimated maximum terrain frequency"),
+    "max_accel_mps2": ("m/s^2", "largest acceleration"),
+    "max_decel_mps2": ("m/s^2", "largest deceleration, a positive number"),
+    "max_jerk_mps3": ("m/s^3", "largest jerk"),
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class Vehicle:
+    """One quarter-car corner of a vehicle and its planning limits (SI units).
+
+    Attributes are the keys of a vehicle file. Every value must be a finite number > 0;
+    ``confidence`` must lie in (0.5, 1). Construction validates and raises
+    :class:`~profileopt.errors.InputError` (a ``ValueError``) otherwise.
+
+    Attributes
+    ----------
+    quarter_mass_kg : float
+        Sprung mass m carried by one wheel (kg).
+    ground_clearance_m : float
+        Ground clearance h (m); the RI is elevation divided by h (Eq. 1).
+    wheel_radius_m : float
+        Wheel radius r (m); the step width X_w saturates at r (Eq. 2).
+    natural_frequency_radps : float
+        Suspension natural frequency wn (rad/s).
+    damping_ratio : float
+        Suspension damping ratio zeta (dimensionless).
+    confidence : float
+        Pe, the probability that an elevation stays below e_max (Eq. 8), in (0.5, 1).
+    max_excitation_force_n, max_transmitted_force_n : float
+        Force limits (N) for the excitation-force models (Prev:BEM, IECM, SBEM:EF) and the
+        transmitted-force model (SBEM:TF).
+    max_speed_mps : float
+        Top speed v_max (m/s).
+    terrain_frequency_cpm : float
+        Prev:BEM's estimated maximum terrain frequency (cycles per metre).
+    max_accel_mps2, max_decel_mps2, max_jerk_mps3 : float
+        Planning limits: acceleration (m/s^2), deceleration as a positive number (m/s^2) and
+        jerk (m/s^3). ``max_jerk_mps3`` may be ``inf`` only when set from code (the command
+        line's ``--max-jerk inf``), never in a file.
+    name : str
+        Where the vehicle came from (a bundled name or a path); not a file key.
+    """
+
+    quarter_mass_kg: float
+    ground_clearance_m: float
+    wheel_radius_m: float
+    natural_frequency_radps: float
+    damping_ratio: float
+    confidence: float
+    max_excitation_force_n: float
+    max_transmitted_force_n: float
+    max_speed_mps: float
+    terrain_frequency_cpm: float
+    max_accel_mps2: float
+    max_decel_mps2: float
+    max_jerk_mps3: float
+    name: str = dataclasses.field(default="", compare=False)
+
+    def __post_init__(self) -> None:
+        where = self.name or "Vehicle"
+        for key, (unit, what) in _UNITS.items():
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise InputError(
+                    f"{where}: key '{key}' = {value!r} is not a number; "
+                    f"give the {what} as a number in {unit}"
+                )
+            value = float(value)
+            object.__setattr__(self, key, value)
+            # Only the jerk limit may be switched off (inf), and only from code or the command
+            # line: load_vehicle refuses non-finite values in a file.
+            infinite_ok = key == "max_jerk_mps3" and value == math.inf
+            if not (math.isfinite(value) or infinite_ok) or not value > 0:
+                raise InputError(
+                    f"{where}: key '{key}' = {value!r} is not allowed; "
+                    f"the {what} must be a finite number > 0 in {unit}"
+                )
+        if not 0.5 < self.confidence < 1.0:
+            raise InputError(
+                f"{where}: key 'confidence' = {self.confidence!r} is outside (0.5, 1); "
+                "give the probability Pe that e <= e_max, for example 0.999999"
+            )
+
+    # Quarter-car constants (NOTES.md): k = m wn^2, c = 2 zeta m wn.
+    @property
+    def spring_n_per_m(self) -> float:
+        """Suspension stiffness k = m wn^2 (N/m)."""
+        return self.quarter_mass_kg * self.natural_frequency_radps**2
+
+    @property
+    def damping_ns_per_m(self) -> float:
+        """Suspension damping c = 2 zeta m wn (N s/m)."""
+        return 2.0 * self.damping_ratio * self.quarter_mass_kg * self.natural_frequency_radps
+
+    def replace(self, **changes: float) -> "Vehicle":
+        """A copy with some values changed (validated again); unknown keys raise ``TypeError``."""
+        return dataclasses.replace(self, **changes)
+
+
+def _bundled_dirs() -> list:
+    dirs = []
+    try:
+        dirs.append(resources.files("profileopt.models"))
+    except ModuleNotFoundError:  # pragma: no cover - only when the package is broken
+        pass
+    checkout = Path(__file__).resolve().parent.parent / "models"
+    if checkout.is_dir():
+        dirs.append(checkout)
+    return dirs
+
+
+def bundled_vehicles() -> list[str]:
+    """Names of the bundled vehicle files, for example ``["atv", "atv-resonant"]``."""
+    names: set[str] = set()
+    for d in _bundled_dirs():
+        for entry in d.iterdir():
+            if entry.name.endswith(".toml"):
+                names.add(entry.name[: -len(".toml")])
+    return sorted(names)
+
+
+def load_vehicle(name_or_path: str | Path) -> Vehicle:
+    """Load a vehicle by bundled name (``"atv"``) or from a TOML file path.
+
+    Parameters
+    ----------
+    name_or_path : str or pathlib.Path
+        A bundled name (see :func:`bundled_vehicles`) or the path of a ``.toml`` file.
+
+    Returns
+    -------
+    Vehicle
+        The validated, frozen vehicle.
+
+    Raises
+    ------
+    InputError
+        The file is missing or unreadable, is not valid TOML, misses a key, has an unknown
+        key, or a value of the wrong type or out of range. The message names the file, the
+        key, the value and the unit expected.
+    """
+    text, where = _read_vehicle_text(name_or_path)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{where}: not valid TOML ({exc}); fix the syntax at that line") from None
+    unknown = sorted(set(data) - set(_UNITS))
+    if unknown:
+        raise InputError(
+            f"{where}: unknown key '{unknown[0]}'; a vehicle file has exactly the keys "
+            + ", ".join(_UNITS)
+        )
+    missing = [k for k in _UNITS if k not in data]
+    if missing:
+        unit, what = _UNITS[missing[0]]
+        raise InputError(f"{where}: missing key '{missing[0]}'; add the {what} in {unit}")
+    for key, value in data.items():
+        if isinstance(value, float) and not math.isfinite(value):
+            unit, what = _UNITS[key]
+            raise InputError(
+                f"{where}: key '{key}' = {value!r} is not finite; give the {what} as a finite "
+                f"number > 0 in {unit}"
+            )
+    return Vehicle(**data, name=where)
+
+
+def _read_vehicle_text(name_or_path: str | Path) -> tuple[str, str]:
+    raw = str(name_or_path)
+    looks_like_path = isinstance(name_or_path, Path) or raw.endswith(".toml") or "/" in raw or "\\" in raw
+    if not looks_like_path:
+        for d in _bundled_dirs():
+            entry = d / f"{raw}.toml"
+            if entry.is_file():
+                return entry.read_text(encoding="utf-8"), str(entry)
+        raise InputError(
+            f"vehicle '{raw}': no bundled vehicle of that name; use one of "
+            f"{', '.join(bundled_vehicles())} or the path of a .toml file"
+        )
+    path = Path(raw)
+    try:
+        return path.read_text(encoding="utf-8"), str(path)
+    except FileNotFoundError:
+        raise InputError(f"{path}: vehicle file not found; check the path") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: cannot read the vehicle file ({exc})") from None
