@@ -57,11 +57,16 @@ class SpeedBands:
         Band edges (m/s); B is the largest number of bands of any row (at least 1).
     count : numpy.ndarray of int, shape (N,)
         Number of bands of each row (0: no admissible speed at all).
+    peaks_mps : numpy.ndarray, shape (N, P)
+        Speeds (m/s) of the interior local maxima of the force in (0, v_max), NaN-padded
+        (P >= 1). With the band edges and the ends of a speed interval they locate the
+        largest force over that interval (:meth:`max_force_speed`).
     """
 
     lower_mps: np.ndarray
     upper_mps: np.ndarray
     count: np.ndarray
+    peaks_mps: np.ndarray
 
     def first(self) -> np.ndarray:
         """Largest V with every speed in [0, V] admissible (m/s), shape (N,); 0 if none."""
@@ -138,6 +143,7 @@ def safeguarded_newton(
             newton = x[idx] - f / df
         inside = np.isfinite(newton) & (newton > lo[idx]) & (newton < hi[idx])
         x_new = np.where(inside, newton, 0.5 * (lo[idx] + hi[idx]))
+        x_new = np.where(f == 0, x[idx], x_new)  # an exact root: keep it, do not bisect away
         step = np.abs(x_new - x[idx])
         x[idx] = x_new
         done = (f == 0) | (step <= xtol) | (hi[idx] - lo[idx] <= xtol)
@@ -191,6 +197,10 @@ def speed_bands(ri: ArrayLike, vehicle: "Vehicle", model: str = "sbem_tf") -> Sp
         g_ext = _mapped(value_slope, ext, ri[rows])[0]
         cand[rows, 2 * cols + 1] = ext
         gc[rows, 2 * cols + 1] = g_ext
+        is_peak = dg[rows, cols] > 0
+        peak_rows, peak_v = rows[is_peak], ext[is_peak]
+    else:
+        peak_rows, peak_v = np.empty(0, dtype=np.intp), np.empty(0)
 
     # 3. roots between consecutive candidates
     ok = gc <= 0.0
@@ -212,15 +222,23 @@ def speed_bands(ri: ArrayLike, vehicle: "Vehicle", model: str = "sbem_tf") -> Sp
     upper_r = np.concatenate([change_r[~entering], np.flatnonzero(ok[:, -1])])
     upper_v = np.concatenate([roots[~entering], np.full(int(ok[:, -1].sum()), vmax)])
     count = np.bincount(lower_r, minlength=n)
-    width = max(int(count.max(initial=0)), 1)
-    lower = np.full((n, width), np.nan)
-    upper = np.full((n, width), np.nan)
-    for rows_, vals, out in ((lower_r, lower_v, lower), (upper_r, upper_v, upper)):
-        order = np.lexsort((vals, rows_))
-        rows_s, vals_s = rows_[order], vals[order]
-        first_of_row = np.searchsorted(rows_s, rows_s, side="left")
-        out[rows_s, np.arange(rows_s.size) - first_of_row] = vals_s
-    return SpeedBands(lower_mps=lower, upper_mps=upper, count=count)
+    return SpeedBands(
+        lower_mps=_ragged_to_padded(lower_r, lower_v, n),
+        upper_mps=_ragged_to_padded(upper_r, upper_v, n),
+        count=count,
+        peaks_mps=_ragged_to_padded(peak_rows, peak_v, n),
+    )
+
+
+def _ragged_to_padded(rows: np.ndarray, values: np.ndarray, n: int) -> np.ndarray:
+    """Values tagged with their row into an (n, width) array, each row sorted, NaN-padded."""
+    width = max(int(np.bincount(rows, minlength=n).max(initial=0)), 1)
+    out = np.full((n, width), np.nan)
+    order = np.lexsort((values, rows))
+    rows_s, vals_s = rows[order], values[order]
+    first_of_row = np.searchsorted(rows_s, rows_s, side="left")
+    out[rows_s, np.arange(rows_s.size) - first_of_row] = vals_s
+    return out
 
 
 def allowable_speed(
