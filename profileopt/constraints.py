@@ -1,0 +1,634 @@
+"""The terrain force limits as building blocks for your own CasADi problems.
+
+Import this module to put the paper's force limits into an optimal-control problem of your
+own (plain ``casadi.nlpsol``, ``casadi.Opti``, rockit, do-mpc, acados) or to generate C for
+a vehicle computer. Nothing here writes a formula: every force is the expression of
+:mod:`profileopt.forces`, the same one the planner uses.
+
+Terrain values
+--------------
+A force depends on the speed V (m/s) and on the terrain, given either as
+
+* the roughness index RI (dimensionless; every model), or
+* the worst-case elevation e_max (m) of Eq. (8), e_max = 4.7534 RI h for Pe = 0.999999
+  (IECM, SBEM:EF and SBEM:TF; Prev:BEM is defined on the RI only).
+
+Models: ``"prev_bem"``, ``"iecm"``, ``"sbem_ef"``, ``"sbem_tf"`` (default: SBEM:TF, the
+force transmitted to the frame, held to ``vehicle.max_transmitted_force_n``).
+
+What is here
+------------
+Forces on any kind of argument (numbers, numpy arrays, ``DM``, ``SX``, ``MX``)
+    :func:`iecm_force_n`, :func:`sbem_ef_force_n`, :func:`sbem_tf_force_n` (speed, e_max),
+    :func:`prev_bem_force_n` (speed, RI), and by model name :func:`force_of_ri`,
+    :func:`force_of_e_max`; :func:`force_limit_n` gives the limit.
+Constraints over a horizon
+    :func:`force_constraints` returns a :class:`ForceConstraints` that unpacks as the
+    ``(g, lbg, ubg)`` triple of ``casadi.nlpsol``; :func:`add_force_constraints` adds the
+    same to a ``casadi.Opti``. The normalised form g = F / F_limit - 1 <= 0 (default) is
+    of order one, which IPOPT prefers to forces of thousands of newtons.
+Named ``casadi.Function`` objects
+    :func:`force_function` and :func:`constraint_function`, with named inputs and outputs,
+    for ``map``, ``jacobian()`` and code generation (:mod:`profileopt.codegen`).
+Resonance
+    :func:`band_edges` (one band per terrain value, as speed bounds) and, re-exported,
+    :func:`~profileopt.speeds.speed_bands` (every band) and
+    :func:`~profileopt.speeds.allowable_speed`.
+
+A minimal problem, fastest speeds over ten stages of varying roughness::
+
+    import casadi as ca, numpy as np
+    from profileopt import load_vehicle
+    from profileopt.constraints import force_constraints
+    vehicle = load_vehicle("atv")
+    v = ca.SX.sym("v", 10)
+    g, lbg, ubg = force_constraints(v, np.linspace(0.05, 0.4, 10), vehicle)
+    solver = ca.nlpsol("s", "ipopt", {"x": v, "f": -ca.sum1(v), "g": g})
+    v_best = solver(x0=1, lbx=0, ubx=vehicle.max_speed_mps, lbg=lbg, ubg=ubg)["x"]
+
+Stages and segments: which speeds a constraint covers
+-----------------------------------------------------
+``force_constraints(speed, terrain, ...)`` accepts two layouts:
+
+* *points*: N speeds and N terrain values (or one value for all): F(v_i, terrain_i) is
+  constrained at each stage i;
+* *segments*: N + 1 boundary speeds and N terrain values: segment i runs from speed v_i to
+  v_{i+1} over terrain_i, and F(v_i, terrain_i) and F(v_{i+1}, terrain_i) are both
+  constrained (2 N rows, ordered segment by segment).
+
+Within a segment the vehicle passes through every speed between its entry and exit speeds
+(NOTES.md, "Which root"), so the limit must hold over that whole interval, not only at its
+ends. When the force grows monotonically with speed (IECM, SBEM:EF, Prev:BEM always; SBEM:TF
+of a well-damped suspension such as the bundled ``atv``), holding it at both ends holds it
+everywhere in between, and the *segments* layout is exact. When it does not (SBEM:TF of a
+lightly damped suspension, ``atv-resonant``), read the next section.
+
+Resonance and controllers
+-------------------------
+For a lightly damped suspension the SBEM:TF force peaks near resonance (r = w_b / wn ~ 1),
+dips, then grows again, so the admissible speeds over one terrain value form several
+*bands* [lower_j, upper_j]. A pointwise constraint F(v_k) <= F_limit at the stages of a
+horizon then admits a plan whose speed jumps across a forbidden band between two stages,
+which the real vehicle cannot do: it passes through every speed in between. What a
+controller should do:
+
+* **Starting from rest, or whenever you cannot guarantee staying inside one band**, use the
+  ``"first"`` band [0, V_first]: every speed from 0 to V_first is admissible, so any path
+  of speeds below it is safe. ``band_edges(ri, vehicle, band="first")`` gives it; it is
+  ``allowable_speed(ri, vehicle, semantics="first")``.
+* **``"largest"`` only if the vehicle is already above resonance** and the plan keeps it
+  there: the top band [lower, upper] is admissible as a whole, but the vehicle must never
+  slow through the forbidden speeds below ``lower`` on that terrain. Experienced drivers do
+  this on washboard: accelerate on smooth ground to above resonance, then hold the band.
+* The force limit is **a speed constraint that must hold over every speed passed
+  through**, not only over the speeds at the stage points (see the segments layout above).
+* **Pin a horizon to a band by speed bounds**: compute the band per stage (numbers, from the
+  terrain the stage will see) with :func:`band_edges` and pass its edges as ``lbx``/``ubx``
+  of the stage speeds (or ``opti.subject_to(opti.bounded(lower, v, upper))``). Every speed
+  between two stages of one band is then admissible, because a band is an interval. Keep
+  the force constraint too: it costs little and documents the intent. When the terrain
+  ahead depends on the predicted position (an interpolant of s), bound the speed by the
+  *smallest* upper edge of every terrain patch the stage can reach (see
+  ``examples/mpc_terrain_preview.py``).
+* A band whose lower edge is above the current speed cannot be reached without crossing
+  forbidden speeds on that terrain: that is a planning decision (accelerate earlier, on
+  smoother ground), not something one horizon can fix.
+
+Units: speeds in m/s, e_max in m, forces in N, accelerations in m/s^2; RI and g are
+dimensionless.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Literal
+
+import casadi as ca
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ._casadi import is_symbolic
+from .errors import InputError
+from .forces import get_model, iecm_force_n, prev_bem_force_n, sbem_ef_force_n, sbem_tf_force_n
+from .speeds import SpeedBands, allowable_speed, speed_bands
+from .terrain import _check_ri
+
+if TYPE_CHECKING:
+    from .vehicle import Vehicle
+
+__all__ = [
+    "iecm_force_n",
+    "sbem_ef_force_n",
+    "sbem_tf_force_n",
+    "prev_bem_force_n",
+    "force_of_ri",
+    "force_of_e_max",
+    "force_limit_n",
+    "ForceConstraints",
+    "force_constraints",
+    "add_force_constraints",
+    "force_function",
+    "constraint_function",
+    "BandEdges",
+    "band_edges",
+    "SpeedBands",
+    "speed_bands",
+    "allowable_speed",
+]
+
+Terrain = Literal["ri", "e_max"]
+Band = Literal["first", "largest", "containing"]
+
+# The models defined on the worst-case elevation e_max (Eq. 8): their own expressions.
+_OF_E_MAX: dict[str, Callable[..., Any]] = {
+    "iecm": iecm_force_n,
+    "sbem_ef": sbem_ef_force_n,
+    "sbem_tf": sbem_tf_force_n,
+}
+
+
+def _model(model: str) -> Any:
+    try:
+        return get_model(model)
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+
+
+def _check_terrain_kind(terrain: str, model: str) -> None:
+    if terrain not in ("ri", "e_max"):
+        raise InputError(f"terrain {terrain!r} is unknown; choose 'ri' (roughness index) or 'e_max' (metres)")
+    if terrain == "e_max" and model not in _OF_E_MAX:
+        raise InputError(
+            f"model {model!r} is defined on the roughness index only; use terrain='ri' "
+            f"(e_max works with {', '.join(_OF_E_MAX)})"
+        )
+
+
+def _check_e_max(e_max_m: Any) -> None:
+    if is_symbolic(e_max_m):
+        return
+    values = np.asarray(e_max_m.full() if isinstance(e_max_m, ca.DM) else e_max_m, dtype=float)
+    if np.any(np.isnan(values)) or np.any(values < 0):
+        raise InputError("e_max_m must be a number >= 0 in metres (NaN or a negative value was given)")
+
+
+def force_of_ri(model: str, speed_mps: Any, ri: Any, vehicle: "Vehicle") -> Any:
+    """The force (N) that ``model`` predicts at ``speed_mps`` over terrain of roughness ``ri``.
+
+    Parameters
+    ----------
+    model : str
+        ``"prev_bem"``, ``"iecm"``, ``"sbem_ef"`` or ``"sbem_tf"``.
+    speed_mps : number, numpy array, DM, SX or MX
+        Forward speed V (m/s); broadcast against ``ri``.
+    ri : number, numpy array, DM, SX or MX
+        Roughness index (dimensionless), >= 0.
+    vehicle : Vehicle
+
+    Returns
+    -------
+    Same kind as the arguments (a float for two numbers): the force (N).
+    """
+    return _model(model).force_n(speed_mps, ri, vehicle)
+
+
+def force_of_e_max(model: str, speed_mps: Any, e_max_m: Any, vehicle: "Vehicle") -> Any:
+    """The force (N) that ``model`` predicts at ``speed_mps`` for a worst-case elevation.
+
+    Parameters
+    ----------
+    model : str
+        ``"iecm"``, ``"sbem_ef"`` or ``"sbem_tf"`` (Prev:BEM is defined on the RI only).
+    speed_mps : number, numpy array, DM, SX or MX
+        Forward speed V (m/s); broadcast against ``e_max_m``.
+    e_max_m : number, numpy array, DM, SX or MX
+        Worst-case elevation e_max (m) of Eq. (8), >= 0.
+    vehicle : Vehicle
+
+    Returns
+    -------
+    Same kind as the arguments (a float for two numbers): the force (N).
+    """
+    _model(model)
+    _check_terrain_kind("e_max", model)
+    _check_e_max(e_max_m)
+    return _OF_E_MAX[model](speed_mps, e_max_m, vehicle)
+
+
+def force_limit_n(model: str, vehicle: "Vehicle") -> float:
+    """The force limit (N) ``model`` is held to: ``max_transmitted_force_n`` for SBEM:TF,
+    ``max_excitation_force_n`` for the other three."""
+    return _model(model).limit_n(vehicle)
+
+
+def _force(model: str, terrain: Terrain, speed_mps: Any, value: Any, vehicle: "Vehicle") -> Any:
+    if terrain == "ri":
+        return force_of_ri(model, speed_mps, value, vehicle)
+    return force_of_e_max(model, speed_mps, value, vehicle)
+
+
+# ---------------------------------------------------------------------------------------
+# Constraints over a horizon
+# ---------------------------------------------------------------------------------------
+
+
+@dataclasses.dataclass(frozen=True)
+class ForceConstraints:
+    """Force-limit (and optional acceleration) constraints lbg <= g <= ubg.
+
+    Unpacks as the triple ``g, lbg, ubg = force_constraints(...)`` that
+    ``casadi.nlpsol`` takes (``{"g": g}`` and ``lbg=lbg, ubg=ubg`` at the call).
+
+    Attributes
+    ----------
+    g : casadi.SX or casadi.MX, shape (R, 1)
+        The constraint expressions: first the ``n_force`` force rows, then the acceleration
+        rows (if an acceleration vector was given). A force row is F / F_limit - 1
+        (dimensionless, ``normalised=True``) or F (N); an acceleration row is a (m/s^2).
+    lbg, ubg : numpy.ndarray, shape (R,)
+        Bounds: force rows (-inf, 0] normalised or (-inf, F_limit] raw; acceleration rows
+        [-max_decel_mps2, max_accel_mps2].
+    force_n : casadi.SX or casadi.MX, shape (n_force, 1)
+        The force (N) of each force row, for inspection.
+    limit_n : float
+        The force limit F_limit (N).
+    n_force : int
+        Number of force rows.
+    model : str
+        The force model.
+    normalised : bool
+        Whether the force rows are F / F_limit - 1.
+    """
+
+    g: Any
+    lbg: np.ndarray
+    ubg: np.ndarray
+    force_n: Any
+    limit_n: float
+    n_force: int
+    model: str
+    normalised: bool
+
+    def __iter__(self) -> Iterator[Any]:
+        return iter((self.g, self.lbg, self.ubg))
+
+
+def _column(x: Any) -> Any:
+    """``x`` as a column: SX/MX unchanged (reshaped), numbers and arrays as DM."""
+    if isinstance(x, (ca.SX, ca.MX)):
+        return ca.vec(x)
+    if isinstance(x, ca.DM):
+        return ca.vec(x)
+    arr = np.asarray(x, dtype=float)
+    return ca.DM(arr.reshape(-1, 1))
+
+
+def _pair_stages(speed: Any, terrain: Any, where: str) -> tuple[Any, Any]:
+    """Speeds and terrain values row by row for the points or segments layout."""
+    n_v, n_t = speed.shape[0], terrain.shape[0]
+    if n_t == 1 and n_v >= 1:
+        return speed, ca.repmat(terrain, n_v, 1)
+    if n_v == n_t:
+        return speed, terrain
+    if n_v == n_t + 1:
+        # segments: both ends of segment i against terrain i, ordered segment by segment
+        starts, ends = speed[:-1], speed[1:]
+        v_rows = ca.vec(ca.horzcat(starts, ends).T)
+        t_rows = ca.vec(ca.horzcat(terrain, terrain).T)
+        return v_rows, t_rows
+    raise InputError(
+        f"{where}: {n_v} speeds and {n_t} terrain values do not match; give N speeds and N "
+        "values (points), N + 1 speeds and N values (segments), or one terrain value"
+    )
+
+
+def force_constraints(
+    speed_mps: Any,
+    ri: Any,
+    vehicle: "Vehicle",
+    model: str = "sbem_tf",
+    *,
+    normalised: bool = True,
+    accel_mps2: Any = None,
+    e_max_m: Any = None,
+) -> ForceConstraints:
+    """The force limit over a horizon of speed symbols, as lbg <= g <= ubg.
+
+    Parameters
+    ----------
+    speed_mps : casadi.SX or casadi.MX, shape (N,) or (N + 1,)
+        Stage speeds (m/s). Numbers and arrays work too (g is then a DM).
+    ri : SX, MX, DM, numpy array or number, shape (N,) or scalar, or None
+        Roughness index of each stage or segment (dimensionless, >= 0): parameters or
+        numbers. ``None`` when ``e_max_m`` is given instead.
+    vehicle : Vehicle
+    model : str, default ``"sbem_tf"``
+        ``"prev_bem"``, ``"iecm"``, ``"sbem_ef"`` or ``"sbem_tf"``.
+    normalised : bool, default True
+        Force rows g = F / F_limit - 1 <= 0 (dimensionless, well scaled for IPOPT) if True,
+        g = F <= F_limit (N) if False.
+    accel_mps2 : SX or MX, shape (M,), optional
+        Accelerations (m/s^2) to bound by [-max_decel_mps2, max_accel_mps2]; appended after
+        the force rows.
+    e_max_m : SX, MX, DM, numpy array or number, shape (N,) or scalar, optional
+        Worst-case elevation (m) of each stage or segment instead of ``ri`` (IECM, SBEM:EF,
+        SBEM:TF only).
+
+    Returns
+    -------
+    ForceConstraints
+        Unpacks as ``g, lbg, ubg``. Layouts (module docstring): N speeds and N terrain
+        values give N force rows (points); N + 1 speeds and N values give 2 N rows, the
+        entry and exit speed of each segment against its terrain (segments); one terrain
+        value applies to every speed.
+
+    Raises
+    ------
+    InputError
+        Unknown model, both or neither of ``ri`` and ``e_max_m``, Prev:BEM with
+        ``e_max_m``, mismatched lengths, or a negative or NaN terrain value.
+    """
+    spec = _model(model)
+    if (ri is None) == (e_max_m is None):
+        raise InputError("force_constraints: give exactly one of ri (roughness index) and e_max_m (metres)")
+    terrain: Terrain = "ri" if e_max_m is None else "e_max"
+    _check_terrain_kind(terrain, model)
+    value = ri if terrain == "ri" else e_max_m
+    if terrain == "ri":
+        try:
+            _check_ri(value)
+        except ValueError as exc:
+            raise InputError(f"force_constraints: {exc}") from None
+    else:
+        _check_e_max(value)
+    speed_col = _column(speed_mps)
+    value_col = _column(value)
+    if speed_col.shape[0] == 0:
+        raise InputError("force_constraints: no speeds were given; pass at least one stage speed")
+    v_rows, t_rows = _pair_stages(speed_col, value_col, "force_constraints")
+    force = _force(model, terrain, v_rows, t_rows, vehicle)
+    limit = spec.limit_n(vehicle)
+    n = int(force.shape[0])
+    if normalised:
+        g_force = force / limit - 1.0
+        upper = np.zeros(n)
+    else:
+        g_force = force
+        upper = np.full(n, limit)
+    lbg, ubg = [np.full(n, -np.inf)], [upper]
+    rows = [g_force]
+    if accel_mps2 is not None:
+        a = _column(accel_mps2)
+        rows.append(a)
+        lbg.append(np.full(a.shape[0], -vehicle.max_decel_mps2))
+        ubg.append(np.full(a.shape[0], vehicle.max_accel_mps2))
+    return ForceConstraints(
+        g=ca.vertcat(*rows),
+        lbg=np.concatenate(lbg),
+        ubg=np.concatenate(ubg),
+        force_n=force,
+        limit_n=limit,
+        n_force=n,
+        model=model,
+        normalised=normalised,
+    )
+
+
+def add_force_constraints(
+    opti: ca.Opti,
+    speed_mps: ca.MX,
+    ri: Any,
+    vehicle: "Vehicle",
+    model: str = "sbem_tf",
+    *,
+    normalised: bool = True,
+    accel_mps2: Any = None,
+    e_max_m: Any = None,
+) -> ForceConstraints:
+    """Add the force limit (and acceleration bounds) of :func:`force_constraints` to ``opti``.
+
+    Parameters
+    ----------
+    opti : casadi.Opti
+    speed_mps : casadi.MX, shape (N,) or (N + 1,)
+        Stage speeds (m/s): ``opti.variable`` entries or expressions of them.
+    ri, e_max_m : exactly one of them
+        Roughness index (dimensionless) or worst-case elevation (m) per stage or segment:
+        ``opti.parameter`` (set with ``opti.set_value`` before each solve) or numbers.
+    vehicle, model, normalised, accel_mps2
+        As for :func:`force_constraints`.
+
+    Returns
+    -------
+    ForceConstraints
+        What was added: the force rows as ``g[:n_force] <= ubg[:n_force]``, the acceleration
+        rows as ``opti.bounded(lbg, a, ubg)``.
+    """
+    if not isinstance(opti, ca.Opti):
+        raise InputError(f"add_force_constraints: opti must be a casadi.Opti, got {type(opti).__name__}")
+    cons = force_constraints(
+        speed_mps, ri, vehicle, model, normalised=normalised, accel_mps2=accel_mps2, e_max_m=e_max_m
+    )
+    n = cons.n_force
+    opti.subject_to(cons.g[:n] <= ca.DM(cons.ubg[:n]))
+    if cons.g.shape[0] > n:
+        opti.subject_to(opti.bounded(ca.DM(cons.lbg[n:]), cons.g[n:], ca.DM(cons.ubg[n:])))
+    return cons
+
+
+# ---------------------------------------------------------------------------------------
+# Named casadi.Function objects
+# ---------------------------------------------------------------------------------------
+
+_TERRAIN_INPUT = {"ri": "ri", "e_max": "e_max_m"}
+_TERRAIN_DOC = {"ri": "ri: roughness index RI (dimensionless, >= 0)", "e_max": "e_max_m: worst-case elevation e_max (m, >= 0, Eq. 8)"}
+
+
+def _function_name(name: str | None, default: str) -> str:
+    out = default if name is None else name
+    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", out):
+        raise InputError(f"function name {out!r} is not a C identifier; use letters, digits and '_'")
+    return out
+
+
+def force_function(
+    model: str,
+    vehicle: "Vehicle",
+    terrain: Terrain = "ri",
+    *,
+    n_stages: int = 1,
+    name: str | None = None,
+) -> ca.Function:
+    """The model's force as a named ``casadi.Function`` with the vehicle folded in.
+
+    Parameters
+    ----------
+    model : str
+        ``"prev_bem"``, ``"iecm"``, ``"sbem_ef"`` or ``"sbem_tf"``.
+    vehicle : Vehicle
+        Its constants become numbers inside the Function.
+    terrain : {"ri", "e_max"}, default ``"ri"``
+        Second input: the roughness index, or the worst-case elevation in metres (not for
+        Prev:BEM).
+    n_stages : int, default 1
+        Length of the input and output vectors (elementwise over stages).
+    name : str, optional
+        Function name (a C identifier); default ``"<model>_force_of_<terrain>"``.
+
+    Returns
+    -------
+    casadi.Function
+        Inputs ``speed_mps`` (n_stages x 1, m/s) and ``ri`` (dimensionless) or ``e_max_m``
+        (m), output ``force_n`` (n_stages x 1, N). ``fn.jacobian()`` gives
+        ``jac_force_n_speed_mps`` (N per m/s) and ``jac_force_n_ri`` (N) or
+        ``jac_force_n_e_max_m`` (N/m), diagonal. At terrain 0 (smooth ground) the force is 0.
+    """
+    spec = _model(model)
+    _check_terrain_kind(terrain, model)
+    if not (isinstance(n_stages, int) and n_stages >= 1):
+        raise InputError(f"n_stages = {n_stages!r}: must be an integer >= 1")
+    v = ca.SX.sym("speed_mps", n_stages)
+    t = ca.SX.sym(_TERRAIN_INPUT[terrain], n_stages)
+    force = _force(model, terrain, v, t, vehicle)
+    fname = _function_name(name, f"{model}_force_of_{terrain}")
+    doc = (
+        f"{spec.label} force (N) of vehicle {vehicle.name or '(unnamed)'}; inputs speed_mps: "
+        f"speed (m/s), {_TERRAIN_DOC[terrain]}; output force_n: force (N); "
+        f"limit {spec.limit_n(vehicle):g} N ({spec.limit_key})."
+    )
+    fn = ca.Function(fname, [v, t], [force], ["speed_mps", _TERRAIN_INPUT[terrain]], ["force_n"])
+    fn.__doc__ = doc
+    return fn
+
+
+def constraint_function(
+    model: str,
+    vehicle: "Vehicle",
+    terrain: Terrain = "ri",
+    *,
+    normalised: bool = True,
+    n_stages: int = 1,
+    name: str | None = None,
+) -> ca.Function:
+    """The force constraint g(speed, terrain) <= 0 as a named ``casadi.Function``.
+
+    Parameters
+    ----------
+    model, vehicle, terrain, n_stages
+        As for :func:`force_function`.
+    normalised : bool, default True
+        g = F / F_limit - 1 (dimensionless) if True, g = F - F_limit (N) if False; both
+        are <= 0 exactly when the force is within the limit.
+    name : str, optional
+        Function name (a C identifier); default ``"<model>_constraint_of_<terrain>"``.
+
+    Returns
+    -------
+    casadi.Function
+        Inputs ``speed_mps`` (n_stages x 1, m/s) and ``ri`` or ``e_max_m`` (m), output ``g``
+        (n_stages x 1) with g <= 0 admissible. ``fn.jacobian()`` gives ``jac_g_speed_mps``
+        and ``jac_g_ri`` / ``jac_g_e_max_m``.
+    """
+    spec = _model(model)
+    force_fn = force_function(model, vehicle, terrain, n_stages=n_stages)
+    v = ca.SX.sym("speed_mps", n_stages)
+    t = ca.SX.sym(_TERRAIN_INPUT[terrain], n_stages)
+    force = force_fn(v, t)
+    limit = spec.limit_n(vehicle)
+    g = force / limit - 1.0 if normalised else force - limit
+    fname = _function_name(name, f"{model}_constraint_of_{terrain}")
+    fn = ca.Function(fname, [v, t], [g], ["speed_mps", _TERRAIN_INPUT[terrain]], ["g"])
+    unit = "dimensionless, F / F_limit - 1" if normalised else "N, F - F_limit"
+    fn.__doc__ = (
+        f"{spec.label} force constraint g <= 0 of vehicle {vehicle.name or '(unnamed)'}; inputs "
+        f"speed_mps: speed (m/s), {_TERRAIN_DOC[terrain]}; output g ({unit}); "
+        f"F_limit = {limit:g} N."
+    )
+    return fn
+
+
+# ---------------------------------------------------------------------------------------
+# Resonance: the band a controller should stay in
+# ---------------------------------------------------------------------------------------
+
+
+@dataclasses.dataclass(frozen=True)
+class BandEdges:
+    """One admissible speed band per terrain value, as bounds for stage speeds.
+
+    Attributes
+    ----------
+    lower_mps, upper_mps : numpy.ndarray, shape of ``ri``
+        The band [lower, upper] (m/s): every speed in it keeps the force within the limit.
+        Both 0 when the terrain admits no speed at all (for ``"first"`` and ``"largest"``:
+        even the static force exceeds the limit, the vehicle must not be there); NaN for
+        ``"containing"`` when the given speed lies in no band.
+    band : str
+        Which band: ``"first"``, ``"largest"`` or ``"containing"``.
+    """
+
+    lower_mps: np.ndarray
+    upper_mps: np.ndarray
+    band: str
+
+
+def band_edges(
+    ri: ArrayLike,
+    vehicle: "Vehicle",
+    model: str = "sbem_tf",
+    band: Band = "first",
+    speed_mps: ArrayLike | None = None,
+) -> BandEdges:
+    """Edges of the admissible speed band to pin each stage to (see "Resonance and
+    controllers" in the module docstring).
+
+    Parameters
+    ----------
+    ri : array_like, any shape
+        Roughness index of each stage (dimensionless, >= 0).
+    vehicle : Vehicle
+    model : str, default ``"sbem_tf"``
+    band : {"first", "largest", "containing"}, default ``"first"``
+        ``"first"``: [0, V_first], safe from rest and for any speed path below V_first.
+        ``"largest"``: the top band, only for a vehicle already above resonance that stays
+        there. ``"containing"``: the band that contains ``speed_mps`` (the current speed), to
+        keep a vehicle in the band it is in.
+    speed_mps : array_like, broadcast against ``ri``, optional
+        Required for ``"containing"`` (m/s).
+
+    Returns
+    -------
+    BandEdges
+        Bounds (m/s) of the shape of ``ri``. Every band of every RI:
+        :func:`~profileopt.speeds.speed_bands`.
+    """
+    _model(model)
+    if band not in ("first", "largest", "containing"):
+        raise InputError(f"band {band!r} is unknown; choose 'first', 'largest' or 'containing'")
+    values = np.asarray(ri, dtype=float)
+    try:
+        bands = speed_bands(values.ravel(), vehicle, model)
+    except ValueError as exc:
+        raise InputError(f"band_edges: {exc}") from None
+    n = values.size
+    if band == "first":
+        lower, upper = np.zeros(n), bands.first()
+    elif band == "largest":
+        last = np.maximum(bands.count - 1, 0)
+        rows = np.arange(n)
+        has = bands.count > 0
+        lower = np.where(has, bands.lower_mps[rows, last], 0.0)
+        upper = np.where(has, bands.upper_mps[rows, last], 0.0)
+    else:
+        if speed_mps is None:
+            raise InputError("band_edges: band='containing' needs speed_mps, the speed to find the band of")
+        v = np.broadcast_to(np.asarray(speed_mps, dtype=float), values.shape).ravel()
+        inside = (bands.lower_mps <= v[:, None]) & (v[:, None] <= bands.upper_mps)
+        found = inside.any(axis=1)
+        j = np.argmax(inside, axis=1)
+        rows = np.arange(n)
+        lower = np.where(found, bands.lower_mps[rows, j], math.nan)
+        upper = np.where(found, bands.upper_mps[rows, j], math.nan)
+    return BandEdges(lower.reshape(values.shape), upper.reshape(values.shape), band)
