@@ -1,1 +1,41 @@
-"""``profileopt figures``: reproduce the paper's Figs. 1, 5 and 6 (placeholder, see issue 2)."""
+"""``profileopt figures``: reproduce the paper's Figs. 1, 5 and 6 as PNG + CSV files."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..cli import command
+from ..errors import InputError
+from ..figures import write_paper_figures
+from ..vehicle import load_vehicle
+
+
+def run(args: argparse.Namespace) -> int:
+    """Write the figures into ``args.out`` (created if missing); print each file written."""
+    vehicle = load_vehicle(args.vehicle)
+    resonant = load_vehicle(args.resonant_vehicle)
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out}: exists and is not a folder; give a folder path")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"--out {out}: cannot create the folder ({exc.strerror}); choose another path") from None
+    for path in write_paper_figures(out, vehicle, resonant):
+        print(path)
+    return 0
+
+
+def _arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--out", required=True, metavar="DIR",
+                        help="folder for the figures (created if missing)")
+    parser.add_argument("--vehicle", default="atv", metavar="NAME_OR_TOML",
+                        help="vehicle of Fig. 5: a bundled name or a .toml file (default: atv, Table 1)")
+    parser.add_argument("--resonant-vehicle", default="atv-resonant", metavar="NAME_OR_TOML",
+                        help="vehicle of Fig. 6: a bundled name or a .toml file (default: atv-resonant)")
+
+
+# cli.command reads run.arguments when it registers run, so set it first, then register.
+run.arguments = _arguments  # type: ignore[attr-defined]
+command("figures", "write the paper's Figs. 1, 5 and 6 (PNG and CSV of the curves) into a folder")(run)
