@@ -1,0 +1,137 @@
+"""Generated C (``profileopt export-c``) against the Python Functions it was made from.
+
+The reference is CasADi's own evaluation of the Python Functions (``force_function``,
+``constraint_function`` and ``Function.jacobian()``); the C is compiled with the system
+compiler and loaded through ``casadi.external``. Both evaluate the same expression graph,
+so they must agree to rounding: within 1e-12 relative (1e-12 absolute near zero).
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from profileopt import load_vehicle
+from profileopt.cli import main
+from profileopt.codegen import c_functions, export_c
+from profileopt.constraints import constraint_function, force_function
+
+CC = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
+needs_cc = pytest.mark.skipif(CC is None, reason="no C compiler (cc, gcc or clang) on PATH")
+
+RTOL = 1e-12
+
+
+def _compile_shared(source: Path, out: Path) -> Path:
+    subprocess.run([CC, "-shared", "-fPIC", "-O2", str(source), "-lm", "-o", str(out)], check=True)
+    return out
+
+
+def _points(rng: np.random.Generator, terrain: str, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Random speeds (m/s) and terrain values, with the special points mixed in:
+    smooth ground (0) and e_max around the wheel radius 0.1 m where X_w saturates (Eq. 2)."""
+    speed = rng.uniform(0.0, 20.0, n)
+    if terrain == "ri":
+        value = rng.uniform(0.0, 1.5, n)
+        value[:3] = [0.0, 0.1 / 0.47534243088162570, 0.21]  # e_max = 0, = r, just above r
+    else:
+        value = rng.uniform(0.0, 0.5, n)
+        value[:3] = [0.0, 0.1, 0.1000001]
+    speed[3] = 0.0
+    return speed, value
+
+
+def _close(actual: np.ndarray, expected: np.ndarray) -> None:
+    np.testing.assert_allclose(actual, expected, rtol=RTOL, atol=RTOL, equal_nan=True)
+
+
+def _check_library(so: Path, functions, vehicle, n_stages: int, rng: np.random.Generator) -> None:
+    for e in functions:
+        builder = force_function if e.kind == "force" else constraint_function
+        py = builder(e.model, vehicle, e.terrain, n_stages=n_stages)
+        py_jac = py.jacobian()  # CasADi's own Jacobian, not the exporter's wrapper
+        c = ca.external(e.name, str(so))
+        c_jac = ca.external(e.jacobian_name, str(so))
+        assert c.name_in() == py.name_in() and c.name_out() == py.name_out()
+        speed, value = _points(rng, e.terrain, 8 * n_stages)
+        for i in range(8):
+            s, t = speed[i * n_stages:(i + 1) * n_stages], value[i * n_stages:(i + 1) * n_stages]
+            _close(np.asarray(c(s, t)), np.asarray(py(s, t)))
+            jc, jp = c_jac(s, t), py_jac(s, t, 0)
+            for k in range(2):
+                assert jc[k].sparsity() == jp[k].sparsity(), e.jacobian_name
+                _close(np.asarray(jc[k].nonzeros()), np.asarray(jp[k].nonzeros()))
+        # many points at once through map
+        speed, value = _points(rng, e.terrain, 64 * n_stages)
+        shape = (n_stages, 64)
+        s, t = speed.reshape(shape, order="F"), value.reshape(shape, order="F")
+        _close(np.asarray(c.map(64)(s, t)), np.asarray(py.map(64)(s, t)))
+
+
+@needs_cc
+@pytest.mark.parametrize("name", ["atv", "atv-resonant"])
+def test_generated_c_matches_python(tmp_path: Path, name: str) -> None:
+    vehicle = load_vehicle(name)
+    result = export_c(vehicle, tmp_path / "c")
+    assert len(result.functions) == 14  # 4 models x (force, constraint) vs RI, 3 models vs e_max
+    header = result.header.read_text()
+    for e in result.functions:
+        assert f"int {e.name}(const casadi_real** arg" in header
+        assert f"int {e.jacobian_name}(const casadi_real** arg" in header
+    so = _compile_shared(result.source, tmp_path / "libforces.so")
+    _check_library(so, result.functions, vehicle, 1, np.random.default_rng(4))
+
+
+@needs_cc
+def test_command_line_export_with_stages_and_example_program(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "export"
+    assert main(["export-c", "--vehicle", "atv-resonant", "-o", str(out), "--model", "sbem_tf", "--stages", "3"]) == 0
+    files = sorted(p.name for p in out.iterdir())
+    assert files == ["README.md", "example.c", "profileopt_atv_resonant.c", "profileopt_atv_resonant.h"]
+    vehicle = load_vehicle("atv-resonant")
+    functions = [t[0] for t in c_functions(vehicle, ["sbem_tf"], n_stages=3)]
+    so = _compile_shared(out / "profileopt_atv_resonant.c", tmp_path / "lib3.so")
+    _check_library(so, functions, vehicle, 3, np.random.default_rng(5))
+
+    # The example program of the README compiles, runs and prints what Python computes.
+    exe = tmp_path / "example"
+    subprocess.run([CC, "-O2", "example.c", "profileopt_atv_resonant.c", "-lm", "-o", str(exe)], cwd=out, check=True)
+    printed = subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout
+    number = r"([-+0-9.eE]+|nan|inf)"
+    pattern = rf"speed {number} m/s, RI {number}: g {number}, dg/dspeed {number} s/m, dg/dRI {number}"
+    rows = [list(map(float, re.fullmatch(pattern, line).groups())) for line in printed.strip().splitlines()]
+    assert len(rows) == 3
+    g = constraint_function("sbem_tf", vehicle)
+    jac = g.jacobian()
+    for speed, ri, g_c, dv_c, dri_c in rows:
+        _close(np.array([g_c]), np.asarray(g(speed, ri)).ravel())
+        _close(np.array([dv_c, dri_c]), np.array([float(j) for j in jac(speed, ri, 0)]))
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--vehicle", "no-such-car"], "no bundled vehicle"),
+        (["--vehicle", "atv", "--stages", "0"], "--stages 0"),
+    ],
+)
+def test_bad_input_is_one_line_and_writes_nothing(tmp_path: Path, capsys, argv, message) -> None:
+    out = tmp_path / "c"
+    assert main(["export-c", *argv, "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert not out.exists()
+
+
+def test_output_that_is_a_file_is_refused(tmp_path: Path, capsys) -> None:
+    target = tmp_path / "taken"
+    target.write_text("keep me")
+    assert main(["export-c", "--vehicle", "atv", "-o", str(target)]) == 2
+    assert "is not a folder" in capsys.readouterr().err
+    assert target.read_text() == "keep me"
