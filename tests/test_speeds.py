@@ -1,0 +1,226 @@
+"""Allowable speeds: the generic safeguarded-Newton solver against closed-form inverses, the
+SBEM:TF band semantics, edge cases, and the claims the paper makes about Figs. 5 and 6."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import scipy.special
+
+from profileopt import MODELS, allowable_speed, force_n, get_model, load_vehicle, speed_bands
+from profileopt.figures import PAPER_AMPLITUDES_M, TERRAIN_FREQUENCY_CPM, sinusoid_terrain
+
+ATV = load_vehicle("atv")
+RES = load_vehicle("atv-resonant")
+Z = math.sqrt(2) * scipy.special.erfinv(2 * 0.999999 - 1)  # Eq. (8) factor, 4.7534
+# The paper's terrain (Section 4): 100 sinusoids at 1.5 cycles/m, amplitudes 0 to 0.1 m,
+# RI from the sampled profiles (0 to 0.707 for h = 0.1 m).
+FIG_RI = sinusoid_terrain(PAPER_AMPLITUDES_M, TERRAIN_FREQUENCY_CPM, 0.1).ri
+FINE_RI = np.concatenate([FIG_RI, np.linspace(1e-4, 1.2, 301)])
+
+
+# ------------------------------------------------------------ closed-form inverses (references)
+# Written here only, independently of the library, from the paper and NOTES.md.
+
+def _e_and_xw(ri, vehicle):
+    e = Z * ri * vehicle.ground_clearance_m  # Eq. (8)
+    ec = np.minimum(e, vehicle.wheel_radius_m)
+    return e, np.sqrt(2 * ec * vehicle.wheel_radius_m - ec**2)  # Eq. (2), saturated at r
+
+
+def _finish(v, ri, vehicle):
+    # RI = 0: no force at all, so top speed; otherwise clip into [0, v_max]
+    v = np.where(np.isnan(v), 0.0, v)
+    return np.where(ri == 0, vehicle.max_speed_mps, np.clip(v, 0.0, vehicle.max_speed_mps))
+
+
+def iecm_closed_form(ri, vehicle):
+    # Eq. (7) with F_hat = F / k: V = (F_hat - e_max) wn X_w / (2 zeta e_max)
+    k, wn, zeta = vehicle.spring_n_per_m, vehicle.natural_frequency_radps, vehicle.damping_ratio
+    e, x_w = _e_and_xw(ri, vehicle)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = (vehicle.max_excitation_force_n / k - e) * wn * x_w / (2 * zeta * e)
+    return _finish(v, ri, vehicle)
+
+
+def sbem_ef_closed_form(ri, vehicle):
+    # NOTES.md: V = (2 X_w / (pi c)) sqrt((F / e)^2 - k^2); 0 when F / e < k
+    k, c = vehicle.spring_n_per_m, vehicle.damping_ns_per_m
+    e, x_w = _e_and_xw(ri, vehicle)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        q = (vehicle.max_excitation_force_n / e) ** 2 - k**2
+        v = 2 * x_w / (math.pi * c) * np.sqrt(np.maximum(q, 0.0))
+    return _finish(v, ri, vehicle)
+
+
+def prev_bem_closed_form(ri, vehicle):
+    # NOTES.md: V = wn / (4 pi zeta f) sqrt((F / (k Y))^2 - 1), Y = sqrt(2) RI h; 0 when F < k Y
+    k, wn, zeta = vehicle.spring_n_per_m, vehicle.natural_frequency_radps, vehicle.damping_ratio
+    y = math.sqrt(2) * ri * vehicle.ground_clearance_m
+    with np.errstate(divide="ignore", invalid="ignore"):
+        q = (vehicle.max_excitation_force_n / (k * y)) ** 2 - 1
+        v = wn / (4 * math.pi * zeta * vehicle.terrain_frequency_cpm) * np.sqrt(np.maximum(q, 0.0))
+    return _finish(v, ri, vehicle)
+
+
+CLOSED_FORMS = {"iecm": iecm_closed_form, "sbem_ef": sbem_ef_closed_form, "prev_bem": prev_bem_closed_form}
+
+
+@pytest.mark.parametrize("semantics", ["first", "largest"])
+@pytest.mark.parametrize("key", list(CLOSED_FORMS))
+@pytest.mark.parametrize("vehicle", [ATV, RES, ATV.replace(max_excitation_force_n=800.0)], ids=["atv", "resonant", "weak"])
+def test_newton_solver_matches_closed_form_inverse(vehicle, key, semantics):
+    expected = CLOSED_FORMS[key](FINE_RI, vehicle)
+    got = allowable_speed(FINE_RI, vehicle, key, semantics)
+    # the grid must exercise every regime: top speed, interior root and 0
+    assert np.any(expected == vehicle.max_speed_mps) and np.any((expected > 0) & (expected < vehicle.max_speed_mps))
+    np.testing.assert_allclose(got, expected, rtol=1e-9, atol=1e-10)
+
+
+def test_hand_value_sbem_ef_inverse():
+    # RI with e_max = 0.02 m (X_w = 0.06 m); limit 18 sqrt(5) N is the force at w_b = 6 rad/s
+    # (test_forces), so the inverse must return V = 2 X_w w_b / pi = 0.72 / pi m/s.
+    vehicle = ATV.replace(max_excitation_force_n=18.0 * math.sqrt(5.0))
+    ri = 0.02 / (Z * 0.1)
+    assert allowable_speed(ri, vehicle, "sbem_ef") == pytest.approx(0.72 / math.pi, rel=1e-10)
+    # IECM hand value: 218 N at 2 m/s (test_forces) -> limit 218 N gives 2 m/s
+    assert allowable_speed(ri, ATV.replace(max_excitation_force_n=218.0), "iecm") == pytest.approx(2.0, rel=1e-10)
+
+
+# ------------------------------------------------------------ SBEM:TF (no closed form)
+
+@pytest.mark.parametrize("vehicle", [ATV, RES], ids=["atv", "resonant"])
+def test_sbem_tf_first_and_largest_are_what_they_claim(vehicle):
+    limit = vehicle.max_transmitted_force_n
+    vmax = vehicle.max_speed_mps
+    ris = FIG_RI[1::3]
+    first = allowable_speed(ris, vehicle, "sbem_tf", "first")
+    largest = allowable_speed(ris, vehicle, "sbem_tf", "largest")
+    assert np.all(first <= largest)
+    for v in (first, largest):  # an interior answer is a root: the force equals the limit
+        interior = (v > 0) & (v < vmax)
+        np.testing.assert_allclose(force_n("sbem_tf", v[interior], ris[interior], vehicle), limit, rtol=1e-9)
+    # "first": every speed from rest up to it is admissible (a fine grid, far finer than the
+    # resonance peak, whose relative width is ~ zeta), and just above it is not
+    unit = np.linspace(0.0, 1.0, 4001)[None, :]
+    below = first[:, None] * unit
+    assert np.all(force_n("sbem_tf", below, ris[:, None], vehicle) <= limit * (1 + 1e-9))
+    short = first < vmax
+    assert np.all(force_n("sbem_tf", first[short] * (1 + 1e-6) + 1e-9, ris[short], vehicle) > limit)
+    # "largest": no speed above it, up to v_max, is admissible
+    above = largest[:, None] + (vmax - largest[:, None]) * unit[:, 1:]
+    short = largest < vmax
+    assert np.all(force_n("sbem_tf", above[short], ris[short, None], vehicle) > limit)
+
+
+@pytest.mark.parametrize("key", list(MODELS))
+@pytest.mark.parametrize("vehicle", [ATV, RES], ids=["atv", "resonant"])
+def test_every_band_edge_is_a_root(key, vehicle):
+    # Regression: a Newton iterate that hit a root exactly (f == 0) was replaced by the
+    # bracket midpoint (SBEM:TF, atv-resonant, RI = 0.154 gave 0.33725 m/s, a speed where
+    # the force is 3 % below the limit, instead of the root 0.34175 m/s).
+    ri = np.linspace(1e-3, 0.8, 800)
+    bands = speed_bands(ri, vehicle, key)
+    limit = get_model(key).limit_n(vehicle)
+    rows = np.broadcast_to(ri[:, None], bands.lower_mps.shape)
+    for edges in (bands.lower_mps, bands.upper_mps):
+        interior = np.isfinite(edges) & (edges > 0) & (edges < vehicle.max_speed_mps)
+        np.testing.assert_allclose(force_n(key, edges[interior], rows[interior], vehicle), limit, rtol=1e-9)
+    assert allowable_speed(0.154, RES, "sbem_tf", "first") == pytest.approx(0.34174518, rel=1e-6)
+
+
+def test_sbem_tf_table_1_is_monotone_so_semantics_agree():
+    np.testing.assert_array_equal(
+        allowable_speed(FINE_RI, ATV, "sbem_tf", "first"), allowable_speed(FINE_RI, ATV, "sbem_tf", "largest")
+    )
+
+
+# ------------------------------------------------------------ edge cases
+
+@pytest.mark.parametrize("semantics", ["first", "largest"])
+@pytest.mark.parametrize("key", list(MODELS))
+def test_smooth_ground_allows_top_speed(key, semantics):
+    assert allowable_speed(0.0, RES, key, semantics) == RES.max_speed_mps
+    np.testing.assert_array_equal(allowable_speed(np.zeros(3), ATV, key, semantics), ATV.max_speed_mps)
+
+
+@pytest.mark.parametrize("semantics", ["first", "largest"])
+@pytest.mark.parametrize("key", ["prev_bem", "iecm", "sbem_ef"])
+def test_limit_below_static_force_gives_zero(key, semantics):
+    # RI = 0.5: static forces k e_max = 900 * 0.2377 = 214 N (IECM, SBEM:EF) and
+    # k Y = 900 * 0.0707 = 63.6 N (Prev:BEM) both exceed a 10 N limit
+    weak = ATV.replace(max_excitation_force_n=10.0)
+    assert allowable_speed(0.5, weak, key, semantics) == 0.0
+    assert speed_bands(0.5, weak, key).count[0] == 0
+
+
+def test_sbem_tf_has_no_static_force():
+    # F_T ~ k e r^2 as V -> 0: even a tiny limit leaves a small positive speed
+    v = allowable_speed(0.5, ATV.replace(max_transmitted_force_n=1.0), "sbem_tf")
+    assert 0 < v < 0.1
+    assert force_n("sbem_tf", v, 0.5, ATV) == pytest.approx(1.0, rel=1e-9)
+
+
+@pytest.mark.parametrize("ri", [math.nan, -0.1, [0.1, math.nan], [-1e-12]])
+def test_nan_or_negative_ri_raises(ri):
+    with pytest.raises(ValueError, match="RI"):
+        allowable_speed(ri, ATV)
+
+
+def test_bad_model_and_semantics_raise():
+    with pytest.raises(ValueError, match="largest"):
+        allowable_speed(0.1, ATV, "sbem_tf", "last")
+    with pytest.raises(ValueError, match="sbem_tf"):
+        allowable_speed(0.1, ATV, "sbem")
+
+
+def test_shapes_scalar_and_array():
+    assert isinstance(allowable_speed(0.3, ATV), float)
+    grid = np.array([[0.0, 0.1], [0.3, 0.7]])
+    out = allowable_speed(grid, ATV, "iecm")
+    assert out.shape == (2, 2)
+    np.testing.assert_allclose(out, iecm_closed_form(grid, ATV), rtol=1e-9)
+
+
+# ------------------------------------------------------------ the paper's claims (Figs. 5, 6)
+
+def test_fig5_ordering_prev_bem_iecm_sbem_ef():
+    # "the method derived in [11] produces the most aggressive velocity profile ... IECM had a
+    # more aggressive velocity profile than the two SBEM methods"
+    prev, iecm, ef = (allowable_speed(FIG_RI, ATV, k) for k in ("prev_bem", "iecm", "sbem_ef"))
+    assert np.all(prev >= iecm - 1e-12)
+    assert np.all(iecm >= ef - 1e-12)
+    assert np.any(prev > iecm + 1) and np.any(iecm > ef + 1)  # not trivially equal
+
+
+def test_fig5_sbem_ef_and_tf_almost_identical():
+    # "SBEM:EF and SBEM:TF produced almost identical profiles": within 0.5 %
+    ef = allowable_speed(FIG_RI, ATV, "sbem_ef")
+    tf = allowable_speed(FIG_RI, ATV, "sbem_tf")
+    np.testing.assert_allclose(tf, ef, rtol=0.005)
+    assert ef.min() < 4.0  # the comparison covers the slow, rough end too
+
+
+def test_fig6_largest_follows_ef_then_collapses_at_ri_045():
+    # "With resonance ... SBEM:TF deviates significantly from SBEM:EF, especially starting at
+    # RI ~ 0.45" (NOTES.md: this is the "largest" root)
+    ef = allowable_speed(FIG_RI, RES, "sbem_ef")
+    tf = allowable_speed(FIG_RI, RES, "sbem_tf", "largest")
+    near = FIG_RI <= 0.36
+    np.testing.assert_allclose(tf[near], ef[near], rtol=0.05)
+    upto = FIG_RI <= 0.40
+    np.testing.assert_allclose(tf[upto], ef[upto], rtol=0.10)
+    collapsed = (FIG_RI >= 0.45) & (FIG_RI <= 0.55)
+    assert collapsed.sum() >= 10
+    assert np.all(tf[collapsed] < 0.5 * ef[collapsed])
+
+
+def test_fig6_first_collapses_from_ri_013():
+    # NOTES.md: the first crossing (every speed from rest admissible) collapses to the band
+    # below resonance, about 0.3 m/s, already from RI ~ 0.13 on
+    first = allowable_speed(FIG_RI, RES, "sbem_tf", "first")
+    assert np.all(first[FIG_RI >= 0.13] < 0.4)
+    assert np.all(first[FIG_RI >= 0.13] > 0.2)
+    assert np.all(first[FIG_RI <= 0.1] > 8.0)  # and it really is a collapse
