@@ -36,7 +36,13 @@ The wheel does not follow the raw samples: a rigid wheel of radius r rolling ove
 follows the upper envelope of circles of radius r centred on the samples (Fig. 2): its
 centre at s_j is w(s_j) = max over |s_i - s_j| <= r of z_i + sqrt(r^2 - (s_i - s_j)^2), and
 the base input is y(s_j) = w(s_j) - r. A step of height e is climbed over the horizontal
-distance X_w = sqrt(2 e r - e^2) of Eq. (2). Between samples y is interpolated linearly.
+distance X_w = sqrt(2 e r - e^2) of Eq. (2). Between samples y is interpolated with a
+monotone cubic (PCHIP, :class:`scipy.interpolate.PchipInterpolator`): its slope is
+continuous and it never overshoots a step. Linear interpolation would not do: its slope
+jumps at every sample, and the damper turns each jump into a force spike c v (change of
+slope) that is an artefact of sampling (1.3 % of the transmitted force on a 10 m sinusoid
+sampled every 2 cm at 2 m/s). A genuine jump of slope (where the wheel first touches an
+edge) is spread over one sample interval instead; its full slope is still reached.
 
 Integration
 -----------
@@ -95,9 +101,8 @@ MAX_STEPS = 20_000_000
 class QuarterCarRun:
     """A simulated drive: time series on the uniform time grid and per-segment peaks.
 
-    At a grid point where the slope of the held input changes, the damper's share of the
-    force jumps by c times that change; the series hold the one-sided value of larger
-    magnitude, and the per-segment peaks take both sides into account.
+    The held input's slope changes at every grid point by O(dt); forces are the central
+    values (mean of the two one-sided limits), those of the smooth input to O(dt^2).
 
     Attributes
     ----------
@@ -281,18 +286,19 @@ def choose_time_step_s(
 ) -> float:
     """The time step dt (s) of the simulation, and why.
 
-    The held input is exact between route samples crossed inside one step; what the hold
-    blurs is each kink of the piecewise-linear y(s) (at a sample), by at most one step. The
-    highest frequency the wheel passes is v_max / spacing samples per second (s^-1), so
+    The solution is exact for the held input (linear in time between grid points); what
+    the hold approximates is the smooth input y(s(t)) (a cubic between route samples). The
+    highest frequency the wheel passes is v_max / spacing samples per second, so
 
-    * dt <= spacing / (4 v_max) (:data:`STEPS_PER_SAMPLE`): every sample interval holds at
-      least three whole steps, so the damper force c y' of every straight piece of the
-      input is reproduced exactly at some grid point, and the spring force k (y - x) is
-      blurred by at most a quarter of a sample's rise;
+    * dt <= spacing / (4 v_max) (:data:`STEPS_PER_SAMPLE`): every cubic piece of the input
+      is sampled at least 4 times even at top speed; the central slope of the held input
+      then differs from y' by O(dt^2) (the closed-form checks in the tests agree to 1e-5);
     * dt <= 2 pi / (200 wn) (:data:`STEPS_PER_PERIOD`): the suspension's own swing is
       sampled 200 times per period, so a peak between grid points is missed by at most
       1 - cos(pi / 200) ~ 1.2e-4 of its amplitude;
     * dt <= (shortest segment time) / 4: every segment holds grid points.
+
+    For a route sampled every 5 cm driven at up to 10 m/s that is dt = 1.25 ms.
 
     Parameters
     ----------
