@@ -161,6 +161,11 @@ def wheel_envelope_m(s_m: np.ndarray, z_m: np.ndarray, wheel_radius_m: float) ->
     and y_j = w_j - r is the height of its lowest point (equal to z_j on ground flatter than
     the wheel). A step of height e is climbed over X_w = sqrt(2 e r - e^2) (Eq. 2).
 
+    The terrain beyond the route's ends is unknown; it is continued along the first and the
+    last chord (straight, at the end spacing) for a wheel radius, so that a wheel near an end
+    is neither lifted nor dropped by missing ground (on a slope of grade g the wheel stands
+    r (sqrt(1 + g^2) - 1) above the samples, up to the last one).
+
     Vectorised over the samples: one pass per neighbour offset, and there are only as many
     offsets as samples fit within r (about r / spacing), so 10^5 samples take milliseconds.
 
@@ -183,6 +188,19 @@ def wheel_envelope_m(s_m: np.ndarray, z_m: np.ndarray, wheel_radius_m: float) ->
     r = float(wheel_radius_m)
     if not (math.isfinite(r) and r > 0):
         raise InputError(f"wheel radius = {wheel_radius_m!r} m: must be a finite number > 0")
+    if s.size >= 2:  # continue the end chords by r, at the end spacings
+        pads = []
+        for a, b_ in ((0, 1), (-1, -2)):
+            step = s[a] - s[b_]  # negative at the start, positive at the end
+            count = int(math.ceil(r / abs(step)))
+            ds = step * np.arange(1, count + 1)
+            pads.append((s[a] + ds, z[a] + (z[a] - z[b_]) / step * ds))
+        head, tail = pads
+        s = np.concatenate([head[0][::-1], s, tail[0]])
+        z = np.concatenate([head[1][::-1], z, tail[1]])
+        inner = slice(head[0].size, s.size - tail[0].size)
+    else:
+        inner = slice(None)
     m = s.size
     idx = np.arange(m)
     reach_right = int(np.max(np.searchsorted(s, s + r, side="right") - 1 - idx, initial=0))
@@ -203,7 +221,7 @@ def wheel_envelope_m(s_m: np.ndarray, z_m: np.ndarray, wheel_radius_m: float) ->
         np.maximum(y[:-offset], z[offset:] - drop, out=y[:-offset])
         # neighbour to the left of j + offset: circle centred on j
         np.maximum(y[offset:], z[:-offset] - drop, out=y[offset:])
-    return y
+    return y[inner].copy()
 
 
 def boundary_times_s(boundaries_m: np.ndarray, speed_mps: np.ndarray) -> np.ndarray:

@@ -235,3 +235,16 @@ def test_matches_solve_ivp_over_a_bump_at_changing_speed() -> None:
     scale = np.max(np.abs(f_ref))
     assert scale > 100.0  # the bump and the step really excite the suspension
     assert np.max(np.abs(f_sim - f_ref)) < 2e-3 * scale
+
+
+def test_wheel_on_a_straight_incline_stands_above_it_up_to_both_ends() -> None:
+    # On a straight incline of grade g the wheel touches the ground below-ahead of its
+    # centre; its lowest point stands r (sqrt(1 + g^2) - 1) above the ground directly below
+    # (right triangle of the radius to the contact point). The ends see missing ground
+    # beyond them continued along the end chords, so the same holds there.
+    g, r = 0.3, 0.1
+    s = np.arange(0.0, 2.0 + 1e-9, 0.005)
+    y = wheel_envelope_m(s, 10.0 + g * s, r)
+    # samples every 5 mm approximate the contact point to O(ds^2 / r)
+    assert np.allclose(y - (10.0 + g * s), r * (math.sqrt(1 + g * g) - 1), atol=2e-4)
+    assert abs((y[-1] - y[-2]) - (y[1] - y[0])) < 1e-4  # no step at either end
