@@ -1,0 +1,391 @@
+"""Check a plan against a simulated vehicle: the forces it really causes on the route.
+
+:func:`verify` drives the vehicle's quarter car (:mod:`profileopt.simulate`) over the
+route's own elevation samples at the profile's speeds, and sets each segment's simulated
+peak force beside the model's prediction (the profile's ``force_n``) and the vehicle's
+limit. The force compared with the limit is the one the model limits: the transmitted force
+F_T for SBEM:TF, the excitation force F = k y + c y' for Prev:BEM, IECM and SBEM:EF.
+
+The simulation is linear and keeps the wheel on the ground. A massless wheel presses on the
+ground with m g + F_T, so where F_T < -m g the real wheel would leave the ground and land
+again; such segments are flagged (``lift_off``): there the linear model's downward force is
+not physical (a real vehicle would see the landing instead).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ._io import atomic_path, atomic_write
+from .errors import InputError
+from .forces import get_model
+from .simulate import QuarterCarRun, simulate_quarter_car
+
+if TYPE_CHECKING:
+    from .planner import Profile
+    from .route import Route
+    from .vehicle import Vehicle
+
+__all__ = ["Verification", "verify", "plot_verification", "VERIFICATION_COLUMNS", "STANDARD_GRAVITY_MPS2"]
+
+#: Standard gravity (m/s^2), for the static wheel load m g.
+STANDARD_GRAVITY_MPS2 = 9.80665
+#: Columns of the verification CSV, in order.
+VERIFICATION_COLUMNS = (
+    "s_start_m", "s_end_m", "speed_start_mps", "speed_end_mps", "ri",
+    "predicted_force_n", "force_limit_n",
+    "sim_transmitted_peak_n", "sim_transmitted_up_n", "sim_transmitted_down_n", "sim_excitation_peak_n",
+    "ratio", "over_limit", "lift_off",
+)
+#: A simulated peak counts as above the prediction only beyond this share of the limit,
+#: so that the ringing after a rough patch over smooth ground (prediction 0) is not counted.
+UNDERPREDICTION_TOLERANCE = 0.01
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Verification:
+    """A profile checked against the simulated quarter car, segment by segment.
+
+    Attributes
+    ----------
+    s_m : numpy.ndarray, shape (N+1,)
+        Segment boundaries (m).
+    speed_mps : numpy.ndarray, shape (N+1,)
+        The profile's speeds at the boundaries (m/s).
+    ri : numpy.ndarray, shape (N,)
+        Each segment's RI (dimensionless), from the profile.
+    predicted_n : numpy.ndarray, shape (N,)
+        The model's largest predicted force over the speeds driven in the segment (N).
+    limit_n : numpy.ndarray, shape (N,)
+        The vehicle's limit for the model's force (N).
+    transmitted_peak_n : numpy.ndarray, shape (N,)
+        Simulated largest |F_T| in the segment (N).
+    transmitted_up_n, transmitted_down_n : numpy.ndarray, shape (N,)
+        Simulated largest and smallest F_T (N): upwards (compressing the suspension) and
+        downwards.
+    excitation_peak_n : numpy.ndarray, shape (N,)
+        Simulated largest |k y + c y'| (N), y measured from the segment's trend line.
+    simulated_n : numpy.ndarray, shape (N,)
+        The simulated peak of the model's own force (``transmitted_peak_n`` for SBEM:TF,
+        ``excitation_peak_n`` otherwise) (N).
+    ratio : numpy.ndarray, shape (N,)
+        ``simulated_n / limit_n`` (dimensionless); above 1 the plan is not safe there.
+    model : str
+        Force model key.
+    quantity : str
+        ``"transmitted"`` or ``"excitation"``.
+    route, vehicle : str
+        Where the route and the vehicle came from.
+    weight_n : float
+        Static wheel load m g (N); F_T below -m g means the wheel leaves the ground.
+    travel_time_s : float
+        Time to drive the profile (s).
+    run : QuarterCarRun
+        The simulation itself (time series), for plots.
+    timings_s : dict
+        Wall-clock seconds: ``simulate`` (of which ``envelope`` and ``integrate``),
+        ``total``.
+    notes : tuple of str
+        Remarks for the user (for example a profile limit that differs from the vehicle's).
+    """
+
+    s_m: np.ndarray
+    speed_mps: np.ndarray
+    ri: np.ndarray
+    predicted_n: np.ndarray
+    limit_n: np.ndarray
+    transmitted_peak_n: np.ndarray
+    transmitted_up_n: np.ndarray
+    transmitted_down_n: np.ndarray
+    excitation_peak_n: np.ndarray
+    simulated_n: np.ndarray
+    ratio: np.ndarray
+    model: str
+    quantity: str
+    route: str
+    vehicle: str
+    weight_n: float
+    travel_time_s: float
+    run: QuarterCarRun
+    timings_s: dict
+    notes: tuple[str, ...] = ()
+
+    @property
+    def length_m(self) -> np.ndarray:
+        """Segment lengths (m), shape (N,)."""
+        return np.diff(self.s_m)
+
+    @property
+    def over(self) -> np.ndarray:
+        """Segments whose simulated force exceeds the limit (bool, shape (N,))."""
+        return self.ratio > 1.0
+
+    @property
+    def over_count(self) -> int:
+        """Number of segments over the limit."""
+        return int(np.count_nonzero(self.over))
+
+    @property
+    def over_length_m(self) -> float:
+        """Total length of the segments over the limit (m)."""
+        return float(np.sum(self.length_m[self.over]))
+
+    @property
+    def over_fraction(self) -> float:
+        """Share of the segments over the limit (dimensionless, 0 to 1)."""
+        return self.over_count / self.ratio.size
+
+    @property
+    def worst_ratio(self) -> float:
+        """Largest simulated force / limit (dimensionless)."""
+        return float(np.max(self.ratio))
+
+    @property
+    def worst_segment(self) -> int:
+        """Index of the segment with the largest ratio."""
+        return int(np.argmax(self.ratio))
+
+    @property
+    def lift_off(self) -> np.ndarray:
+        """Segments where F_T < -m g: the real wheel would leave the ground (bool, (N,))."""
+        return self.transmitted_down_n < -self.weight_n
+
+    @property
+    def underpredicted(self) -> np.ndarray:
+        """Segments whose simulated force exceeds the prediction by more than 1 % of the
+        limit: where the model was not conservative (bool, shape (N,))."""
+        return self.simulated_n > self.predicted_n + UNDERPREDICTION_TOLERANCE * self.limit_n
+
+    def summary(self, timings: bool = True) -> dict:
+        """The headline numbers, JSON-ready (SI units in the key names).
+
+        ``timings=False`` leaves out the wall-clock times, so that the same inputs give
+        the same summary on every run.
+        """
+        i = self.worst_segment
+        return {
+            "route": self.route,
+            "vehicle": self.vehicle,
+            "model": self.model,
+            "quantity": self.quantity,
+            "segments": int(self.ratio.size),
+            "travel_time_s": self.travel_time_s,
+            "worst_ratio": self.worst_ratio,
+            "worst_segment_start_m": float(self.s_m[i]),
+            "worst_simulated_n": float(self.simulated_n[i]),
+            "worst_predicted_n": float(self.predicted_n[i]),
+            "over_count": self.over_count,
+            "over_length_m": self.over_length_m,
+            "over_fraction": self.over_fraction,
+            "underpredicted_count": int(np.count_nonzero(self.underpredicted)),
+            "lift_off_count": int(np.count_nonzero(self.lift_off)),
+            "time_step_s": self.run.time_step_s,
+            "steps": self.run.steps,
+            "notes": list(self.notes),
+        } | ({"timings_s": dict(self.timings_s)} if timings else {})
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The CSV columns by name, in order (:data:`VERIFICATION_COLUMNS`)."""
+        return {
+            "s_start_m": self.s_m[:-1],
+            "s_end_m": self.s_m[1:],
+            "speed_start_mps": self.speed_mps[:-1],
+            "speed_end_mps": self.speed_mps[1:],
+            "ri": self.ri,
+            "predicted_force_n": self.predicted_n,
+            "force_limit_n": self.limit_n,
+            "sim_transmitted_peak_n": self.transmitted_peak_n,
+            "sim_transmitted_up_n": self.transmitted_up_n,
+            "sim_transmitted_down_n": self.transmitted_down_n,
+            "sim_excitation_peak_n": self.excitation_peak_n,
+            "ratio": self.ratio,
+            "over_limit": self.over.astype(int),
+            "lift_off": self.lift_off.astype(int),
+        }
+
+    def to_csv(self, path: str | Path) -> None:
+        """Write one row per segment (:data:`VERIFICATION_COLUMNS`) atomically.
+
+        Numbers carry 10 significant digits; the same inputs give the same bytes.
+        """
+        cols = self.columns()
+        with atomic_write(path) as handle:
+            handle.write(f"# profileopt verify: route {Path(self.route).name}, vehicle {Path(self.vehicle).name}, model {self.model} "
+                         f"({self.quantity} force); forces in N, speeds in m/s, s in m\n")
+            handle.write(",".join(VERIFICATION_COLUMNS) + "\n")
+            for row in zip(*cols.values()):
+                handle.write(",".join(str(int(v)) if isinstance(v, (np.integer, int)) else f"{v + 0.0:.10g}"
+                                      for v in row) + "\n")
+
+    def to_json(self, timings: bool = True) -> str:
+        """:meth:`summary` as indented JSON (with ``timings=False``, the same on every run)."""
+        return json.dumps(self.summary(timings), indent=2)
+
+
+def verify(
+    route: "Route",
+    profile: "Profile",
+    vehicle: "Vehicle",
+    *,
+    model: str | None = None,
+    detrend: bool = True,
+) -> Verification:
+    """Simulate the vehicle driving ``profile`` over ``route`` and compare with the limits.
+
+    Parameters
+    ----------
+    route : Route
+        The terrain (the samples the profile was planned on).
+    profile : Profile
+        Speeds at the segment boundaries (m/s), with the model's prediction ``force_n`` (N)
+        per segment.
+    vehicle : Vehicle
+        The quarter car (m, wn, zeta, r) and the force limits (N).
+    model : str, optional
+        The force model the profile was planned with; default ``profile.model`` (a profile
+        read from CSV does not record it and says ``"sbem_tf"``).
+    detrend : bool, default True
+        Datum of the excitation force: each segment's trend line (True, as the RI) or
+        mean (False).
+
+    Returns
+    -------
+    Verification
+
+    Raises
+    ------
+    InputError
+        The profile does not lie on the route, or a segment is never crossed (speed 0 at
+        both of its ends), or the model is unknown.
+    """
+    t_start = time.perf_counter()
+    key = profile.model if model is None else model
+    try:
+        force_model = get_model(key)
+    except ValueError as exc:
+        raise InputError(f"--model: {exc}") from None
+    s = np.asarray(profile.s_m, dtype=float)
+    span = max(abs(route.s_m[0]), abs(route.s_m[-1]), 1.0) * 1e-9
+    if s[0] < route.s_m[0] - span or s[-1] > route.s_m[-1] + span:
+        raise InputError(
+            f"{route.source}: the profile covers s = {s[0]:g} to {s[-1]:g} m but the route {route.s_m[0]:g} to "
+            f"{route.s_m[-1]:g} m; verify a profile planned on this route"
+        )
+    notes: list[str] = []
+    limit = force_model.limit_n(vehicle)
+    profile_limit = np.asarray(profile.force_limit_n, dtype=float)[:-1]
+    if np.any(np.abs(profile_limit - limit) > 1e-9 * limit):
+        notes.append(
+            f"the profile's force_limit_n ({profile_limit.min():g} to {profile_limit.max():g} N) differs from "
+            f"{vehicle.name or 'the vehicle'}'s {force_model.limit_key} = {limit:g} N: was it planned with "
+            "another vehicle or model? The vehicle's limit is used"
+        )
+    run = simulate_quarter_car(route.s_m, route.z_m, s, profile.speed_mps, vehicle, detrend=detrend)
+    t_sim = time.perf_counter()
+
+    seg = np.clip(np.searchsorted(s, run.s_m, side="right") - 1, 0, s.size - 2)
+    starts = np.searchsorted(seg, np.arange(s.size - 1), side="left")
+    up = np.maximum.reduceat(run.transmitted_n, starts)
+    down = np.minimum.reduceat(run.transmitted_n, starts)
+    simulated = run.transmitted_peak_n if force_model.quantity == "transmitted" else run.excitation_peak_n
+    limit_n = np.full(s.size - 1, limit)
+    t_end = time.perf_counter()
+    return Verification(
+        s_m=s.copy(),
+        speed_mps=np.asarray(profile.speed_mps, dtype=float).copy(),
+        ri=np.asarray(profile.ri, dtype=float)[:-1].copy(),
+        predicted_n=np.asarray(profile.force_n, dtype=float)[:-1].copy(),
+        limit_n=limit_n,
+        transmitted_peak_n=run.transmitted_peak_n,
+        transmitted_up_n=up,
+        transmitted_down_n=down,
+        excitation_peak_n=run.excitation_peak_n,
+        simulated_n=simulated,
+        ratio=simulated / limit_n,
+        model=force_model.key,
+        quantity=force_model.quantity,
+        route=str(route.source),
+        vehicle=vehicle.name or "vehicle",
+        weight_n=vehicle.quarter_mass_kg * STANDARD_GRAVITY_MPS2,
+        travel_time_s=float(run.time_s[-1]),
+        run=run,
+        timings_s={
+            "simulate": t_sim - t_start,
+            "envelope": run.timings_s["envelope"],
+            "integrate": run.timings_s["integrate"],
+            "total": t_end - t_start,
+        },
+        notes=tuple(notes),
+    )
+
+
+def _envelope_trace(x: np.ndarray, values: np.ndarray, bins: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-bin min and max of ``values`` along ``x`` (for plotting millions of points)."""
+    edges = np.linspace(x[0], x[-1], bins + 1)
+    which = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, bins - 1)
+    starts = np.searchsorted(which, np.arange(bins), side="left")
+    filled = np.diff(np.append(starts, which.size)) > 0
+    starts = starts[filled]
+    centres = 0.5 * (edges[:-1] + edges[1:])[filled]
+    return centres, np.minimum.reduceat(values, starts), np.maximum.reduceat(values, starts)
+
+
+def _step(boundaries: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return np.repeat(boundaries, 2)[1:-1], np.repeat(values, 2)
+
+
+def plot_verification(verification: Verification, path: str | Path) -> None:
+    """Write a PNG: forces and limit along s, and simulated versus predicted per segment.
+
+    Top: the simulated force of the model's kind along s (band between its smallest and
+    largest value in each of 3000 bins), the per-segment simulated peak, the model's
+    prediction and the limit; the speed on the right axis. Bottom: per segment, the
+    simulated peak against the prediction (points above the diagonal: the model was not
+    conservative there; above the dashed line: over the limit).
+
+    The file is written through :func:`profileopt._io.atomic_path`.
+    """
+    from matplotlib.figure import Figure
+
+    v = verification
+    run = v.run
+    series = run.transmitted_n if v.quantity == "transmitted" else run.excitation_n
+    label = "transmitted force F_T" if v.quantity == "transmitted" else "excitation force k y + c y'"
+    fig = Figure(figsize=(10, 8), layout="constrained")
+    top, bottom = fig.subplots(2, 1, height_ratios=[3, 2])
+    xs, lo, hi = _envelope_trace(run.s_m, series, 3000)
+    top.fill_between(xs, lo, hi, color="0.6", lw=0, label=f"simulated {label}")
+    top.plot(*_step(v.s_m, v.simulated_n), color="C0", lw=1.2, label="simulated peak |F| per segment")
+    top.plot(*_step(v.s_m, v.predicted_n), color="C2", lw=1.2, label=f"predicted ({get_model(v.model).label})")
+    top.plot(*_step(v.s_m, v.limit_n), color="C3", ls="--", lw=1.2, label="limit")
+    top.axhline(-v.weight_n, color="C4", ls=":", lw=1, label="-m g (wheel lifts off below)")
+    top.set_xlabel("s (m)")
+    top.set_ylabel("force (N)")
+    top.set_xlim(v.s_m[0], v.s_m[-1])
+    top.legend(loc="upper left", fontsize=8)
+    speed_axis = top.twinx()
+    speed_axis.plot(v.s_m, v.speed_mps, color="C1", lw=1, alpha=0.8)
+    speed_axis.set_ylabel("planned speed (m/s)", color="C1")
+    top.set_title(f"{Path(v.route).name}: {get_model(v.model).label} plan, {Path(v.vehicle).stem}; "
+                  f"{v.over_count}/{v.ratio.size} segments over the limit, worst {v.worst_ratio:.2f} x limit")
+
+    over = v.over
+    bottom.scatter(v.predicted_n[~over], v.simulated_n[~over], s=12, color="C0", label="within the limit")
+    bottom.scatter(v.predicted_n[over], v.simulated_n[over], s=16, color="C3", label="over the limit")
+    top_value = max(float(np.max(v.simulated_n)), float(np.max(v.predicted_n)), float(v.limit_n.max())) * 1.05
+    bottom.plot([0, top_value], [0, top_value], color="0.3", lw=1, label="simulated = predicted")
+    bottom.axhline(float(v.limit_n.max()), color="C3", ls="--", lw=1, label="limit")
+    bottom.set_xlim(0, top_value)
+    bottom.set_ylim(0, top_value)
+    bottom.set_xlabel("predicted peak force per segment (N)")
+    bottom.set_ylabel("simulated peak force (N)")
+    bottom.legend(loc="lower right", fontsize=8)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=110)
+
