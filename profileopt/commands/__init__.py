@@ -6,3 +6,4 @@ sub-command by writing its module and importing it here.
 
 from . import figures  # noqa: F401
 from . import export_c  # noqa: F401
+from . import verify  # noqa: F401
