@@ -53,7 +53,8 @@ first-order hold). For such an input the linear ODE has an exact solution: in th
 coordinate u = x - y, m u'' = -k u - c u' between grid points, and at each grid point u'
 jumps by minus the jump of the input's slope. The transition matrix expm(A dt)
 (:func:`scipy.linalg.expm`) makes this a discrete linear system, run with
-:func:`scipy.signal.lfilter` in compiled code (about 1 s per 10^7 steps). The relative
+:func:`scipy.signal.lfilter` in compiled code (whole simulation: about 0.35 s per 10^6 steps,
+a 5 km route sampled every 5 cm at 10 m/s). The relative
 coordinate keeps the numbers small (millimetres) even on routes at absolute elevations of
 hundreds of metres.
 
@@ -69,9 +70,6 @@ import time
 from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.interpolate
-import scipy.linalg
-import scipy.signal
 
 from .errors import InputError
 
@@ -422,6 +420,11 @@ def simulate_quarter_car(
     -------
     QuarterCarRun
     """
+    # scipy's submodules take 0.6 s to import: only when a simulation is run
+    import scipy.interpolate
+    import scipy.linalg
+    import scipy.signal
+
     t_start = time.perf_counter()
     s = np.asarray(s_m, dtype=float)
     z = np.asarray(z_m, dtype=float)
