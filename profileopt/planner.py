@@ -1,0 +1,748 @@
+"""The minimum-time speed profile along a route under per-segment force limits.
+
+The route is cut into segments; each segment's roughness gives, through the chosen force
+model, the *bands* of admissible speeds (:func:`profileopt.speeds.speed_bands`). Inside a
+segment the vehicle passes through every speed between its entry and exit speeds, so the
+force limit holds over the whole segment exactly when both boundary speeds lie in one band
+of that segment (NOTES.md, "Which root"). The planner therefore
+
+1. chooses one band per segment for the whole route at once: the greatest feasible
+   assignment, which is also the fastest (see :func:`choose_bands`);
+2. computes the exact minimum-time profile for those bands and the acceleration bounds by a
+   vectorised forward-backward pass (:func:`greatest_profile`); with smoothing and jerk off
+   that is already the optimum;
+3. polishes it with IPOPT on the nonlinear program in the squared speed b = v^2 at the
+   segment boundaries (Verscheure et al. 2009): travel time plus a smoothness term, subject
+   to the band bounds, the acceleration bounds and the jerk bound.
+
+If IPOPT fails, a profile that keeps every limit (the forward-backward profile with the
+acceleration bounds lowered far enough that the jerk bound holds) is returned instead, with
+the solver's status, and the command line says so.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import casadi as ca
+import numpy as np
+
+from ._io import atomic_write
+from .errors import InfeasibleError, InputError
+from .forces import get_model
+from .speeds import SpeedBands, speed_bands
+from .terrain import segment_roughness_index, worst_case_elevation
+
+if TYPE_CHECKING:
+    from .route import Route
+    from .vehicle import Vehicle
+
+__all__ = [
+    "Segments",
+    "Profile",
+    "PlanningError",
+    "segment_route",
+    "choose_bands",
+    "greatest_profile",
+    "plan",
+    "read_profile",
+    "PROFILE_COLUMNS",
+    "MIN_SAMPLES_PER_SEGMENT",
+    "DEFAULT_SMOOTHING",
+]
+
+#: A segment's RI is a standard deviation: with fewer samples it means little.
+MIN_SAMPLES_PER_SEGMENT = 8
+#: Weight of the jerk term: objective = time + w * integral (jerk / (1 m/s^3))^2 dt, both in s.
+DEFAULT_SMOOTHING = 0.01
+#: Columns of a profile CSV, in order.
+PROFILE_COLUMNS = ("s_m", "speed_mps", "accel_mps2", "time_s", "ri", "e_max_m", "force_n", "force_limit_n")
+#: Speed (m/s) that keeps sqrt(b) differentiable at rest in the NLP's time and jerk terms.
+_SPEED_EPS_MPS = 1e-3
+#: Relative tolerance of the independent constraint check of every returned profile.
+_CHECK_RTOL = 1e-6
+
+
+class PlanningError(RuntimeError):
+    """The solver failed and no profile keeping every limit could be built."""
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Segments:
+    """A route cut into segments, with each segment's roughness and speed caps.
+
+    Attributes
+    ----------
+    boundaries_m : numpy.ndarray, shape (N+1,)
+        Segment boundaries s_i (m); segment i covers s_i <= s < s_{i+1}, the last one closed.
+    length_m : numpy.ndarray, shape (N,)
+        Segment lengths (m).
+    ri : numpy.ndarray, shape (N,)
+        Detrended RI of each segment's own samples (dimensionless).
+    e_max_m : numpy.ndarray, shape (N,)
+        Worst-case elevation of Eq. (8) (m).
+    speed_cap_mps : numpy.ndarray, shape (N,)
+        min(v_max, the route's speed_limit over the segment's samples) (m/s).
+    samples : numpy.ndarray of int, shape (N,)
+        Number of route samples in each segment.
+    notes : tuple of str
+        Decisions taken while segmenting (e.g. a short tail merged into its neighbour).
+    """
+
+    boundaries_m: np.ndarray
+    length_m: np.ndarray
+    ri: np.ndarray
+    e_max_m: np.ndarray
+    speed_cap_mps: np.ndarray
+    samples: np.ndarray
+    notes: tuple[str, ...] = ()
+
+    @property
+    def count(self) -> int:
+        """Number of segments N."""
+        return int(self.length_m.size)
+
+
+def segment_route(route: "Route", vehicle: "Vehicle", segment_length_m: float = 5.0) -> Segments:
+    """Cut a route into segments of ``segment_length_m`` and measure each one's roughness.
+
+    Parameters
+    ----------
+    route : Route
+    vehicle : Vehicle
+        Supplies h (for the RI), Pe (for e_max) and v_max.
+    segment_length_m : float, default 5
+        Segment length (m), > 0 and at most the route's length. The last segment takes what
+        is left; if that tail holds fewer than ``MIN_SAMPLES_PER_SEGMENT`` samples it is
+        merged into the segment before it (noted in ``Segments.notes``).
+
+    Returns
+    -------
+    Segments
+
+    Raises
+    ------
+    InputError
+        A bad segment length, or a segment with fewer than ``MIN_SAMPLES_PER_SEGMENT``
+        samples (the message says what sample spacing is needed).
+    """
+    length = float(segment_length_m)
+    total = route.length_m
+    if not (math.isfinite(length) and length > 0):
+        raise InputError(f"--segment-length = {segment_length_m!r} m: must be a number > 0")
+    if length > total * (1 + 1e-12):
+        raise InputError(
+            f"--segment-length = {length:g} m is longer than the route {route.source} ({total:g} m); "
+            "choose a shorter segment length"
+        )
+    s, z = route.s_m, route.z_m
+    n_full = max(int(math.floor(total / length + 1e-9)), 1)
+    bounds = s[0] + length * np.arange(n_full + 1)
+    if total - n_full * length > 1e-9 * max(total, 1.0):
+        bounds = np.append(bounds, s[-1])
+    bounds[-1] = s[-1]
+    starts = np.searchsorted(s, bounds[:-1], side="left")
+    counts = np.diff(np.append(starts, s.size))
+    notes: tuple[str, ...] = ()
+    if counts.size > 1 and counts[-1] < MIN_SAMPLES_PER_SEGMENT:
+        notes = (
+            f"the last {bounds[-1] - bounds[-2]:.3g} m hold only {counts[-1]} samples; "
+            "merged into the segment before them",
+        )
+        bounds = np.delete(bounds, -2)
+        starts = starts[:-1]
+        counts = np.diff(np.append(starts, s.size))
+    thin = np.flatnonzero(counts < MIN_SAMPLES_PER_SEGMENT)
+    if thin.size:
+        i = thin[0]
+        spacing = length / MIN_SAMPLES_PER_SEGMENT
+        raise InputError(
+            f"{route.source}: segment {i} ({bounds[i]:g} to {bounds[i + 1]:g} m) holds {counts[i]} samples; "
+            f"measuring roughness needs at least {MIN_SAMPLES_PER_SEGMENT}: sample the route every "
+            f"{spacing:.3g} m or closer, or raise --segment-length"
+        )
+    ri = segment_roughness_index(s, z, starts, vehicle.ground_clearance_m)
+    cap = np.full(starts.size, vehicle.max_speed_mps)
+    if route.speed_limit_mps is not None:
+        cap = np.minimum(cap, np.minimum.reduceat(route.speed_limit_mps, starts))
+    return Segments(
+        boundaries_m=bounds,
+        length_m=np.diff(bounds),
+        ri=ri,
+        e_max_m=worst_case_elevation(ri, vehicle),
+        speed_cap_mps=cap,
+        samples=counts,
+        notes=notes,
+    )
+
+
+def greatest_profile(
+    lower_b: np.ndarray, upper_b: np.ndarray, length_m: np.ndarray, accel_mps2: float, decel_mps2: float
+) -> np.ndarray:
+    """The pointwise-greatest squared-speed profile within bounds and acceleration limits.
+
+    Solves b_j <= upper_b[j], b_{j+1} - b_j <= 2 a ds_j, b_j - b_{j+1} <= 2 d ds_j exactly
+    (a forward and a backward pass, each a min-plus prefix scan done with
+    ``numpy.minimum.accumulate``; O(N)). Among all profiles meeting these constraints it is
+    greatest at every boundary, hence of least travel time; it is feasible for the lower
+    bounds too iff any profile is (check ``result >= lower_b``).
+
+    Parameters
+    ----------
+    lower_b, upper_b : numpy.ndarray, shape (N+1,)
+        Bounds on b = v^2 at the boundaries (m^2/s^2); ``lower_b`` is not used here.
+    length_m : numpy.ndarray, shape (N,)
+        Segment lengths (m).
+    accel_mps2, decel_mps2 : float
+        Acceleration and deceleration bounds (m/s^2, both > 0).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N+1,)
+        b (m^2/s^2).
+    """
+    del lower_b  # the greatest solution does not depend on the lower bounds
+    up = np.concatenate([[0.0], np.cumsum(2.0 * accel_mps2 * length_m)])
+    forward = up + np.minimum.accumulate(upper_b - up)
+    down = np.concatenate([[0.0], np.cumsum(2.0 * decel_mps2 * length_m)])
+    backward = np.minimum.accumulate((forward + down)[::-1])[::-1] - down
+    return np.minimum(forward, backward)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Bounds:
+    lower_b: np.ndarray  # (N+1,) m^2/s^2
+    upper_b: np.ndarray  # (N+1,)
+    band: np.ndarray  # (N,) chosen band index
+    greatest_b: np.ndarray  # (N+1,) exact min-time profile for these bands
+
+
+def _boundary_bounds(lo: np.ndarray, hi: np.ndarray, v0: float, vend: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per-boundary bounds on b from the bands of the segments on either side."""
+    lo2, hi2 = lo**2, hi**2
+    lower = np.concatenate([[v0**2], np.maximum(lo2[:-1], lo2[1:]), [vend**2]])
+    upper = np.concatenate([[v0**2], np.minimum(hi2[:-1], hi2[1:]), [vend**2]])
+    lower[0], lower[-1] = max(lower[0], lo2[0]), max(lower[-1], lo2[-1])
+    upper[0], upper[-1] = min(upper[0], hi2[0]), min(upper[-1], hi2[-1])
+    return lower, upper
+
+
+def choose_bands(
+    bands_lower_mps: np.ndarray,
+    bands_upper_mps: np.ndarray,
+    count: np.ndarray,
+    length_m: np.ndarray,
+    accel_mps2: float,
+    decel_mps2: float,
+    v0_mps: float,
+    vend_mps: float,
+    where: np.ndarray,
+) -> _Bounds:
+    """Choose one admissible speed band per segment, for the whole route at once.
+
+    Bands are ordered, so raising a segment's band raises both its lower and upper speed.
+    Raising upper bounds only raises the greatest profile, so if two band assignments are
+    feasible their componentwise maximum is feasible too, and it is at least as fast. There
+    is thus one greatest feasible assignment, and it is the fastest. It is found by starting
+    every segment in its highest band and lowering, round after round, each segment whose
+    lower bound the greatest profile cannot reach: a segment lowered that way is above its
+    band in every feasible assignment, so no feasible choice is ever lost.
+
+    This is what an experienced driver does on washboard: accelerate on smooth ground to
+    above resonance, hold the upper band over the corrugations, and slow down below
+    resonance only where something ahead (a stop, rougher ground) forces it.
+
+    Parameters
+    ----------
+    bands_lower_mps, bands_upper_mps : numpy.ndarray, shape (N, B)
+        Band edges (m/s) per segment, NaN-padded, already capped by the speed limits.
+    count : numpy.ndarray of int, shape (N,)
+        Number of bands per segment.
+    length_m : numpy.ndarray, shape (N,)
+    accel_mps2, decel_mps2 : float
+    v0_mps, vend_mps : float
+        Boundary speeds (m/s).
+    where : numpy.ndarray, shape (N+1,)
+        Boundary positions (m), for messages.
+
+    Raises
+    ------
+    InfeasibleError
+        No assignment keeps every limit; the message says where and why.
+    """
+    n = count.size
+    rows = np.arange(n)
+    empty = np.flatnonzero(count == 0)
+    if empty.size:
+        i = empty[0]
+        raise InfeasibleError(
+            f"segment {i} ({where[i]:g} to {where[i + 1]:g} m): the predicted force exceeds the limit "
+            "at every speed, so the route cannot be driven; choose another route or a vehicle with a "
+            "higher force limit"
+        )
+    band = count - 1
+    tol = 1e-9 * max(float(np.nanmax(bands_upper_mps)) ** 2, 1.0)
+    while True:
+        lo, hi = bands_lower_mps[rows, band], bands_upper_mps[rows, band]
+        lower, upper = _boundary_bounds(lo, hi, v0_mps, vend_mps)
+        b = greatest_profile(lower, upper, length_m, accel_mps2, decel_mps2)
+        short = b < lower - tol
+        if not short.any():
+            return _Bounds(lower_b=lower, upper_b=upper, band=band.copy(), greatest_b=np.maximum(b, lower))
+        j = np.flatnonzero(short)
+        # the segments on either side of boundary j whose own lower edge is out of reach
+        left = j[j > 0] - 1
+        right = j[j < n]
+        culprits = np.unique(np.concatenate([left[lo[left] ** 2 > b[left + 1] + tol],
+                                             right[lo[right] ** 2 > b[right] + tol]]))
+        lowerable = culprits[band[culprits] > 0]
+        if lowerable.size == 0:
+            raise InfeasibleError(_infeasible_message(int(j[0]), b, lower, upper, where, v0_mps, vend_mps))
+        band[lowerable] -= 1
+
+
+def _infeasible_message(j: int, b: np.ndarray, lower: np.ndarray, upper: np.ndarray, where: np.ndarray,
+                        v0: float, vend: float) -> str:
+    n = where.size - 1
+    reach = math.sqrt(max(b[j], 0.0))
+    if j == 0:
+        if upper[0] < v0**2:
+            return (f"--v0 = {v0:g} m/s is above the allowable speed {math.sqrt(max(upper[0], 0.0)):.3g} m/s "
+                    "of the first segment; start slower")
+        return (f"starting at --v0 = {v0:g} m/s the vehicle cannot brake in time for the limits ahead "
+                f"(it can only be at {reach:.3g} m/s); start slower or raise max_decel_mps2")
+    if j == n:
+        if upper[-1] < vend**2:
+            return (f"--vend = {vend:g} m/s is above the allowable speed {math.sqrt(max(upper[-1], 0.0)):.3g} "
+                    "m/s of the last segment; end slower")
+        return (f"the route cannot end at --vend = {vend:g} m/s: the vehicle can reach only {reach:.3g} m/s "
+                "there; lower --vend or raise max_accel_mps2")
+    return (f"at s = {where[j]:g} m the speed must be at least {math.sqrt(lower[j]):.3g} m/s but the "
+            f"acceleration bounds allow only {reach:.3g} m/s; relax --v0/--vend or the vehicle's "
+            "acceleration limits")
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Profile:
+    """A speed profile along a route: one row per segment boundary.
+
+    Attributes
+    ----------
+    s_m : numpy.ndarray, shape (N+1,)
+        Segment boundaries (m).
+    speed_mps : numpy.ndarray, shape (N+1,)
+        Speed at each boundary (m/s). Inside a segment the acceleration is constant, so
+        v(s)^2 is linear in s between boundaries.
+    accel_mps2 : numpy.ndarray, shape (N+1,)
+        Acceleration of the segment starting at that row (m/s^2); the last row repeats.
+    time_s : numpy.ndarray, shape (N+1,)
+        Arrival time at each boundary (s).
+    ri, e_max_m, force_n, force_limit_n : numpy.ndarray, shape (N+1,)
+        The segment's RI, worst-case elevation (m), the largest predicted force over the
+        speeds driven inside it (N) and the model's force limit (N); last row repeats.
+    status : str
+        ``"optimal"`` (IPOPT converged), ``"exact"`` (the forward-backward profile is the
+        optimum: smoothing and jerk off), ``"fallback: <IPOPT status>"`` (IPOPT failed; the
+        returned profile keeps every limit but is not optimal) or ``"read"`` (from a file).
+    success : bool
+        True unless the fallback was used.
+    model : str
+        Force model key.
+    objective : float
+        Travel time plus smoothing term (s), as minimised.
+    timings_s : dict
+        Wall-clock seconds of the stages (``segment``, ``bands``, ``choose``, ``build``,
+        ``solve``, ``total``).
+    iterations : int
+        IPOPT iterations (0 if not run).
+    notes : tuple of str
+        Remarks for the user (merged segments, fallback, ignored columns).
+    allowable_first_mps, allowable_largest_mps : numpy.ndarray, shape (N,) or None
+        Per-segment allowable speeds of the model under both semantics (m/s), capped by the
+        speed limits, for plots and summaries.
+    speed_cap_mps : numpy.ndarray, shape (N,) or None
+        Per-segment speed caps min(v_max, speed_limit) (m/s).
+    """
+
+    s_m: np.ndarray
+    speed_mps: np.ndarray
+    accel_mps2: np.ndarray
+    time_s: np.ndarray
+    ri: np.ndarray
+    e_max_m: np.ndarray
+    force_n: np.ndarray
+    force_limit_n: np.ndarray
+    status: str = "read"
+    success: bool = True
+    model: str = "sbem_tf"
+    objective: float = float("nan")
+    timings_s: dict = dataclasses.field(default_factory=dict)
+    iterations: int = 0
+    notes: tuple[str, ...] = ()
+    allowable_first_mps: np.ndarray | None = None
+    allowable_largest_mps: np.ndarray | None = None
+    speed_cap_mps: np.ndarray | None = None
+
+    @property
+    def travel_time_s(self) -> float:
+        """Time to drive the whole route (s)."""
+        return float(self.time_s[-1])
+
+    @property
+    def distance_m(self) -> float:
+        """Length of the route (m)."""
+        return float(self.s_m[-1] - self.s_m[0])
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The CSV columns by name, in order."""
+        return {name: getattr(self, name) for name in PROFILE_COLUMNS}
+
+    def to_csv(self, path: str | Path) -> None:
+        """Write the profile CSV atomically (columns :data:`PROFILE_COLUMNS`).
+
+        Numbers are written with 17 significant digits (``%.17g``), so reading the file
+        back gives the same floats and the same input gives the same bytes.
+        """
+        table = np.column_stack(list(self.columns().values()))
+        with atomic_write(path) as handle:
+            handle.write(",".join(PROFILE_COLUMNS) + "\n")
+            np.savetxt(handle, table, delimiter=",", fmt="%.17g")
+
+
+def read_profile(path: str | Path) -> Profile:
+    """Read a profile CSV written by :meth:`Profile.to_csv`.
+
+    Raises
+    ------
+    InputError
+        Missing file, wrong header, non-numeric or non-finite cells, or s not increasing.
+    """
+    path = Path(path)
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except FileNotFoundError:
+        raise InputError(f"{path}: profile file not found; check the path") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: cannot read the profile file ({exc})") from None
+    lines = [ln for ln in lines if ln.strip() and not ln.lstrip().startswith("#")]
+    if not lines:
+        raise InputError(f"{path}: the profile file is empty; write one with 'profileopt plan -o'")
+    header = tuple(c.strip() for c in lines[0].split(","))
+    if header != PROFILE_COLUMNS:
+        raise InputError(f"{path}: line 1: header must be {','.join(PROFILE_COLUMNS)}; got {','.join(header)}")
+    rows = []
+    for number, line in enumerate(lines[1:], start=2):
+        cells = line.split(",")
+        try:
+            values = [float(c) for c in cells]
+        except ValueError:
+            raise InputError(f"{path}: line {number}: a cell is not a number") from None
+        if len(values) != len(PROFILE_COLUMNS) or not all(math.isfinite(v) for v in values):
+            raise InputError(f"{path}: line {number}: needs {len(PROFILE_COLUMNS)} finite numbers")
+        rows.append(values)
+    if len(rows) < 2:
+        raise InputError(f"{path}: a profile needs at least 2 rows")
+    table = np.array(rows)
+    if np.any(np.diff(table[:, 0]) <= 0):
+        raise InputError(f"{path}: s_m must increase strictly")
+    if np.any(table[:, 1] < 0):
+        raise InputError(f"{path}: speed_mps must be >= 0")
+    return Profile(**{name: table[:, i] for i, name in enumerate(PROFILE_COLUMNS)})
+
+
+# ---------------------------------------------------------------------------------------
+# The nonlinear program, built once per (size, jerk on/off) and re-solved with parameters.
+
+
+@dataclasses.dataclass(frozen=True)
+class _Nlp:
+    solver: ca.Function
+    n: int
+    with_jerk: bool
+
+
+_IPOPT_OPTIONS = {
+    "ipopt.print_level": 0,
+    "ipopt.sb": "yes",
+    "print_time": False,
+    "ipopt.tol": 1e-10,
+    "ipopt.acceptable_tol": 1e-7,
+    "ipopt.max_iter": 300,
+    "ipopt.mu_strategy": "adaptive",
+    "ipopt.bound_relax_factor": 0.0,
+}
+
+
+@functools.lru_cache(maxsize=8)
+def _build_nlp(n: int, with_jerk: bool) -> _Nlp:
+    """The NLP for N = n segments, in the scaled variable y = b / b_ref (b = v^2).
+
+    Parameters p (in order): segment lengths / L_ref (n), then b_ref (m^2/s^2), L_ref (m),
+    a_ref (m^2/s), T_ref (s), the smoothing weight (-) and 1/J (s^3/m). Constraints g:
+    the accelerations a_i / a_ref (n), then, with jerk, jerk_j / J at the n-1 interior
+    boundaries, where jerk_j = v_j (a_j - a_{j-1}) / ((ds_{j-1} + ds_j) / 2) (jerk = v da/ds).
+    Objective: (travel time + weight * integral (jerk / (1 m/s^3))^2 dt) / T_ref, with
+    integral jerk^2 dt = sum v_j (a_j - a_{j-1})^2 / dsm_j (dt = ds / v).
+    """
+    y = ca.SX.sym("y", n + 1)
+    ds_scaled = ca.SX.sym("ds", n)
+    b_ref, l_ref, a_ref, t_ref, weight, inv_jerk = (ca.SX.sym(name) for name in
+                                                    ("b_ref", "l_ref", "a_ref", "t_ref", "weight", "inv_jerk"))
+    ds = l_ref * ds_scaled  # m
+    b = b_ref * y  # m^2/s^2
+    v = ca.sqrt(b + _SPEED_EPS_MPS**2)  # m/s, smooth at rest
+    travel = ca.sum1(2.0 * ds / (v[:-1] + v[1:]))  # s
+    accel = (b[1:] - b[:-1]) / (2.0 * ds)  # m/s^2
+    g = [accel / a_ref]
+    objective = travel
+    if n >= 2:
+        dsm = 0.5 * (ds[:-1] + ds[1:])
+        da = accel[1:] - accel[:-1]
+        objective = objective + weight * ca.sum1(v[1:-1] * da**2 / dsm)
+        if with_jerk:
+            g.append(v[1:-1] * da / dsm * inv_jerk)
+    p = ca.vertcat(ds_scaled, b_ref, l_ref, a_ref, t_ref, weight, inv_jerk)
+    nlp = {"x": y, "p": p, "f": objective / t_ref, "g": ca.vertcat(*g)}
+    solver = ca.nlpsol(f"profileopt_n{n}_{'jerk' if with_jerk else 'nojerk'}", "ipopt", nlp, _IPOPT_OPTIONS)
+    return _Nlp(solver=solver, n=n, with_jerk=with_jerk)
+
+
+# ---------------------------------------------------------------------------------------
+# Planning
+
+
+def _cap_bands(bands: SpeedBands, cap_mps: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Intersect every band with [0, cap]: clip upper edges, drop bands starting above cap."""
+    cap = cap_mps[:, None]
+    keep = bands.lower_mps <= cap  # NaN compares False: padding stays dropped
+    lower = np.where(keep, bands.lower_mps, np.nan)
+    upper = np.where(keep, np.minimum(bands.upper_mps, cap), np.nan)
+    return lower, upper, keep.sum(axis=1)
+
+
+def _validate_options(vehicle: "Vehicle", model: str, segment_length_m: float, smoothing: float,
+                      max_jerk_mps3: float, v0_mps: float, vend_mps: float) -> None:
+    try:
+        get_model(model)
+    except ValueError as exc:
+        raise InputError(f"--model: {exc}") from None
+    if not (math.isfinite(smoothing) and smoothing >= 0):
+        raise InputError(f"--smoothing = {smoothing!r}: must be a finite number >= 0 (0 is pure minimum time)")
+    if math.isnan(max_jerk_mps3) or not max_jerk_mps3 > 0:
+        raise InputError(f"--max-jerk = {max_jerk_mps3!r} m/s^3: must be > 0 ('inf' turns the jerk limit off)")
+    for flag, value in (("--v0", v0_mps), ("--vend", vend_mps)):
+        if not (math.isfinite(value) and value >= 0):
+            raise InputError(f"{flag} = {value!r} m/s: must be a finite speed >= 0")
+        if value > vehicle.max_speed_mps:
+            raise InputError(f"{flag} = {value:g} m/s is above the vehicle's max_speed_mps = "
+                             f"{vehicle.max_speed_mps:g} m/s; give a lower boundary speed")
+
+
+def _max_force_over_segments(model: str, vehicle: "Vehicle", ri: np.ndarray, speed: np.ndarray,
+                             peaks: np.ndarray) -> np.ndarray:
+    """Largest predicted force (N) over the speeds between each segment's end speeds."""
+    lo = np.minimum(speed[:-1], speed[1:])[:, None]
+    hi = np.maximum(speed[:-1], speed[1:])[:, None]
+    inside = (peaks >= lo) & (peaks <= hi)
+    candidates = np.concatenate([lo, hi, np.where(inside, peaks, lo)], axis=1)
+    forces = get_model(model).force_n(candidates, np.broadcast_to(ri[:, None], candidates.shape), vehicle)
+    return forces.max(axis=1)
+
+
+def _violations(b: np.ndarray, lower: np.ndarray, upper: np.ndarray, length_m: np.ndarray,
+                accel: float, decel: float, jerk: float) -> dict[str, float]:
+    """Largest relative violation of each constraint by the squared speeds b (0 if none)."""
+    scale_b = max(float(upper.max()), 1.0)
+    a = np.diff(b) / (2.0 * length_m)
+    out = {
+        "speed": float(max(np.max(lower - b), np.max(b - upper), 0.0)) / scale_b,
+        "accel": float(max(np.max(a - accel), np.max(-decel - a), 0.0)) / accel,
+        "jerk": 0.0,
+    }
+    if math.isfinite(jerk) and length_m.size >= 2:
+        j = np.sqrt(np.maximum(b[1:-1], 0.0)) * np.diff(a) / (0.5 * (length_m[:-1] + length_m[1:]))
+        out["jerk"] = float(max(np.max(np.abs(j)) - jerk, 0.0)) / jerk
+    return out
+
+
+def plan(
+    route: "Route",
+    vehicle: "Vehicle",
+    *,
+    segment_length_m: float = 5.0,
+    model: str = "sbem_tf",
+    smoothing: float = DEFAULT_SMOOTHING,
+    max_jerk_mps3: float | None = None,
+    v0_mps: float = 0.0,
+    vend_mps: float = 0.0,
+) -> Profile:
+    """The fastest smooth speed profile along ``route`` that keeps every limit.
+
+    Parameters
+    ----------
+    route : Route
+    vehicle : Vehicle
+    segment_length_m : float, default 5
+        Length of the segments whose roughness is measured (m).
+    model : str, default ``"sbem_tf"``
+        Force model: ``"sbem_tf"``, ``"sbem_ef"``, ``"iecm"`` or ``"prev_bem"``.
+    smoothing : float, default :data:`DEFAULT_SMOOTHING` (0.01)
+        Weight w of the comfort term: the objective is travel time + w * integral of
+        (jerk / 1 m/s^3)^2 dt, both in seconds. 0 is pure minimum time.
+    max_jerk_mps3 : float, optional
+        Jerk bound (m/s^3); ``None`` takes the vehicle's ``max_jerk_mps3``, ``inf`` turns
+        it off.
+    v0_mps, vend_mps : float, default 0
+        Speed at the start and at the end of the route (m/s).
+
+    Returns
+    -------
+    Profile
+        ``status`` says how it was obtained; a profile is never returned that breaks a
+        force, speed, acceleration or jerk limit.
+
+    Raises
+    ------
+    InputError
+        Bad options or a route too sparsely sampled for its segments.
+    InfeasibleError
+        No profile keeps every limit (an impassable segment, unreachable boundary speeds).
+    PlanningError
+        IPOPT failed and no limit-keeping fallback profile exists (please report it).
+    """
+    t_start = time.perf_counter()
+    jerk = vehicle.max_jerk_mps3 if max_jerk_mps3 is None else float(max_jerk_mps3)
+    _validate_options(vehicle, model, segment_length_m, smoothing, jerk, v0_mps, vend_mps)
+    timings: dict[str, float] = {}
+    seg = segment_route(route, vehicle, segment_length_m)
+    timings["segment"] = time.perf_counter() - t_start
+
+    t = time.perf_counter()
+    bands = speed_bands(seg.ri, vehicle, model)
+    lower_mps, upper_mps, count = _cap_bands(bands, seg.speed_cap_mps)
+    timings["bands"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    a_max, d_max = vehicle.max_accel_mps2, vehicle.max_decel_mps2
+    args = (lower_mps, upper_mps, count, seg.length_m)
+    chosen = choose_bands(*args, a_max, d_max, v0_mps, vend_mps, seg.boundaries_m)
+    timings["choose"] = time.perf_counter() - t
+
+    notes = list(seg.notes)
+    iterations = 0
+    exact = smoothing == 0 and not math.isfinite(jerk)
+    if exact:
+        b, status, success = chosen.greatest_b, "exact", True
+    else:
+        b, status, iterations, nlp_timings = _solve_nlp(seg, chosen, vehicle, smoothing, jerk)
+        timings.update(nlp_timings)
+        success = status == "optimal"
+        if success:
+            worst = _violations(b, chosen.lower_b, chosen.upper_b, seg.length_m, a_max, d_max, jerk)
+            if max(worst.values()) > _CHECK_RTOL:
+                status, success = f"solution breaks a limit ({max(worst, key=worst.get)})", False
+        if not success:
+            notes.append(f"IPOPT did not converge ({status}); returning a slower profile that keeps every limit")
+            b = _fallback(args, vehicle, jerk, v0_mps, vend_mps, seg)
+            status = f"fallback: {status}"
+    b = np.clip(b, chosen.lower_b, chosen.upper_b) if success else b
+    profile = _assemble(seg, b, vehicle, model, bands, lower_mps, upper_mps, count, smoothing)
+    timings["total"] = time.perf_counter() - t_start
+    return dataclasses.replace(
+        profile, status=status, success=success, objective=_objective(b, seg.length_m, smoothing),
+        timings_s=timings, iterations=iterations, notes=tuple(notes),
+    )
+
+
+def _objective(b: np.ndarray, length_m: np.ndarray, smoothing: float) -> float:
+    """Travel time plus the smoothing term (s) of a squared-speed profile, exactly."""
+    v = np.sqrt(np.maximum(b, 0.0))
+    travel = float(np.sum(2.0 * length_m / (v[:-1] + v[1:])))
+    if length_m.size < 2 or smoothing == 0:
+        return travel
+    a = np.diff(b) / (2.0 * length_m)
+    return travel + smoothing * float(np.sum(v[1:-1] * np.diff(a) ** 2 / (0.5 * (length_m[:-1] + length_m[1:]))))
+
+
+def _solve_nlp(seg: Segments, chosen: _Bounds, vehicle: "Vehicle", smoothing: float,
+               jerk: float) -> tuple[np.ndarray, str, int, dict[str, float]]:
+    n = seg.count
+    t = time.perf_counter()
+    nlp = _build_nlp(n, math.isfinite(jerk))
+    build = time.perf_counter() - t
+    b_ref = max(float(chosen.upper_b.max()), 1e-6)
+    l_ref = float(seg.length_m.mean())
+    a_ref = vehicle.max_accel_mps2
+    t_ref = max(_objective(chosen.greatest_b, seg.length_m, 0.0), 1e-6)
+    inv_jerk = 1.0 / jerk if math.isfinite(jerk) else 0.0
+    p = np.concatenate([seg.length_m / l_ref, [b_ref, l_ref, a_ref, t_ref, smoothing, inv_jerk]])
+    lbg = [np.full(n, -vehicle.max_decel_mps2 / a_ref)]
+    ubg = [np.full(n, 1.0)]
+    if nlp.with_jerk and n >= 2:
+        lbg.append(np.full(n - 1, -1.0))
+        ubg.append(np.full(n - 1, 1.0))
+    t = time.perf_counter()
+    result = nlp.solver(
+        x0=chosen.greatest_b / b_ref, lbx=chosen.lower_b / b_ref, ubx=chosen.upper_b / b_ref,
+        lbg=np.concatenate(lbg), ubg=np.concatenate(ubg), p=p,
+    )
+    stats = nlp.solver.stats()
+    solve = time.perf_counter() - t
+    status = "optimal" if stats.get("success", False) else str(stats.get("return_status", "failed"))
+    b = np.asarray(result["x"]).ravel() * b_ref
+    return b, status, int(stats.get("iter_count", 0)), {"build": build, "solve": solve}
+
+
+def _fallback(args: tuple, vehicle: "Vehicle", jerk: float, v0: float, vend: float, seg: Segments) -> np.ndarray:
+    """A profile that keeps every limit: forward-backward with acceleration bounds so low
+    that the jerk bound holds at every boundary whatever the pattern of accelerations.
+
+    With |a| <= a' everywhere, |a_j - a_{j-1}| <= 2 a', so jerk = v da/ds <= v_top 2 a' /
+    ds_min <= J when a' = J ds_min / (2 v_top).
+    """
+    a, d = vehicle.max_accel_mps2, vehicle.max_decel_mps2
+    if math.isfinite(jerk):
+        v_top = float(np.nanmax(args[1]))
+        cap = jerk * float(seg.length_m.min()) / (2.0 * max(v_top, 1e-9))
+        a, d = min(a, cap), min(d, cap)
+    try:
+        chosen = choose_bands(*args, a, d, v0, vend, seg.boundaries_m)
+    except InfeasibleError as exc:
+        raise PlanningError(f"IPOPT failed and no jerk-limited fallback exists ({exc})") from None
+    return chosen.greatest_b
+
+
+def _assemble(seg: Segments, b: np.ndarray, vehicle: "Vehicle", model: str, bands: SpeedBands,
+              lower_mps: np.ndarray, upper_mps: np.ndarray, count: np.ndarray, smoothing: float) -> Profile:
+    speed = np.sqrt(np.maximum(b, 0.0))
+    accel = np.diff(b) / (2.0 * seg.length_m)
+    with np.errstate(divide="ignore"):
+        dt = 2.0 * seg.length_m / (speed[:-1] + speed[1:])
+    time_s = np.concatenate([[0.0], np.cumsum(dt)])
+    force = _max_force_over_segments(model, vehicle, seg.ri, speed, bands.peaks_mps)
+    rows = np.arange(seg.count)
+    first = np.where((count > 0) & (lower_mps[:, 0] == 0), upper_mps[:, 0], 0.0)
+    largest = np.where(count > 0, upper_mps[rows, np.maximum(count - 1, 0)], 0.0)
+
+    def per_row(x: np.ndarray) -> np.ndarray:
+        return np.append(x, x[-1])
+
+    return Profile(
+        s_m=seg.boundaries_m,
+        speed_mps=speed,
+        accel_mps2=per_row(accel),
+        time_s=time_s,
+        ri=per_row(seg.ri),
+        e_max_m=per_row(seg.e_max_m),
+        force_n=per_row(force),
+        force_limit_n=np.full(seg.count + 1, get_model(model).limit_n(vehicle)),
+        model=model,
+        allowable_first_mps=first,
+        allowable_largest_mps=largest,
+        speed_cap_mps=seg.speed_cap_mps,
+    )
