@@ -17,16 +17,23 @@ from .errors import InputError
 
 __all__ = ["main", "build_parser"]
 
-# Each sub-command registers itself here: name -> (adds its arguments, runs it).
-# A runner takes the parsed arguments and returns the exit status.
-_COMMANDS: dict[str, tuple[str, Callable[[argparse.ArgumentParser], None], Callable[[argparse.Namespace], int]]] = {}
+# Each sub-command registers itself here: name -> (help, runner). A runner takes the parsed
+# arguments and returns the exit status; its ``arguments(parser)`` attribute, if any, adds
+# its options (looked up when the parser is built, so it may be set before or after).
+_COMMANDS: dict[str, tuple[str, Callable[[argparse.Namespace], int]]] = {}
 
 
-def command(name: str, help_text: str):
-    """Register ``run(args) -> int`` as sub-command ``name``; ``run.arguments(parser)`` adds its options."""
+def command(name: str, help_text: str,
+            arguments: Callable[[argparse.ArgumentParser], None] | None = None):
+    """Register ``run(args) -> int`` as sub-command ``name``.
+
+    ``arguments(parser)`` (or an ``arguments`` attribute of ``run``) adds its options.
+    """
 
     def decorate(run: Callable[[argparse.Namespace], int]) -> Callable[[argparse.Namespace], int]:
-        _COMMANDS[name] = (help_text, getattr(run, "arguments", lambda p: None), run)
+        if arguments is not None:
+            run.arguments = arguments  # type: ignore[attr-defined]
+        _COMMANDS[name] = (help_text, run)
         return run
 
     return decorate
@@ -40,9 +47,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--debug", action="store_true", help="show a traceback on any error")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for name, (help_text, add_arguments, _run) in _COMMANDS.items():
+    for name, (help_text, run) in _COMMANDS.items():
         p = sub.add_parser(name, help=help_text, description=help_text)
-        add_arguments(p)
+        getattr(run, "arguments", lambda parser: None)(p)
     return parser
 
 
@@ -53,7 +60,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return _COMMANDS[args.command][2](args)
+        return _COMMANDS[args.command][1](args)
     except InputError as exc:
         if args.debug:
             traceback.print_exc()
