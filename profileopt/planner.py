@@ -34,7 +34,7 @@ import numpy as np
 
 from ._io import atomic_write
 from .errors import InfeasibleError, InputError
-from .forces import get_model
+from .forces import MODELS, get_model
 from .speeds import SpeedBands, speed_bands
 from .terrain import segment_roughness_index, worst_case_elevation
 
@@ -367,6 +367,13 @@ class Profile:
         speed limits, for plots and summaries.
     speed_cap_mps : numpy.ndarray, shape (N,) or None
         Per-segment speed caps min(v_max, speed_limit) (m/s).
+    band_lower_mps, band_upper_mps : numpy.ndarray, shape (N,) or None
+        The admissible speed band chosen for each segment (m/s), capped by the speed caps:
+        both boundary speeds of segment i lie in [band_lower_mps[i], band_upper_mps[i]].
+    settings : dict
+        What the profile was planned with: vehicle, model, segment_length_m, smoothing,
+        max_accel_mps2, max_decel_mps2, max_jerk_mps3, v0_mps, vend_mps, method. Written
+        into the CSV's first (comment) line and read back by :func:`read_profile`.
     """
 
     s_m: np.ndarray
@@ -387,6 +394,9 @@ class Profile:
     allowable_first_mps: np.ndarray | None = None
     allowable_largest_mps: np.ndarray | None = None
     speed_cap_mps: np.ndarray | None = None
+    band_lower_mps: np.ndarray | None = None
+    band_upper_mps: np.ndarray | None = None
+    settings: dict = dataclasses.field(default_factory=dict)
 
     @property
     def travel_time_s(self) -> float:
@@ -409,9 +419,17 @@ class Profile:
         back gives the same floats and the same input gives the same bytes.
         """
         table = np.column_stack(list(self.columns().values()))
+        meta = " ".join(f"{k}={_format_setting(v)}" for k, v in self.settings.items())
         with atomic_write(path) as handle:
+            handle.write(f"# profileopt profile: {meta} status={self.status.replace(' ', '_')}\n")
             handle.write(",".join(PROFILE_COLUMNS) + "\n")
             np.savetxt(handle, table, delimiter=",", fmt="%.17g")
+
+
+def _format_setting(value: object) -> str:
+    if isinstance(value, float):
+        return repr(value)
+    return str(value).replace(" ", "_")
 
 
 def read_profile(path: str | Path) -> Profile:
@@ -429,6 +447,12 @@ def read_profile(path: str | Path) -> Profile:
         raise InputError(f"{path}: profile file not found; check the path") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"{path}: cannot read the profile file ({exc})") from None
+    settings: dict[str, object] = {}
+    for line in lines:
+        if line.startswith("# profileopt profile:"):
+            for item in line.split(":", 1)[1].split():
+                key, _, value = item.partition("=")
+                settings[key] = value
     lines = [ln for ln in lines if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
         raise InputError(f"{path}: the profile file is empty; write one with 'profileopt plan -o'")
@@ -452,7 +476,11 @@ def read_profile(path: str | Path) -> Profile:
         raise InputError(f"{path}: s_m must increase strictly")
     if np.any(table[:, 1] < 0):
         raise InputError(f"{path}: speed_mps must be >= 0")
-    return Profile(**{name: table[:, i] for i, name in enumerate(PROFILE_COLUMNS)})
+    model = str(settings.get("model", "sbem_tf"))
+    if model not in MODELS:
+        raise InputError(f"{path}: line 1: model={model} is unknown; it must be one of {', '.join(MODELS)}")
+    return Profile(**{name: table[:, i] for i, name in enumerate(PROFILE_COLUMNS)}, model=model,
+                   settings=settings)
 
 
 # ---------------------------------------------------------------------------------------
@@ -580,6 +608,7 @@ def plan(
     max_jerk_mps3: float | None = None,
     v0_mps: float = 0.0,
     vend_mps: float = 0.0,
+    method: str = "auto",
 ) -> Profile:
     """The fastest smooth speed profile along ``route`` that keeps every limit.
 
@@ -599,6 +628,10 @@ def plan(
         it off.
     v0_mps, vend_mps : float, default 0
         Speed at the start and at the end of the route (m/s).
+    method : {"auto", "ipopt"}, default "auto"
+        ``"auto"`` returns the exact forward-backward profile without running IPOPT when it
+        is provably optimal (smoothing 0 and no jerk bound); ``"ipopt"`` always solves the
+        NLP (for benchmarks and tests of the NLP itself).
 
     Returns
     -------
@@ -618,6 +651,8 @@ def plan(
     t_start = time.perf_counter()
     jerk = vehicle.max_jerk_mps3 if max_jerk_mps3 is None else float(max_jerk_mps3)
     _validate_options(vehicle, model, segment_length_m, smoothing, jerk, v0_mps, vend_mps)
+    if method not in ("auto", "ipopt"):
+        raise InputError(f"--method = {method!r}: choose 'auto' or 'ipopt'")
     timings: dict[str, float] = {}
     seg = segment_route(route, vehicle, segment_length_m)
     timings["segment"] = time.perf_counter() - t_start
@@ -635,7 +670,7 @@ def plan(
 
     notes = list(seg.notes)
     iterations = 0
-    exact = smoothing == 0 and not math.isfinite(jerk)
+    exact = method == "auto" and smoothing == 0 and not math.isfinite(jerk)
     if exact:
         b, status, success = chosen.greatest_b, "exact", True
     else:
@@ -651,11 +686,18 @@ def plan(
             b = _fallback(args, vehicle, jerk, v0_mps, vend_mps, seg)
             status = f"fallback: {status}"
     b = np.clip(b, chosen.lower_b, chosen.upper_b) if success else b
-    profile = _assemble(seg, b, vehicle, model, bands, lower_mps, upper_mps, count, smoothing)
+    profile = _assemble(seg, b, vehicle, model, bands, lower_mps, upper_mps, count, chosen)
+    settings = {
+        "vehicle": Path(vehicle.name).stem if vehicle.name else "vehicle", "model": model,
+        "segment_length_m": float(segment_length_m), "smoothing": float(smoothing),
+        "max_speed_mps": vehicle.max_speed_mps, "max_accel_mps2": a_max, "max_decel_mps2": d_max,
+        "max_jerk_mps3": jerk,
+        "v0_mps": float(v0_mps), "vend_mps": float(vend_mps), "method": method,
+    }
     timings["total"] = time.perf_counter() - t_start
     return dataclasses.replace(
         profile, status=status, success=success, objective=_objective(b, seg.length_m, smoothing),
-        timings_s=timings, iterations=iterations, notes=tuple(notes),
+        timings_s=timings, iterations=iterations, notes=tuple(notes), settings=settings,
     )
 
 
@@ -718,7 +760,7 @@ def _fallback(args: tuple, vehicle: "Vehicle", jerk: float, v0: float, vend: flo
 
 
 def _assemble(seg: Segments, b: np.ndarray, vehicle: "Vehicle", model: str, bands: SpeedBands,
-              lower_mps: np.ndarray, upper_mps: np.ndarray, count: np.ndarray, smoothing: float) -> Profile:
+              lower_mps: np.ndarray, upper_mps: np.ndarray, count: np.ndarray, chosen: _Bounds) -> Profile:
     speed = np.sqrt(np.maximum(b, 0.0))
     accel = np.diff(b) / (2.0 * seg.length_m)
     with np.errstate(divide="ignore"):
@@ -745,4 +787,84 @@ def _assemble(seg: Segments, b: np.ndarray, vehicle: "Vehicle", model: str, band
         allowable_first_mps=first,
         allowable_largest_mps=largest,
         speed_cap_mps=seg.speed_cap_mps,
+        band_lower_mps=lower_mps[rows, chosen.band],
+        band_upper_mps=upper_mps[rows, chosen.band],
     )
+
+
+def jerk_mps3(profile: Profile) -> np.ndarray:
+    """Jerk v da/ds at the interior boundaries (m/s^3), shape (N-1,)."""
+    ds = np.diff(profile.s_m)
+    a = profile.accel_mps2[:-1]
+    return profile.speed_mps[1:-1] * np.diff(a) / (0.5 * (ds[:-1] + ds[1:]))
+
+
+def summarize(profile: Profile) -> dict:
+    """A short account of a planned profile, for people and for ``--json``.
+
+    Returns
+    -------
+    dict
+        ``distance_m``, ``travel_time_s``, ``mean_speed_mps``; ``slowest_segment`` (index,
+        ``s_start_m``, ``s_end_m``, ``top_speed_mps``, ``ri`` and ``reason``: which limit
+        holds the vehicle back there); ``margins`` (the largest ratio of each constrained
+        quantity to its limit, and where: force, acceleration, deceleration, jerk); and
+        ``solver`` (status, success, iterations, time_s). Plain Python numbers only.
+    """
+    n = profile.s_m.size - 1
+    settings = profile.settings
+    spec = get_model(profile.model)
+    v = profile.speed_mps
+    top = np.maximum(v[:-1], v[1:])
+    i = int(np.argmin(top))
+    accel = profile.accel_mps2[:-1]
+    tol = 1e-6 * max(float(v.max()), 1.0)
+    a_max = float(settings.get("max_accel_mps2", math.nan))
+    d_max = float(settings.get("max_decel_mps2", math.nan))
+    j_max = float(settings.get("max_jerk_mps3", math.inf))
+    reason = "the acceleration, jerk and smoothing terms"
+    if profile.band_upper_mps is not None and top[i] >= profile.band_upper_mps[i] - tol:
+        cap = profile.speed_cap_mps[i] if profile.speed_cap_mps is not None else math.inf
+        if profile.band_upper_mps[i] >= cap - tol:
+            top_speed = float(settings.get("max_speed_mps", math.inf))
+            reason = "the vehicle's top speed" if cap >= top_speed - tol else f"the route's speed_limit ({cap:.3g} m/s)"
+        else:
+            reason = f"the {spec.label} force limit ({spec.quantity}, {profile.force_limit_n[i]:g} N) at RI {profile.ri[i]:.3f}"
+            if profile.allowable_largest_mps is not None and profile.band_upper_mps[i] < profile.allowable_largest_mps[i] - tol:
+                reason += (f", held below resonance: the faster band up to {profile.allowable_largest_mps[i]:.3g} m/s "
+                           "cannot be entered or left in time")
+    elif math.isfinite(a_max) and accel[i] >= a_max * (1 - 1e-6):
+        reason = "accelerating at max_accel_mps2 (from a slower point before it)"
+    elif math.isfinite(d_max) and -accel[i] >= d_max * (1 - 1e-6):
+        reason = "braking at max_decel_mps2 (for a slower point after it)"
+
+    def worst(values: np.ndarray, limit: float, where: np.ndarray) -> dict:
+        if values.size == 0 or not math.isfinite(limit):
+            return {"ratio": None, "s_m": None}
+        k = int(np.argmax(values))
+        return {"ratio": float(values[k] / limit), "s_m": float(where[k])}
+
+    force_ratio = profile.force_n[:-1] / profile.force_limit_n[:-1]
+    k = int(np.argmax(force_ratio))
+    return {
+        "distance_m": profile.distance_m,
+        "travel_time_s": profile.travel_time_s,
+        "mean_speed_mps": profile.distance_m / profile.travel_time_s if profile.travel_time_s > 0 else 0.0,
+        "segments": n,
+        "model": profile.model,
+        "slowest_segment": {
+            "index": i, "s_start_m": float(profile.s_m[i]), "s_end_m": float(profile.s_m[i + 1]),
+            "top_speed_mps": float(top[i]), "ri": float(profile.ri[i]), "reason": reason,
+        },
+        "margins": {
+            "force": {"ratio": float(force_ratio[k]), "s_m": float(profile.s_m[k])},
+            "accel": worst(accel, a_max, profile.s_m[:-1]),
+            "decel": worst(-accel, d_max, profile.s_m[:-1]),
+            "jerk": worst(np.abs(jerk_mps3(profile)), j_max, profile.s_m[1:-1]),
+        },
+        "solver": {
+            "status": profile.status, "success": profile.success, "iterations": profile.iterations,
+            "time_s": float(profile.timings_s.get("total", math.nan)),
+        },
+        "notes": list(profile.notes),
+    }

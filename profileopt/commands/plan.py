@@ -1,0 +1,103 @@
+"""``profileopt plan``: the minimum-time speed profile along a route."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from ..cli import command
+from ..forces import MODELS
+from ..planner import DEFAULT_SMOOTHING, plan, summarize
+from ..route import read_route
+from ..vehicle import load_vehicle
+
+
+def _float(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
+
+
+def _arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("route", help="route CSV: columns s,z or x,y,z (m), optional speed_limit (m/s)")
+    parser.add_argument("--vehicle", default="atv", metavar="NAME_OR_TOML",
+                        help="bundled vehicle name or .toml file (default: atv)")
+    parser.add_argument("-o", "--output", metavar="CSV", help="write the profile CSV here")
+    parser.add_argument("--segment-length", type=_float, default=5.0, metavar="M",
+                        help="segment length in m (default: 5)")
+    parser.add_argument("--model", default="sbem_tf", choices=list(MODELS),
+                        help="force model (default: sbem_tf)")
+    parser.add_argument("--smoothing", type=_float, default=DEFAULT_SMOOTHING, metavar="W",
+                        help="weight of the comfort term: objective = time + W * integral (jerk/(1 m/s^3))^2 dt "
+                             f"(default: {DEFAULT_SMOOTHING}; 0 = pure minimum time)")
+    parser.add_argument("--max-jerk", type=_float, default=None, metavar="MPS3",
+                        help="jerk bound in m/s^3 (default: the vehicle file's; 'inf' turns it off)")
+    parser.add_argument("--v0", type=_float, default=0.0, metavar="MPS", help="speed at the start, m/s (default: 0)")
+    parser.add_argument("--vend", type=_float, default=0.0, metavar="MPS", help="speed at the end, m/s (default: 0)")
+    parser.add_argument("--method", default="auto", choices=["auto", "ipopt"],
+                        help="'auto': exact forward-backward profile when it is optimal, else IPOPT; "
+                             "'ipopt': always IPOPT")
+    parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    parser.add_argument("--plot", metavar="PNG", help="draw speed, allowable speeds and RI along the route")
+
+
+def _run(args: argparse.Namespace) -> int:
+    vehicle = load_vehicle(args.vehicle)
+    route = read_route(args.route)
+    for note in route.notes:
+        print(f"profileopt plan: note: {note}", file=sys.stderr)
+    profile = plan(
+        route, vehicle, segment_length_m=args.segment_length, model=args.model, smoothing=args.smoothing,
+        max_jerk_mps3=args.max_jerk, v0_mps=args.v0, vend_mps=args.vend, method=args.method,
+    )
+    if args.output:
+        profile.to_csv(args.output)
+    if args.plot:
+        from ..plots import plot_profile
+
+        plot_profile(profile, args.plot)
+    for note in profile.notes:
+        print(f"profileopt plan: note: {note}", file=sys.stderr)
+    summary = summarize(profile)
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        print(_human(summary, args))
+    return 0
+
+
+def _ratio(m: dict) -> str:
+    return "off" if m["ratio"] is None else f"{100 * m['ratio']:.1f} % of limit at s = {m['s_m']:g} m"
+
+
+def _human(summary: dict, args: argparse.Namespace) -> str:
+    slow = summary["slowest_segment"]
+    margins = summary["margins"]
+    solver = summary["solver"]
+    lines = [
+        f"route {args.route}: {summary['distance_m']:.1f} m in {summary['segments']} segments, "
+        f"vehicle {args.vehicle}, model {MODELS[summary['model']].label}",
+        f"  travel time  {summary['travel_time_s']:.2f} s   mean speed {summary['mean_speed_mps']:.2f} m/s",
+        f"  slowest      {slow['s_start_m']:g}-{slow['s_end_m']:g} m at {slow['top_speed_mps']:.3g} m/s: "
+        f"{slow['reason']}",
+        f"  force        {_ratio(margins['force'])}",
+        f"  acceleration {_ratio(margins['accel'])}",
+        f"  deceleration {_ratio(margins['decel'])}",
+        f"  jerk         {_ratio(margins['jerk'])}",
+        f"  solver       {solver['status']} ({solver['iterations']} IPOPT iterations), "
+        f"planned in {solver['time_s']:.3f} s",
+    ]
+    if args.output:
+        lines.append(f"wrote {args.output}")
+    if args.plot:
+        lines.append(f"wrote {args.plot}")
+    if not solver["success"]:
+        print(f"profileopt plan: warning: IPOPT did not converge ({solver['status']}); the profile keeps every "
+              "limit but is slower than optimal", file=sys.stderr)
+    return "\n".join(lines)
+
+
+command("plan", "plan the fastest speed profile along a route that keeps the terrain forces within limits",
+        arguments=_arguments)(_run)
