@@ -544,6 +544,17 @@ def _build_nlp(n: int, with_jerk: bool) -> _Nlp:
 # Planning
 
 
+def _first_band_only(bands: SpeedBands) -> SpeedBands:
+    """Only the band that starts at rest, per segment (the "first" semantics)."""
+    starts_at_rest = (bands.count > 0) & (bands.lower_mps[:, 0] == 0.0)
+    return dataclasses.replace(
+        bands,
+        lower_mps=np.where(starts_at_rest, bands.lower_mps[:, 0], np.nan)[:, None],
+        upper_mps=np.where(starts_at_rest, bands.upper_mps[:, 0], np.nan)[:, None],
+        count=starts_at_rest.astype(bands.count.dtype),
+    )
+
+
 def _cap_bands(bands: SpeedBands, cap_mps: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Intersect every band with [0, cap]: clip upper edges, drop bands starting above cap."""
     cap = cap_mps[:, None]
@@ -609,6 +620,7 @@ def plan(
     v0_mps: float = 0.0,
     vend_mps: float = 0.0,
     method: str = "auto",
+    bands: str = "all",
 ) -> Profile:
     """The fastest smooth speed profile along ``route`` that keeps every limit.
 
@@ -632,6 +644,11 @@ def plan(
         ``"auto"`` returns the exact forward-backward profile without running IPOPT when it
         is provably optimal (smoothing 0 and no jerk bound); ``"ipopt"`` always solves the
         NLP (for benchmarks and tests of the NLP itself).
+    bands : {"all", "first"}, default "all"
+        ``"all"`` lets each segment use any band of admissible speeds, chosen over the whole
+        route (a resonant vehicle may cross washboard above resonance); ``"first"`` keeps
+        every segment in its band that starts at rest (NOTES.md "first" semantics: safe for
+        a vehicle that may have to slow down anywhere).
 
     Returns
     -------
@@ -653,13 +670,17 @@ def plan(
     _validate_options(vehicle, model, segment_length_m, smoothing, jerk, v0_mps, vend_mps)
     if method not in ("auto", "ipopt"):
         raise InputError(f"--method = {method!r}: choose 'auto' or 'ipopt'")
+    if bands not in ("all", "first"):
+        raise InputError(f"--bands = {bands!r}: choose 'all' or 'first'")
     timings: dict[str, float] = {}
     seg = segment_route(route, vehicle, segment_length_m)
     timings["segment"] = time.perf_counter() - t_start
 
     t = time.perf_counter()
-    bands = speed_bands(seg.ri, vehicle, model)
-    lower_mps, upper_mps, count = _cap_bands(bands, seg.speed_cap_mps)
+    speed_sets = speed_bands(seg.ri, vehicle, model)
+    if bands == "first":
+        speed_sets = _first_band_only(speed_sets)
+    lower_mps, upper_mps, count = _cap_bands(speed_sets, seg.speed_cap_mps)
     timings["bands"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -686,13 +707,13 @@ def plan(
             b = _fallback(args, vehicle, jerk, v0_mps, vend_mps, seg)
             status = f"fallback: {status}"
     b = np.clip(b, chosen.lower_b, chosen.upper_b) if success else b
-    profile = _assemble(seg, b, vehicle, model, bands, lower_mps, upper_mps, count, chosen)
+    profile = _assemble(seg, b, vehicle, model, speed_sets, lower_mps, upper_mps, count, chosen)
     settings = {
         "vehicle": Path(vehicle.name).stem if vehicle.name else "vehicle", "model": model,
         "segment_length_m": float(segment_length_m), "smoothing": float(smoothing),
         "max_speed_mps": vehicle.max_speed_mps, "max_accel_mps2": a_max, "max_decel_mps2": d_max,
         "max_jerk_mps3": jerk,
-        "v0_mps": float(v0_mps), "vend_mps": float(vend_mps), "method": method,
+        "v0_mps": float(v0_mps), "vend_mps": float(vend_mps), "method": method, "bands": bands,
     }
     timings["total"] = time.perf_counter() - t_start
     return dataclasses.replace(

@@ -39,6 +39,10 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--method", default="auto", choices=["auto", "ipopt"],
                         help="'auto': exact forward-backward profile when it is optimal, else IPOPT; "
                              "'ipopt': always IPOPT")
+    parser.add_argument("--bands", default="all", choices=["all", "first"],
+                        help="'all': any admissible speed band, chosen over the whole route (may cross "
+                             "washboard above resonance); 'first': only speeds reachable from rest "
+                             "without crossing a force peak (default: all)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument("--plot", metavar="PNG", help="draw speed, allowable speeds and RI along the route")
 
@@ -51,6 +55,7 @@ def _run(args: argparse.Namespace) -> int:
     profile = plan(
         route, vehicle, segment_length_m=args.segment_length, model=args.model, smoothing=args.smoothing,
         max_jerk_mps3=args.max_jerk, v0_mps=args.v0, vend_mps=args.vend, method=args.method,
+        bands=args.bands,
     )
     if args.output:
         profile.to_csv(args.output)
