@@ -1,0 +1,265 @@
+"""The route planner: exact optima, band choice over resonance, constraint checks, CLI.
+
+Every profile produced here is checked by ``check_profile`` below, an evaluation of every
+constraint written independently of the planner: speeds against the caps, accelerations
+recomputed from speed^2 differences, jerk v da/ds, and the model's force on a fine grid of
+the speeds each segment passes through.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.optimize import linprog
+
+import profileopt.planner as planner
+from profileopt import InfeasibleError, InputError, force_n, load_vehicle
+from profileopt.planner import (
+    PROFILE_COLUMNS,
+    greatest_profile,
+    plan,
+    read_profile,
+    segment_route,
+    summarize,
+)
+from profileopt.route import Route, read_route
+
+ROOT = Path(__file__).resolve().parents[1]
+ROUTES = ROOT / "examples" / "routes"
+
+
+def check_profile(profile, route, vehicle, *, jerk=None, rtol=1e-6, grid=64):
+    """Assert that ``profile`` keeps every limit (independent of the planner's own check)."""
+    s, v = profile.s_m, profile.speed_mps
+    vmax = vehicle.max_speed_mps
+    assert np.all(v >= 0) and np.all(v <= vmax * (1 + rtol))
+    if route.speed_limit_mps is not None:
+        # every sample inside a segment caps both of the segment's boundary speeds
+        seg = np.searchsorted(s, route.s_m, side="right") - 1
+        seg = np.clip(seg, 0, s.size - 2)
+        cap = np.full(s.size - 1, np.inf)
+        np.minimum.at(cap, seg, route.speed_limit_mps)
+        assert np.all(np.maximum(v[:-1], v[1:]) <= cap * (1 + rtol))
+    ds = np.diff(s)
+    accel = (v[1:] ** 2 - v[:-1] ** 2) / (2 * ds)  # constant acceleration in s: v^2 linear
+    assert np.all(accel <= vehicle.max_accel_mps2 * (1 + rtol))
+    assert np.all(-accel <= vehicle.max_decel_mps2 * (1 + rtol))
+    np.testing.assert_allclose(profile.accel_mps2[:-1], accel, rtol=1e-9, atol=1e-9)
+    j_max = vehicle.max_jerk_mps3 if jerk is None else jerk
+    if math.isfinite(j_max) and ds.size >= 2:
+        jerk_values = v[1:-1] * np.diff(accel) / (0.5 * (ds[:-1] + ds[1:]))
+        assert np.all(np.abs(jerk_values) <= j_max * (1 + rtol))
+    # the force over every speed between the two boundary speeds of each segment
+    frac = np.linspace(0.0, 1.0, grid)
+    speeds = v[:-1, None] + (v[1:] - v[:-1])[:, None] * frac[None, :]
+    ri = profile.ri[:-1, None] * np.ones_like(frac)[None, :]
+    forces = force_n(profile.model, speeds, ri, vehicle)
+    limit = profile.force_limit_n[0]
+    assert np.all(forces <= limit * (1 + rtol)), f"force ratio {forces.max() / limit}"
+    # the reported force is at least what the grid sees, and within the limit
+    assert np.all(profile.force_n[:-1] >= forces.max(axis=1) * (1 - 1e-9))
+    assert np.all(profile.force_n <= limit * (1 + rtol))
+    # time: dt = 2 ds / (v_i + v_{i+1}) for constant acceleration
+    np.testing.assert_allclose(np.diff(profile.time_s), 2 * ds / (v[:-1] + v[1:]), rtol=1e-12)
+
+
+def flat_route(length_m=500.0, spacing_m=0.25, speed_limit=None):
+    s = np.arange(0.0, length_m + 1e-9, spacing_m)
+    return Route(s, np.zeros_like(s), speed_limit, source="flat")
+
+
+@pytest.fixture(scope="module")
+def atv():
+    return load_vehicle("atv")
+
+
+@pytest.fixture(scope="module")
+def resonant():
+    return load_vehicle("atv-resonant")
+
+
+def test_flat_route_matches_the_trapezoid_closed_form(atv):
+    # Flat ground: RI = 0, no force limit, so rest-to-rest at top speed V = 20 m/s with
+    # a = 2.5, d = 4 m/s^2. Accelerating takes V^2/(2a) = 80 m (16 segments of 5 m) and
+    # braking V^2/(2d) = 50 m (10 segments): the switches fall on boundaries, so the
+    # piecewise-constant acceleration of the planner is exact. Trapezoid time:
+    # t = L/V + V/(2a) + V/(2d) = 500/20 + 20/5 + 20/8 = 31.5 s.
+    route = flat_route()
+    profile = plan(route, atv, smoothing=0.0, max_jerk_mps3=math.inf)
+    assert profile.status == "exact"
+    assert profile.travel_time_s == pytest.approx(31.5, rel=1e-12)
+    check_profile(profile, route, atv, jerk=math.inf)
+
+
+def test_speed_limit_column_caps_the_profile(atv):
+    route = flat_route(speed_limit=np.where(np.arange(0, 500.0001, 0.25) < 250, 20.0, 8.0))
+    profile = plan(route, atv)
+    check_profile(profile, route, atv)
+    assert profile.speed_mps[profile.s_m > 255].max() <= 8.0 + 1e-9
+
+
+def test_greatest_profile_is_the_lp_optimum():
+    # The greatest element of {b : b <= U, b_{j+1} - b_j <= 2 a ds, b_j - b_{j+1} <= 2 d ds}
+    # maximises every positively weighted sum of b, so an LP (scipy's HiGHS) must agree.
+    rng = np.random.default_rng(3)
+    n = 40
+    ds = rng.uniform(1.0, 6.0, n)
+    upper = rng.uniform(0.0, 300.0, n + 1)
+    upper[0] = upper[-1] = 0.0
+    a, d = 2.0, 3.5
+    rows, rhs = [], []
+    for j in range(n):
+        e = np.zeros(n + 1)
+        e[j + 1], e[j] = 1.0, -1.0
+        rows += [e, -e]
+        rhs += [2 * a * ds[j], 2 * d * ds[j]]
+    lp = linprog(-np.ones(n + 1), A_ub=np.array(rows), b_ub=np.array(rhs), bounds=list(zip(np.zeros(n + 1), upper)))
+    assert lp.status == 0
+    np.testing.assert_allclose(greatest_profile(np.zeros(n + 1), upper, ds, a, d), lp.x, atol=1e-7)
+
+
+@pytest.mark.parametrize("name,vehicle_name", [("trail.csv", "atv"), ("krc_rms_2in.csv", "atv"),
+                                               ("washboard.csv", "atv-resonant")])
+def test_pure_minimum_time_nlp_matches_the_exact_optimum(name, vehicle_name):
+    # With smoothing 0 and no jerk bound the forward-backward profile over the chosen bands
+    # is the exact optimum; IPOPT, forced to solve the NLP, must agree within 1e-4.
+    route = read_route(ROUTES / name)
+    vehicle = load_vehicle(vehicle_name)
+    exact = plan(route, vehicle, smoothing=0.0, max_jerk_mps3=math.inf)
+    nlp = plan(route, vehicle, smoothing=0.0, max_jerk_mps3=math.inf, method="ipopt")
+    assert exact.status == "exact" and nlp.status == "optimal"
+    assert nlp.travel_time_s == pytest.approx(exact.travel_time_s, rel=1e-4)
+    assert nlp.travel_time_s >= exact.travel_time_s * (1 - 1e-9)  # nothing beats the optimum
+    for profile in (exact, nlp):
+        check_profile(profile, route, vehicle, jerk=math.inf)
+
+
+@pytest.mark.parametrize("name,vehicle_name", [("trail.csv", "atv"), ("curb.csv", "atv"),
+                                               ("krc_rms_4in.csv", "atv"), ("iri_road.csv", "atv")])
+def test_full_problem_keeps_every_limit(name, vehicle_name):
+    route = read_route(ROUTES / name)
+    vehicle = load_vehicle(vehicle_name)
+    profile = plan(route, vehicle)
+    assert profile.success, profile.status
+    check_profile(profile, route, vehicle)
+    # smoothing and jerk cost time, but little
+    exact = plan(route, vehicle, smoothing=0.0, max_jerk_mps3=math.inf)
+    assert exact.travel_time_s <= profile.travel_time_s <= 1.15 * exact.travel_time_s
+
+
+def test_resonant_washboard_is_crossed_above_resonance(resonant):
+    route = read_route(ROUTES / "washboard.csv")
+    fast = plan(route, resonant)
+    safe = plan(route, resonant, bands="first")
+    for profile in (fast, safe):
+        assert profile.success
+        check_profile(profile, route, resonant)
+    on_washboard = (fast.s_m > 155) & (fast.s_m < 295)
+    first_cap = fast.allowable_first_mps.max(initial=0, where=(fast.s_m[:-1] > 155) & (fast.s_m[:-1] < 295))
+    # the band reachable from rest ends at ~0.32 m/s; the plan holds the upper band (~3.4 m/s)
+    assert first_cap < 0.4
+    assert fast.speed_mps[on_washboard].min() > 3.0
+    assert safe.speed_mps[on_washboard].max() < 0.4
+    assert fast.travel_time_s < 0.4 * safe.travel_time_s
+    # ... and slows below resonance again before the rougher stretch at 350-375 m, where only
+    # the band from rest exists
+    rough = np.flatnonzero((fast.s_m[:-1] >= 350) & (fast.s_m[:-1] < 375))
+    top = np.maximum(fast.speed_mps[rough], fast.speed_mps[rough + 1])
+    assert np.all(top <= fast.allowable_largest_mps[rough] + 1e-9)
+    assert top.max() < 0.3
+    summary = summarize(fast)
+    assert 350 <= summary["slowest_segment"]["s_start_m"] < 375
+    assert "force limit" in summary["slowest_segment"]["reason"]
+
+
+@pytest.mark.parametrize("end_m,above", [(320.0, True), (230.0, False)])
+def test_band_choice_near_a_stop(resonant, end_m, above):
+    # Cut the washboard route short. Ending on 20 m of smooth ground after the washboard
+    # (320 m), the vehicle can brake from ~3.4 m/s within a segment, so it crosses above
+    # resonance. Ending ON the washboard (230 m), it never can: leaving the upper band
+    # [~0.53, ~3.4] m/s for the band from rest [0, ~0.32] m/s would pass through forbidden
+    # speeds inside a washboard segment, so the whole washboard must be driven slowly.
+    route = read_route(ROUTES / "washboard.csv")
+    keep = route.s_m <= end_m
+    short = Route(route.s_m[keep], route.z_m[keep], source="washboard-cut")
+    profile = plan(short, resonant)
+    check_profile(profile, short, resonant)
+    assert profile.speed_mps[-1] == 0.0
+    on_washboard = profile.speed_mps[(profile.s_m > 160) & (profile.s_m < 225)]
+    if above:
+        assert on_washboard.min() > 3.0
+    else:
+        assert on_washboard.max() < 0.33
+
+
+def test_fallback_keeps_every_limit_when_ipopt_fails(monkeypatch, atv):
+    route = read_route(ROUTES / "trail.csv")
+
+    def failing(seg, chosen, vehicle, smoothing, jerk):
+        return chosen.greatest_b * 0.5, "Maximum_Iterations_Exceeded", 300, {}
+
+    monkeypatch.setattr(planner, "_solve_nlp", failing)
+    profile = plan(route, atv)
+    assert not profile.success
+    assert profile.status == "fallback: Maximum_Iterations_Exceeded"
+    assert any("IPOPT did not converge" in note for note in profile.notes)
+    check_profile(profile, route, atv)
+
+
+def test_infeasible_stop_is_an_input_error(atv):
+    route = flat_route(length_m=10.0)
+    with pytest.raises(InfeasibleError, match="v0"):
+        plan(route, atv, v0_mps=20.0)
+    with pytest.raises(InputError, match="segment-length"):
+        plan(route, atv, segment_length_m=20.0)
+
+
+def test_short_tail_is_merged_and_noted(atv):
+    s = np.arange(0.0, 51.0 + 1e-9, 0.25)  # 10 segments of 5 m and a 1 m tail of 4 samples
+    route = Route(s, 0.01 * np.sin(s), source="tail")
+    seg = segment_route(route, atv, 5.0)
+    assert seg.count == 10 and seg.boundaries_m[-1] == 51.0
+    assert seg.notes and "merged" in seg.notes[0]
+    assert seg.samples.sum() == s.size
+
+
+def test_profile_csv_round_trip(tmp_path, resonant):
+    route = read_route(ROUTES / "washboard.csv")
+    profile = plan(route, resonant, model="sbem_ef")
+    path = tmp_path / "p.csv"
+    profile.to_csv(path)
+    lines = path.read_text().splitlines()
+    assert lines[0].startswith("# profileopt profile:") and "model=sbem_ef" in lines[0]
+    assert lines[1] == ",".join(PROFILE_COLUMNS)
+    back = read_profile(path)
+    assert back.model == "sbem_ef"
+    for name in PROFILE_COLUMNS:
+        np.testing.assert_array_equal(getattr(back, name), getattr(profile, name))
+
+
+def run_cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "profileopt", *args], capture_output=True, text=True, cwd=cwd)
+
+
+def test_cli_plan_end_to_end(tmp_path):
+    out, png = tmp_path / "profile.csv", tmp_path / "profile.png"
+    done = run_cli("plan", str(ROUTES / "washboard.csv"), "--vehicle", "atv-resonant", "-o", str(out),
+                   "--plot", str(png))
+    assert done.returncode == 0, done.stderr
+    assert "travel time" in done.stdout and "slowest" in done.stdout and "solver" in done.stdout
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    profile = read_profile(out)
+    route = read_route(ROUTES / "washboard.csv")
+    check_profile(profile, route, load_vehicle("atv-resonant"))
+    done = run_cli("plan", str(ROUTES / "curb.csv"), "--json", "--max-jerk", "inf", "--smoothing", "0")
+    assert done.returncode == 0, done.stderr
+    summary = json.loads(done.stdout)
+    assert summary["solver"]["status"] == "exact"
+    assert summary["margins"]["jerk"]["ratio"] is None
+    assert summary["distance_m"] == pytest.approx(200.0)
