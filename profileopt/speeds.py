@@ -131,6 +131,8 @@ def safeguarded_newton(
     x = 0.5 * (lo + hi)
     sign_lo = np.sign(f_lo)
     active = np.ones(x.shape, dtype=bool)
+    older_step = np.abs(hi - lo)  # the step before the last one (rtsafe's dxold)
+    last_step = np.abs(hi - lo)
     for _ in range(max_iter):
         if not active.any():
             break
@@ -141,10 +143,15 @@ def safeguarded_newton(
         hi[idx] = np.where(same, hi[idx], x[idx])
         with np.errstate(divide="ignore", invalid="ignore"):
             newton = x[idx] - f / df
+        # Newton only if it stays inside the bracket and at least halves the step before
+        # last (as in Numerical Recipes' rtsafe); otherwise bisect. Steps thus shrink at least
+        # by half every two iterations (a bisection halves the bracket), so it converges.
         inside = np.isfinite(newton) & (newton > lo[idx]) & (newton < hi[idx])
-        x_new = np.where(inside, newton, 0.5 * (lo[idx] + hi[idx]))
+        fast = np.abs(newton - x[idx]) <= 0.5 * older_step[idx]
+        x_new = np.where(inside & fast, newton, 0.5 * (lo[idx] + hi[idx]))
         x_new = np.where(f == 0, x[idx], x_new)  # an exact root: keep it, do not bisect away
         step = np.abs(x_new - x[idx])
+        older_step[idx], last_step[idx] = last_step[idx], step
         x[idx] = x_new
         done = (f == 0) | (step <= xtol) | (hi[idx] - lo[idx] <= xtol)
         active[idx[done]] = False
