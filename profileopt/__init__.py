@@ -1,8 +1,12 @@
 """profileopt: terrain-force-limited, minimum-time speed profiles for ground vehicles.
 
 The force models of Wilson et al. (University of Calgary) written once in CasADi, a
-roughness index from elevation data, allowable speeds, and (in later modules) a route-level
-speed planner solved with IPOPT.
+roughness index from elevation data, allowable speeds, a route-level minimum-time speed
+planner solved with IPOPT, and a quarter-car simulation that checks every plan.
+
+    >>> import profileopt
+    >>> route = profileopt.read_route("examples/routes/trail.csv")  # doctest: +SKIP
+    >>> profile = profileopt.plan(route, profileopt.load_vehicle("atv"))  # doctest: +SKIP
 """
 
 from .errors import InfeasibleError, InputError
@@ -10,6 +14,8 @@ from .forces import MODELS, force_n, get_model
 from .speeds import SpeedBands, allowable_speed, speed_bands
 from .terrain import roughness_index, step_width, worst_case_elevation
 from .vehicle import Vehicle, bundled_vehicles, load_vehicle
+from .route import Route, read_route
+from .planner import PlanningError, Profile, plan, read_profile, summarize
 from .simulate import QuarterCarRun, simulate_quarter_car, wheel_envelope_m
 # Note: this makes the name profileopt.verify the function, as the issue asks for
 # (profileopt.verify(route, profile, vehicle)); the module stays importable with
@@ -31,6 +37,13 @@ __all__ = [
     "Vehicle",
     "bundled_vehicles",
     "load_vehicle",
+    "Route",
+    "read_route",
+    "PlanningError",
+    "Profile",
+    "plan",
+    "read_profile",
+    "summarize",
     "QuarterCarRun",
     "simulate_quarter_car",
     "wheel_envelope_m",
