@@ -1,0 +1,585 @@
+"""Benchmark of ``profileopt plan`` against TOPP-RA (issue 3, "Performance").
+
+Run by hand, never by the test suite (it takes minutes and its numbers depend on the
+machine)::
+
+    pip install -e '.[bench]'          # TOPP-RA, the independent reference solver
+    python benchmarks/bench_plan.py    # sizes 1000 10000 100000, 3 repeats
+    python benchmarks/bench_plan.py --sizes 1000 10000 --repeats 5 --out /tmp/results.md
+
+For every size N (segments of 5 m) it generates a seeded synthetic route (an ISO 8608
+random profile whose class changes along it, sampled every 0.5 m, so every segment holds
+10 samples), writes it as a CSV in a temporary directory and then, side by side in the
+same process and interleaved repeat by repeat, times:
+
+``full``
+    ``read_route`` -> ``plan`` (SBEM:TF, acceleration, jerk, default smoothing, vehicle
+    ``atv``) -> ``Profile.to_csv``: the command's work, in process. Also the same problem
+    through the real command line (``python -m profileopt plan ... -o``) in a fresh
+    process, which adds interpreter start-up, imports and the printed summary.
+``convex``
+    the convex subset: per-segment speed caps (the force model's allowable speed and
+    v_max) plus acceleration bounds, nothing else (``smoothing=0``, ``max_jerk_mps3=inf``).
+    Timed with ``plan(method="auto")`` (the exact forward-backward pass), with
+    ``plan(method="ipopt")`` (IPOPT forced), and with TOPP-RA.
+
+TOPP-RA solves the same discrete problem: the path is the 1-D position p(s) = s (so
+p' = 1 and p'' = 0), the grid points are the segment boundaries, the velocity bound at
+each boundary is the smaller cap of the two segments meeting there (the planner's bound
+on b = v^2 there), and the acceleration bounds are [-max_decel, max_accel]. With
+x = sdot^2 and a constant path acceleration u_i per stage, TOPP-RA's dynamics
+x_{i+1} = x_i + 2 ds_i u_i are the planner's b_{i+1} = b_i + 2 ds_i a_i, and its travel
+time sum 2 ds_i / (sdot_i + sdot_{i+1}) is the planner's, so the two optima coincide and
+any difference is the solver's. Its end-to-end time runs the same pipeline as the
+planner's (read the CSV, segment, speed bands, solve, write the profile CSV through the
+same ``Profile.to_csv``); only the solver differs.
+
+Every optimum is compared with the exact one, :func:`profileopt.planner.greatest_profile`
+on the same caps, and every written profile is read back and checked against the caps,
+the acceleration bounds (and the jerk bound and force limit for the full problem).
+
+Each timed run starts cold, as a fresh ``profileopt plan`` process would: every
+``functools`` cache in ``profileopt`` (the built NLP, the CasADi functions of the force
+models) is cleared first. Import time is not in the in-process rows; the ``CLI`` row
+includes it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import gc
+import importlib.metadata
+import inspect
+import math
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+import profileopt
+from profileopt import load_vehicle
+from profileopt import planner as planner_module
+from profileopt.forces import get_model
+from profileopt.planner import Profile, greatest_profile, plan, read_profile, segment_route
+from profileopt.route import read_route
+from profileopt.speeds import speed_bands
+from profileopt.synthetic import iso8608_sections
+
+REPO = Path(__file__).resolve().parent.parent
+
+#: Segment length (m) of every plan, the command's default.
+SEGMENT_LENGTH_M = 5.0
+#: Force model of every plan.
+MODEL = "sbem_tf"
+#: ISO 8608 classes of the route's sections and how often each occurs. For the bundled atv
+#: with SBEM:TF, class C leaves v_max (20 m/s) binding and G caps the speed at 2-8 m/s, so
+#: the caps vary along the route and the acceleration bounds are active at every change.
+CLASSES = ("C", "D", "E", "F", "G")
+CLASS_WEIGHTS = (0.20, 0.30, 0.25, 0.17, 0.08)
+#: Section lengths (m) are uniform in this range.
+SECTION_LENGTH_M = (100.0, 600.0)
+#: Highest spatial frequency of the random profile (cycles/m): below the Nyquist frequency
+#: 1 / (2 * 0.5 m) = 1 cycle/m of the default sample spacing.
+N_MAX_CPM = 0.9
+#: The issue's targets.
+FULL_TARGET_S = 1.0  # full problem, 10,000 segments, end to end
+GAP_TARGET = 1e-4  # convex subset, relative to the exact optimum
+SCALING_TARGET = 12.0  # t(100,000) / t(10,000)
+
+
+# ---------------------------------------------------------------------------------------
+# Routes
+
+
+def route_sections(total_m: float, seed: int) -> list[tuple[str, float]]:
+    """Seeded (ISO 8608 class, length in m) sections adding up to ``total_m``."""
+    rng = np.random.default_rng(seed)
+    sections: list[tuple[str, float]] = []
+    covered = 0.0
+    while covered < total_m - 1e-9:
+        length = min(float(rng.uniform(*SECTION_LENGTH_M)), total_m - covered)
+        if total_m - covered - length < SECTION_LENGTH_M[0] / 2:  # no sliver at the end
+            length = total_m - covered
+        sections.append((str(rng.choice(CLASSES, p=CLASS_WEIGHTS)), length))
+        covered += length
+    return sections
+
+
+def write_route(path: Path, segments: int, spacing_m: float, seed: int) -> int:
+    """Write a route of ``segments`` * 5 m sampled every ``spacing_m`` (columns s,z, m).
+
+    Returns the number of samples.
+    """
+    total = segments * SEGMENT_LENGTH_M
+    profile = iso8608_sections(route_sections(total, seed), spacing_m, seed, n_max_cpm=N_MAX_CPM)
+    with open(path, "w", encoding="utf-8") as handle:
+        handle.write(f"# bench_plan.py: ISO 8608 sections, seed {seed}, spacing {spacing_m} m\n")
+        handle.write("s,z\n")
+        np.savetxt(handle, np.column_stack([profile.s_m, profile.z_m]), delimiter=",", fmt=("%.3f", "%.6f"))
+    return int(profile.s_m.size)
+
+
+# ---------------------------------------------------------------------------------------
+# The convex subset and its exact optimum
+
+
+@dataclasses.dataclass(frozen=True)
+class ConvexProblem:
+    """Per-boundary caps of the convex subset and its exact optimum.
+
+    Attributes
+    ----------
+    boundaries_m : numpy.ndarray, shape (N+1,)
+    length_m : numpy.ndarray, shape (N,)
+    ri : numpy.ndarray, shape (N,)
+    e_max_m : numpy.ndarray, shape (N,)
+    segment_cap_mps : numpy.ndarray, shape (N,)
+        min(allowable speed of the model, v_max) per segment (m/s).
+    boundary_cap_mps : numpy.ndarray, shape (N+1,)
+        The smaller cap of the segments meeting at each boundary (m/s).
+    upper_b : numpy.ndarray, shape (N+1,)
+        Bound on b = v^2 (m^2/s^2), with the boundary speeds v0 = vend = 0.
+    exact_b : numpy.ndarray, shape (N+1,)
+        The exact optimum (greatest profile) (m^2/s^2).
+    exact_time_s : float
+    single_band : bool
+        Every segment's admissible speeds are one interval [0, cap], so the caps above are
+        the whole force constraint and the problem is convex.
+    """
+
+    boundaries_m: np.ndarray
+    length_m: np.ndarray
+    ri: np.ndarray
+    e_max_m: np.ndarray
+    segment_cap_mps: np.ndarray
+    boundary_cap_mps: np.ndarray
+    upper_b: np.ndarray
+    exact_b: np.ndarray
+    exact_time_s: float
+    single_band: bool
+
+
+def travel_time_s(b: np.ndarray, length_m: np.ndarray) -> float:
+    """Travel time (s) with constant acceleration per segment: sum 2 ds / (v_i + v_{i+1})."""
+    v = np.sqrt(np.maximum(b, 0.0))
+    return float(np.sum(2.0 * length_m / (v[:-1] + v[1:])))
+
+
+def convex_caps(route_path: Path, vehicle) -> ConvexProblem:
+    """Segment the route and compute the caps of the convex subset (not timed)."""
+    seg = segment_route(read_route(route_path), vehicle, SEGMENT_LENGTH_M)
+    bands = speed_bands(seg.ri, vehicle, MODEL)
+    single = bool(np.all(bands.count == 1) and np.all(bands.lower_mps[:, 0] == 0.0))
+    cap = np.minimum(bands.first(), seg.speed_cap_mps)
+    boundary_cap = np.concatenate([[cap[0]], np.minimum(cap[:-1], cap[1:]), [cap[-1]]])
+    upper_b = boundary_cap**2
+    upper_b[0] = upper_b[-1] = 0.0  # v0 = vend = 0
+    exact_b = greatest_profile(np.zeros_like(upper_b), upper_b, seg.length_m,
+                               vehicle.max_accel_mps2, vehicle.max_decel_mps2)
+    return ConvexProblem(seg.boundaries_m, seg.length_m, seg.ri, seg.e_max_m, cap, boundary_cap, upper_b,
+                         exact_b, travel_time_s(exact_b, seg.length_m), single)
+
+
+def violation(speed_mps: np.ndarray, accel_mps2: np.ndarray, problem: ConvexProblem, vehicle,
+              jerk_mps3: float = math.inf, force_ratio: np.ndarray | None = None) -> float:
+    """Largest relative violation of the caps, acceleration bounds, jerk and force (0 if none).
+
+    Checked independently of the planner: speed^2 against the per-boundary cap^2 (relative
+    to v_max^2), acceleration from the boundary speeds against [-decel, accel], jerk
+    v (a_j - a_{j-1}) / mean(ds) against the bound, force_n / force_limit_n against 1.
+    """
+    b = speed_mps**2
+    worst = [float(np.max(b - problem.boundary_cap_mps**2)) / vehicle.max_speed_mps**2]
+    a = np.diff(b) / (2.0 * problem.length_m)
+    worst.append(float(np.max(a - vehicle.max_accel_mps2)) / vehicle.max_accel_mps2)
+    worst.append(float(np.max(-vehicle.max_decel_mps2 - a)) / vehicle.max_decel_mps2)
+    if math.isfinite(jerk_mps3):
+        jerk = speed_mps[1:-1] * np.diff(a) / (0.5 * (problem.length_m[:-1] + problem.length_m[1:]))
+        worst.append(float(np.max(np.abs(jerk)) - jerk_mps3) / jerk_mps3)
+    if force_ratio is not None:
+        worst.append(float(np.max(force_ratio)) - 1.0)
+    del accel_mps2  # recomputed from the speeds, which define the profile
+    return max(max(worst), 0.0)
+
+
+# ---------------------------------------------------------------------------------------
+# What is timed
+
+
+def clear_caches() -> None:
+    """Forget everything profileopt caches, as a fresh process would not have it."""
+    for name, module in list(sys.modules.items()):
+        if name == "profileopt" or name.startswith("profileopt."):
+            for value in vars(module).values():
+                if callable(getattr(value, "cache_clear", None)) and hasattr(value, "cache_info"):
+                    value.cache_clear()
+
+
+@dataclasses.dataclass
+class Run:
+    """One timed run: wall seconds end to end and of the optimiser, and what it produced."""
+
+    end_to_end_s: float
+    optimiser_s: float = math.nan
+    build_s: float = math.nan
+    iterations: int | None = None
+    travel_time_s: float = math.nan
+    status: str = ""
+    output: Path | None = None
+    speed_mps: np.ndarray | None = None
+
+
+def run_plan(route_path: Path, out_path: Path, vehicle, **options) -> Run:
+    """read_route -> plan -> to_csv, as ``profileopt plan route.csv -o out.csv`` does."""
+    start = time.perf_counter()
+    profile = plan(read_route(route_path), vehicle, segment_length_m=SEGMENT_LENGTH_M, model=MODEL, **options)
+    profile.to_csv(out_path)
+    wall = time.perf_counter() - start
+    t = profile.timings_s
+    optimiser = sum(t.get(k, 0.0) for k in ("choose", "build", "solve"))
+    return Run(wall, optimiser, t.get("build", math.nan), profile.iterations, profile.travel_time_s,
+               profile.status, out_path)
+
+
+def run_cli(route_path: Path, out_path: Path) -> Run:
+    """``python -m profileopt plan route.csv --vehicle atv -o out.csv`` in a fresh process."""
+    start = time.perf_counter()
+    done = subprocess.run([sys.executable, "-m", "profileopt", "plan", str(route_path), "--vehicle", "atv",
+                           "-o", str(out_path)], capture_output=True, text=True, check=False)
+    wall = time.perf_counter() - start
+    if done.returncode != 0:
+        raise RuntimeError(f"profileopt plan failed ({done.returncode}): {done.stderr.strip()}")
+    return Run(wall, status="exit 0", output=out_path)
+
+
+def solve_toppra(problem: ConvexProblem, vehicle) -> tuple[np.ndarray, str]:
+    """TOPP-RA on the convex subset; returns the boundary speeds (m/s) and its return code."""
+    import toppra
+    import toppra.algorithm
+    import toppra.constraint
+
+    grid = problem.boundaries_m
+    index = {float(s): i for i, s in enumerate(grid)}
+    cap = problem.boundary_cap_mps
+
+    def velocity_limits(s: float) -> np.ndarray:
+        c = cap[index[float(s)]]  # called at the grid points only (and at s = grid[0])
+        return np.array([[-c, c]])
+
+    # p(s) = s: a cubic spline through two points of a straight line is that line.
+    path = toppra.SplineInterpolator([grid[0], grid[-1]], [[grid[0]], [grid[-1]]])
+    constraints = [
+        toppra.constraint.JointVelocityConstraintVarying(velocity_limits),
+        # p'' = 0, so collocation and interpolation impose the same bound on u_i.
+        toppra.constraint.JointAccelerationConstraint(
+            np.array([[-vehicle.max_decel_mps2, vehicle.max_accel_mps2]]),
+            discretization_scheme=toppra.constraint.DiscretizationType.Collocation),
+    ]
+    algorithm = toppra.algorithm.TOPPRA(constraints, path, gridpoints=grid, solver_wrapper="seidel")
+    _, sd, _ = algorithm.compute_parameterization(0.0, 0.0)
+    code = str(algorithm.problem_data.return_code).split(".")[-1]
+    if sd is None:
+        return np.full(grid.size, np.nan), code
+    return np.asarray(sd, dtype=float), code
+
+
+def run_toppra(route_path: Path, out_path: Path, vehicle) -> Run:
+    """The planner's pipeline with TOPP-RA as the solver: read, segment, bands, solve, write."""
+    start = time.perf_counter()
+    seg = segment_route(read_route(route_path), vehicle, SEGMENT_LENGTH_M)
+    bands = speed_bands(seg.ri, vehicle, MODEL)
+    cap = np.minimum(bands.first(), seg.speed_cap_mps)
+    boundary_cap = np.concatenate([[cap[0]], np.minimum(cap[:-1], cap[1:]), [cap[-1]]])
+    problem = ConvexProblem(seg.boundaries_m, seg.length_m, seg.ri, seg.e_max_m, cap, boundary_cap,
+                            np.empty(0), np.empty(0), math.nan, True)
+    t = time.perf_counter()
+    speed, code = solve_toppra(problem, vehicle)
+    optimiser = time.perf_counter() - t
+    accel = np.diff(speed**2) / (2.0 * seg.length_m)
+    time_s = np.concatenate([[0.0], np.cumsum(2.0 * seg.length_m / (speed[:-1] + speed[1:]))])
+    model = get_model(MODEL)
+    # single band [0, cap]: the largest force inside a segment is at its larger end speed
+    force = model.force_n(np.maximum(speed[:-1], speed[1:]), seg.ri, vehicle)
+
+    def per_row(x: np.ndarray) -> np.ndarray:
+        return np.append(x, x[-1])
+
+    profile = Profile(s_m=seg.boundaries_m, speed_mps=speed, accel_mps2=per_row(accel), time_s=time_s,
+                      ri=per_row(seg.ri), e_max_m=per_row(seg.e_max_m), force_n=per_row(np.asarray(force)),
+                      force_limit_n=np.full(speed.size, model.limit_n(vehicle)), model=MODEL,
+                      status=f"toppra {code}", settings={"solver": "toppra", "model": MODEL})
+    profile.to_csv(out_path)
+    wall = time.perf_counter() - start
+    return Run(wall, optimiser, travel_time_s=float(time_s[-1]), status=code, output=out_path, speed_mps=speed)
+
+
+# ---------------------------------------------------------------------------------------
+# The table
+
+
+@dataclasses.dataclass
+class Row:
+    """The repeats of one method on one size, summarised."""
+
+    segments: int
+    problem: str
+    method: str
+    runs: list[Run]
+    exact_time_s: float
+    violation: float = math.nan
+    note: str = ""
+    ratio_e2e: float | None = None
+    ratio_opt: float | None = None
+    target: str = ""
+    met: str = ""
+
+    @property
+    def e2e(self) -> float:
+        return statistics.median(r.end_to_end_s for r in self.runs)
+
+    @property
+    def optimiser(self) -> float:
+        return statistics.median(r.optimiser_s for r in self.runs)
+
+    @property
+    def build(self) -> float:
+        return statistics.median(r.build_s for r in self.runs)
+
+    @property
+    def travel(self) -> float:
+        return self.runs[-1].travel_time_s
+
+    @property
+    def gap(self) -> float:
+        return self.travel / self.exact_time_s - 1.0
+
+
+def _seconds(x: float) -> str:
+    if not math.isfinite(x):
+        return "–"
+    return f"{x:.3g}" if x < 100 else f"{x:.0f}"
+
+
+def _spread(row: Row) -> str:
+    times = [r.end_to_end_s for r in row.runs]
+    if len(times) == 1:
+        return _seconds(times[0])
+    return f"{_seconds(row.e2e)} ({_seconds(min(times))}–{_seconds(max(times))})"
+
+
+def _gap(row: Row) -> str:
+    if not math.isfinite(row.travel):
+        return "–"
+    g = row.gap
+    return "0" if g == 0 else f"{g:+.2e}"
+
+
+def _ratio(x: float | None) -> str:
+    return "" if x is None or not math.isfinite(x) else f"{x:.3g}"
+
+
+HEADER = ("segments", "problem", "method", "end to end (s)", "optimiser (s)", "NLP build (s)", "IPOPT iter",
+          "travel time (s)", "vs exact optimum", "worst violation", "ours/TOPP-RA e2e", "ours/TOPP-RA optimiser",
+          "target", "met?")
+
+
+def markdown_table(rows: list[Row]) -> str:
+    lines = ["| " + " | ".join(HEADER) + " |", "|" + "|".join("---" for _ in HEADER) + "|"]
+    for row in rows:
+        iters = [r.iterations for r in row.runs if r.iterations]
+        cells = (
+            f"{row.segments:,}", row.problem, row.method + (f" ({row.note})" if row.note else ""), _spread(row),
+            _seconds(row.optimiser), _seconds(row.build), str(iters[-1]) if iters else "",
+            f"{row.travel:.6g}" if math.isfinite(row.travel) else "–", _gap(row),
+            f"{row.violation:.1e}" if math.isfinite(row.violation) else "–",
+            _ratio(row.ratio_e2e), _ratio(row.ratio_opt), row.target, row.met,
+        )
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------------------
+# Driver
+
+
+def _versions() -> str:
+    names = ("numpy", "scipy", "casadi", "toppra")
+    found = []
+    for name in names:
+        try:
+            found.append(f"{name} {importlib.metadata.version(name)}")
+        except importlib.metadata.PackageNotFoundError:
+            found.append(f"{name} missing")
+    return f"python {platform.python_version()}, " + ", ".join(found)
+
+
+def _machine() -> str:
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    nproc = subprocess.run(["nproc"], capture_output=True, text=True, check=False).stdout.strip() or os.cpu_count()
+    return f"{cpu}; nproc {nproc}; {platform.system()} {platform.release()}"
+
+
+def _commit() -> str:
+    """The commit of the checkout the imported ``profileopt`` comes from (not this script's)."""
+    checkout = Path(profileopt.__file__).resolve().parent.parent
+
+    def git(*args: str) -> str:
+        return subprocess.run(["git", *args], cwd=checkout, capture_output=True, text=True, check=False).stdout.strip()
+
+    head = git("rev-parse", "--short", "HEAD")
+    if not head:
+        return f"{checkout} (not a git checkout)"
+    dirty = git("status", "--porcelain", "--", "profileopt")
+    return f"commit {head}" + (" with uncommitted changes in profileopt/" if dirty else "")
+
+
+def _timed(label: str, fn: Callable[[], Run]) -> Run:
+    clear_caches()
+    gc.collect()
+    run = fn()
+    print(f"  {label}: {run.end_to_end_s:.3f} s", file=sys.stderr, flush=True)
+    return run
+
+
+def bench_size(n: int, repeats: int, workdir: Path, vehicle, spacing_m: float, seed: int, cli: bool) -> list[Row]:
+    route_path = workdir / f"route_{n}.csv"
+    t = time.perf_counter()
+    samples = write_route(route_path, n, spacing_m, seed)
+    print(f"N = {n:,}: route of {samples:,} samples written in {time.perf_counter() - t:.1f} s", file=sys.stderr)
+    problem = convex_caps(route_path, vehicle)
+    if problem.length_m.size != n:
+        raise RuntimeError(f"expected {n} segments, the planner made {problem.length_m.size}")
+    has_method = "method" in inspect.signature(plan).parameters
+
+    full = {"smoothing": planner_module.DEFAULT_SMOOTHING, "max_jerk_mps3": None}
+    convex = {"smoothing": 0.0, "max_jerk_mps3": math.inf}
+    cases: dict[tuple[str, str], Callable[[], Run]] = {
+        ("full", "plan (IPOPT)"): lambda: run_plan(route_path, workdir / "full.csv", vehicle, **full),
+    }
+    if cli:
+        cases[("full", "`profileopt plan` CLI process")] = lambda: run_cli(route_path, workdir / "cli.csv")
+    if has_method:
+        cases[("convex", "plan auto (exact FB)")] = lambda: run_plan(
+            route_path, workdir / "auto.csv", vehicle, method="auto", **convex)
+        cases[("convex", "plan ipopt (forced)")] = lambda: run_plan(
+            route_path, workdir / "ipopt.csv", vehicle, method="ipopt", **convex)
+    else:
+        cases[("convex", "plan (no `method` keyword: auto only)")] = lambda: run_plan(
+            route_path, workdir / "auto.csv", vehicle, **convex)
+    cases[("convex", "TOPP-RA (seidel)")] = lambda: run_toppra(route_path, workdir / "toppra.csv", vehicle)
+
+    runs: dict[tuple[str, str], list[Run]] = {key: [] for key in cases}
+    for r in range(repeats):  # interleaved, so that a noisy minute hits every method alike
+        for key, fn in cases.items():
+            runs[key].append(_timed(f"repeat {r + 1}/{repeats} {key[0]} {key[1]}", fn))
+
+    rows = []
+    for (kind, method), measured in runs.items():
+        row = Row(n, kind, method, measured, problem.exact_time_s)
+        last = measured[-1]
+        if last.speed_mps is not None:  # TOPP-RA: check its speeds directly
+            b = last.speed_mps**2
+            row.violation = violation(last.speed_mps, np.diff(b) / (2 * problem.length_m), problem, vehicle)
+        else:
+            written = read_profile(last.output)
+            if not math.isfinite(row.travel):
+                row.runs[-1].travel_time_s = written.travel_time_s
+            jerk = vehicle.max_jerk_mps3 if kind == "full" else math.inf
+            row.violation = violation(written.speed_mps, written.accel_mps2, problem, vehicle, jerk,
+                                      written.force_n / written.force_limit_n)
+        if not problem.single_band:
+            row.note = "caps are not the whole force constraint: some segment has several bands"
+        rows.append(row)
+    return rows
+
+
+def judge(rows: list[Row]) -> None:
+    """Fill the ratio, target and met? columns."""
+    by = {(r.segments, r.problem, r.method): r for r in rows}
+    full10k = next((r for r in rows if r.segments == 10_000 and r.method == "plan (IPOPT)"), None)
+    for row in rows:
+        if row.problem == "convex" and not row.method.startswith("TOPP-RA"):
+            ref = by.get((row.segments, "convex", "TOPP-RA (seidel)"))
+            if ref is not None:
+                row.ratio_e2e = row.e2e / ref.e2e
+                row.ratio_opt = row.optimiser / ref.optimiser
+            row.target = f"≤ TOPP-RA e2e, gap ≤ {GAP_TARGET:g}"
+            ok = (row.ratio_e2e is not None and row.ratio_e2e <= 1.0 and abs(row.gap) <= GAP_TARGET
+                  and row.violation <= 1e-6)
+            row.met = "yes" if ok else "no"
+        elif row.method.startswith("TOPP-RA"):
+            row.target = "reference"
+        elif row.method == "plan (IPOPT)":
+            if row.segments == 10_000:
+                row.target = f"< {FULL_TARGET_S:g} s e2e"
+                row.met = "yes" if row.e2e < FULL_TARGET_S and row.violation <= 1e-6 else "no"
+            elif row.segments == 100_000 and full10k is not None:
+                limit = SCALING_TARGET * full10k.e2e
+                row.target = f"< {SCALING_TARGET:g} × 10k = {limit:.3g} s"
+                row.met = f"{'yes' if row.e2e < limit else 'no'} ({row.e2e / full10k.e2e:.1f}×)"
+        if row.method.startswith("`profileopt plan`"):
+            row.target = "info (adds start-up, imports, summary)"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--sizes", nargs="+", default=["1000", "10000", "100000"],
+                        help="numbers of 5 m segments (space- or comma-separated; default 1000 10000 100000)")
+    parser.add_argument("--repeats", type=int, default=3, help="timed runs of each method per size (default 3)")
+    parser.add_argument("--out", type=Path, default=REPO / "benchmarks" / "results.md",
+                        help="Markdown file for the table (default benchmarks/results.md)")
+    parser.add_argument("--spacing", type=float, default=0.5, help="route sample spacing in m (default 0.5)")
+    parser.add_argument("--seed", type=int, default=8608, help="seed of the synthetic routes (default 8608)")
+    parser.add_argument("--no-cli", action="store_true", help="skip the command-line process row")
+    args = parser.parse_args(argv)
+    sizes = [int(x) for item in args.sizes for x in item.split(",") if x]
+    if args.repeats < 1 or any(n < 2 for n in sizes):
+        parser.error("--repeats must be >= 1 and every size >= 2")
+    if SEGMENT_LENGTH_M / args.spacing < 8:
+        parser.error("--spacing must give every 5 m segment at least 8 samples (<= 0.625 m)")
+
+    vehicle = load_vehicle("atv")
+    started = time.strftime("%Y-%m-%d %H:%M %Z")
+    load_before = os.getloadavg()
+    rows: list[Row] = []
+    with tempfile.TemporaryDirectory(prefix="bench_plan_") as tmp:
+        workdir = Path(tmp)
+        # warm-up: load the IPOPT plugin and TOPP-RA's modules once, outside every timing
+        bench_size(200, 1, workdir, vehicle, args.spacing, args.seed, cli=False)
+        for n in sizes:
+            rows += bench_size(n, args.repeats, workdir, vehicle, args.spacing, args.seed, cli=not args.no_cli)
+    judge(rows)
+    load_after = os.getloadavg()
+
+    header = "\n".join([
+        f"Run {started} on {_machine()}.",
+        f"{_versions()}; profileopt at {_commit()}.",
+        f"Medians of {args.repeats} cold repeats per method (min–max in brackets), interleaved; load average "
+        f"{load_before[0]:.2f} before, {load_after[0]:.2f} after. Vehicle atv, model {MODEL}, "
+        f"{SEGMENT_LENGTH_M:g} m segments, route samples every {args.spacing:g} m, seed {args.seed}.",
+    ])
+    text = header + "\n\n" + markdown_table(rows) + "\n"
+    print(text)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(text, encoding="utf-8")
+    print(f"wrote {args.out}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
