@@ -16,7 +16,6 @@ import argparse
 import json
 
 from ..cli import command
-from ..errors import InfeasibleError
 from ..forces import MODELS, get_model
 from ..vehicle import load_vehicle
 
@@ -82,40 +81,12 @@ command("verify", "simulate the vehicle driving a planned profile and check the 
 
 def _compare(args: argparse.Namespace) -> int:
     """Run ``profileopt compare``: plan and verify with each model, print one table."""
-    from ..planner import PlanningError, plan
     from ..route import read_route
-    from ..verify import verify
+    from ..study import compare_models
 
     vehicle = load_vehicle(args.vehicle)
     route = read_route(args.route)
-    rows = []
-    for key, model in MODELS.items():
-        row = {"model": key, "label": model.label, "quantity": model.quantity}
-        try:
-            profile = plan(route, vehicle, segment_length_m=args.segment_length, model=key)
-        except InfeasibleError as exc:
-            row["status"] = f"infeasible: {exc}"
-            rows.append(row)
-            continue
-        except PlanningError as exc:
-            row["status"] = f"solver failed: {exc}"
-            rows.append(row)
-            continue
-        result = verify(route, profile, vehicle, model=key)
-        row.update({
-            "status": profile.status,
-            "travel_time_s": profile.travel_time_s,
-            "segments": int(result.ratio.size),
-            "worst_ratio": result.worst_ratio,
-            "worst_segment_start_m": float(result.s_m[result.worst_segment]),
-            "over_count": result.over_count,
-            "over_fraction": result.over_fraction,
-            "over_length_m": result.over_length_m,
-            "worst_transmitted_ratio": float(result.transmitted_peak_n.max() / vehicle.max_transmitted_force_n),
-            "underpredicted_count": int(result.underpredicted.sum()),
-            "lift_off_count": int(result.lift_off.sum()),
-        })
-        rows.append(row)
+    rows = [run.to_dict() for run in compare_models(route, vehicle, segment_length_m=args.segment_length)]
     if args.json:
         print(json.dumps({"route": args.route, "vehicle": args.vehicle,
                           "segment_length_m": args.segment_length, "models": rows}, indent=2))

@@ -1,0 +1,490 @@
+"""Plan with every force model, check each plan in simulation, and pool the results.
+
+The force models predict a worst case from a statistic of the terrain (the RI and a
+confidence level); :func:`profileopt.verify.verify` measures the forces a plan really
+causes in the quarter-car simulation. This module runs that check for several models:
+
+:func:`run_model`
+    plan one route with one model and verify the plan: one :class:`ModelRun`. An
+    infeasible route (:class:`~profileopt.errors.InfeasibleError`) or a solver failure
+    (:class:`~profileopt.planner.PlanningError`) is recorded as the run's status, not
+    raised.
+:func:`compare_models`
+    :func:`run_model` for each model on one route (what ``profileopt compare`` prints).
+:func:`safety_study`
+    :func:`compare_models` over every (route, vehicle) pair of a fixed set, with per-model
+    totals pooled over the set (:class:`SafetyStudy`): the fraction of all driven segments
+    whose simulated force exceeds the limit, the paper's claim (Prev:BEM is aggressive, the
+    SBEM models are safe) put to a test on many routes at once.
+
+Everything reported is deterministic (no wall-clock times), so the same routes and
+vehicles give the same numbers on every run.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING, Sequence
+
+import numpy as np
+
+from .errors import InfeasibleError
+from .forces import MODELS, get_model
+
+if TYPE_CHECKING:
+    from .route import Route
+    from .vehicle import Vehicle
+    from .verify import Verification
+
+__all__ = [
+    "Exceedance",
+    "ModelRun",
+    "ModelTotals",
+    "SafetyStudy",
+    "run_model",
+    "compare_models",
+    "safety_study",
+    "PLANNED",
+    "INFEASIBLE",
+    "SOLVER_FAILED",
+]
+
+#: :attr:`ModelRun.outcome` of a run that was planned and simulated.
+PLANNED = "planned"
+#: :attr:`ModelRun.outcome` of a route that the model says cannot be driven.
+INFEASIBLE = "infeasible"
+#: :attr:`ModelRun.outcome` of a solver failure without a limit-keeping fallback.
+SOLVER_FAILED = "solver failed"
+
+
+@dataclasses.dataclass(frozen=True)
+class Exceedance:
+    """One segment whose simulated force exceeds the limit.
+
+    Attributes
+    ----------
+    s_start_m, s_end_m : float
+        The segment (m).
+    peak_s_m : float
+        Where in the segment the simulated force of the model's kind peaks (m); a peak right
+        after ``s_start_m`` is often the ringing of the segment before.
+    ri : float
+        The segment's RI (dimensionless).
+    speed_start_mps, speed_end_mps : float
+        Planned speeds at the segment's ends (m/s).
+    predicted_n : float
+        The model's largest predicted force over the speeds driven in the segment (N).
+    simulated_n : float
+        Simulated peak of the model's force in the segment (N).
+    limit_n : float
+        The vehicle's limit for that force (N).
+    """
+
+    s_start_m: float
+    s_end_m: float
+    peak_s_m: float
+    ri: float
+    speed_start_mps: float
+    speed_end_mps: float
+    predicted_n: float
+    simulated_n: float
+    limit_n: float
+
+    @property
+    def ratio(self) -> float:
+        """Simulated force / limit (dimensionless, > 1)."""
+        return self.simulated_n / self.limit_n
+
+
+@dataclasses.dataclass(frozen=True)
+class ModelRun:
+    """One route planned with one force model and checked in simulation.
+
+    The numbers are ``None`` unless ``outcome == "planned"``.
+
+    Attributes
+    ----------
+    route : str
+        The route's source (file name or label).
+    vehicle : str
+        The vehicle's name (its file's stem, e.g. ``"atv"``).
+    model, label, quantity : str
+        Force model key, its display label and the force it limits (``"transmitted"`` or
+        ``"excitation"``).
+    outcome : str
+        ``"planned"``, ``"infeasible"`` or ``"solver failed"``.
+    status : str
+        The planner's status (``"optimal"``, ``"exact"``, ``"fallback: ..."``) when planned,
+        else the error's one-line message.
+    travel_time_s : float or None
+        Time to drive the plan (s).
+    segments : int or None
+        Number of segments N.
+    worst_ratio : float or None
+        Largest simulated force / limit over the segments (dimensionless).
+    worst_segment_start_m : float or None
+        Start of the segment with the largest ratio (m).
+    over_count : int or None
+        Segments whose simulated force exceeds the limit.
+    over_length_m : float or None
+        Their total length (m).
+    worst_transmitted_ratio : float or None
+        Largest simulated |F_T| / ``max_transmitted_force_n`` (dimensionless), whatever the
+        model limits.
+    underpredicted_count : int or None
+        Segments where the simulation exceeds the model's own prediction by more than 1 % of
+        the limit.
+    lift_off_count : int or None
+        Segments where F_T < -m g (the real wheel would leave the ground).
+    exceedances : tuple of Exceedance
+        The segments over the limit, in order along the route.
+    """
+
+    route: str
+    vehicle: str
+    model: str
+    label: str
+    quantity: str
+    outcome: str
+    status: str
+    travel_time_s: float | None = None
+    segments: int | None = None
+    worst_ratio: float | None = None
+    worst_segment_start_m: float | None = None
+    over_count: int | None = None
+    over_length_m: float | None = None
+    worst_transmitted_ratio: float | None = None
+    underpredicted_count: int | None = None
+    lift_off_count: int | None = None
+    exceedances: tuple[Exceedance, ...] = ()
+
+    @property
+    def planned(self) -> bool:
+        """True if the route was planned and simulated."""
+        return self.outcome == PLANNED
+
+    @property
+    def over_fraction(self) -> float | None:
+        """Share of the segments over the limit (0 to 1), ``None`` if not planned."""
+        if not self.planned:
+            return None
+        return self.over_count / self.segments
+
+    def to_dict(self) -> dict:
+        """The row of ``profileopt compare --json`` (keys in its order, SI units in names).
+
+        A run that was not planned has only ``model``, ``label``, ``quantity`` and
+        ``status`` (``"infeasible: <message>"`` or ``"solver failed: <message>"``).
+        """
+        row: dict = {"model": self.model, "label": self.label, "quantity": self.quantity}
+        if not self.planned:
+            row["status"] = f"{self.outcome}: {self.status}"
+            return row
+        row.update({
+            "status": self.status,
+            "travel_time_s": self.travel_time_s,
+            "segments": self.segments,
+            "worst_ratio": self.worst_ratio,
+            "worst_segment_start_m": self.worst_segment_start_m,
+            "over_count": self.over_count,
+            "over_fraction": self.over_fraction,
+            "over_length_m": self.over_length_m,
+            "worst_transmitted_ratio": self.worst_transmitted_ratio,
+            "underpredicted_count": self.underpredicted_count,
+            "lift_off_count": self.lift_off_count,
+        })
+        return row
+
+
+def _vehicle_label(vehicle: "Vehicle") -> str:
+    return Path(vehicle.name).stem if vehicle.name else "vehicle"
+
+
+def _exceedances(result: "Verification") -> tuple[Exceedance, ...]:
+    """The segments of ``result`` over the limit, with where in each the force peaks."""
+    run = result.run
+    series = np.abs(run.transmitted_n if result.quantity == "transmitted" else run.excitation_n)
+    out = []
+    for i in np.flatnonzero(result.over):
+        lo, hi = result.s_m[i], result.s_m[i + 1]
+        last = i == result.ratio.size - 1
+        inside = (run.s_m >= lo) & ((run.s_m <= hi) if last else (run.s_m < hi))
+        peak_s = float(run.s_m[inside][np.argmax(series[inside])]) if np.any(inside) else float(lo)
+        out.append(Exceedance(
+            s_start_m=float(lo), s_end_m=float(hi), peak_s_m=peak_s, ri=float(result.ri[i]),
+            speed_start_mps=float(result.speed_mps[i]), speed_end_mps=float(result.speed_mps[i + 1]),
+            predicted_n=float(result.predicted_n[i]), simulated_n=float(result.simulated_n[i]),
+            limit_n=float(result.limit_n[i]),
+        ))
+    return tuple(out)
+
+
+def run_model(route: "Route", vehicle: "Vehicle", model: str, *, segment_length_m: float = 5.0) -> ModelRun:
+    """Plan ``route`` with ``model`` (planner defaults otherwise) and verify the plan.
+
+    Parameters
+    ----------
+    route : Route
+    vehicle : Vehicle
+    model : str
+        Force model key (:data:`profileopt.forces.MODELS`).
+    segment_length_m : float, default 5
+        Segment length (m).
+
+    Returns
+    -------
+    ModelRun
+        ``outcome`` ``"infeasible"`` if the planner raises
+        :class:`~profileopt.errors.InfeasibleError`, ``"solver failed"`` if it raises
+        :class:`~profileopt.planner.PlanningError`; otherwise the verification's numbers.
+
+    Raises
+    ------
+    InputError
+        Bad options or route (other than infeasibility), an unknown model.
+    """
+    from .planner import PlanningError, plan
+    from .verify import verify
+
+    force_model = get_model(model)
+    common = {"route": str(route.source), "vehicle": _vehicle_label(vehicle), "model": force_model.key,
+              "label": force_model.label, "quantity": force_model.quantity}
+    try:
+        profile = plan(route, vehicle, segment_length_m=segment_length_m, model=force_model.key)
+    except InfeasibleError as exc:
+        return ModelRun(**common, outcome=INFEASIBLE, status=str(exc))
+    except PlanningError as exc:
+        return ModelRun(**common, outcome=SOLVER_FAILED, status=str(exc))
+    result = verify(route, profile, vehicle, model=force_model.key)
+    return ModelRun(
+        **common,
+        outcome=PLANNED,
+        status=profile.status,
+        travel_time_s=profile.travel_time_s,
+        segments=int(result.ratio.size),
+        worst_ratio=result.worst_ratio,
+        worst_segment_start_m=float(result.s_m[result.worst_segment]),
+        over_count=result.over_count,
+        over_length_m=result.over_length_m,
+        worst_transmitted_ratio=float(result.transmitted_peak_n.max() / vehicle.max_transmitted_force_n),
+        underpredicted_count=int(result.underpredicted.sum()),
+        lift_off_count=int(result.lift_off.sum()),
+        exceedances=_exceedances(result),
+    )
+
+
+def compare_models(
+    route: "Route",
+    vehicle: "Vehicle",
+    *,
+    models: Sequence[str] | None = None,
+    segment_length_m: float = 5.0,
+) -> tuple[ModelRun, ...]:
+    """:func:`run_model` for each model on one route (``profileopt compare``).
+
+    Parameters
+    ----------
+    route : Route
+    vehicle : Vehicle
+    models : sequence of str, optional
+        Model keys in the order wanted; default all four (:data:`profileopt.forces.MODELS`).
+    segment_length_m : float, default 5
+        Segment length (m).
+
+    Returns
+    -------
+    tuple of ModelRun
+        One per model, in the order given.
+    """
+    keys = list(MODELS) if models is None else list(models)
+    return tuple(run_model(route, vehicle, key, segment_length_m=segment_length_m) for key in keys)
+
+
+@dataclasses.dataclass(frozen=True)
+class ModelTotals:
+    """One model's results pooled over every (route, vehicle) pair of a study.
+
+    Attributes
+    ----------
+    model, label : str
+        Force model key and display label.
+    runs : int
+        (route, vehicle) pairs tried.
+    infeasible_runs : int
+        Pairs the model could not plan (infeasible or solver failure); they add no segments.
+    segments : int
+        Segments driven, summed over the planned pairs.
+    over_count : int
+        Of those, segments whose simulated force exceeds the limit.
+    over_length_m : float
+        Their total length (m).
+    worst_ratio : float
+        Largest simulated force / limit over every planned pair (dimensionless; nan if none
+        was planned).
+    worst_run : str
+        ``"route, vehicle"`` of that worst ratio (empty if none).
+    runs_over : int
+        Planned pairs with at least one segment over the limit.
+    travel_time_s : float
+        Total travel time over the planned pairs (s).
+    mean_time_ratio : float
+        Mean over the pairs that both this model and the study's reference model planned of
+        travel time / the reference's travel time (dimensionless; nan if there is no such
+        pair).
+    """
+
+    model: str
+    label: str
+    runs: int
+    infeasible_runs: int
+    segments: int
+    over_count: int
+    over_length_m: float
+    worst_ratio: float
+    worst_run: str
+    runs_over: int
+    travel_time_s: float
+    mean_time_ratio: float
+
+    @property
+    def over_fraction(self) -> float:
+        """Pooled share of segments over the limit: over_count / segments (nan if none)."""
+        return self.over_count / self.segments if self.segments else math.nan
+
+
+@dataclasses.dataclass(frozen=True)
+class SafetyStudy:
+    """Every model planned and simulated on every (route, vehicle) pair, and the totals.
+
+    Attributes
+    ----------
+    runs : tuple of ModelRun
+        One per (route, vehicle, model), routes outermost, then vehicles, then models.
+    totals : tuple of ModelTotals
+        One per model, in the order of the study's models.
+    models : tuple of str
+        The model keys, in order.
+    reference_model : str
+        The model travel times are compared with (``ModelTotals.mean_time_ratio``).
+    segment_length_m : float
+        Segment length used for every plan (m).
+    """
+
+    runs: tuple[ModelRun, ...]
+    totals: tuple[ModelTotals, ...]
+    models: tuple[str, ...]
+    reference_model: str
+    segment_length_m: float
+
+    def total(self, model: str) -> ModelTotals:
+        """The pooled totals of one model (by key)."""
+        for row in self.totals:
+            if row.model == model:
+                return row
+        raise KeyError(f"model {model!r} is not in this study ({', '.join(self.models)})")
+
+    def pairs(self) -> list[tuple[str, str]]:
+        """The (route, vehicle) pairs of the study, in order."""
+        seen: dict[tuple[str, str], None] = {}
+        for run in self.runs:
+            seen.setdefault((run.route, run.vehicle), None)
+        return list(seen)
+
+    def markdown(self) -> str:
+        """The pooled totals as a Markdown table (one row per model)."""
+        reference = get_model(self.reference_model).label
+        lines = [
+            f"| model | segments over the limit (pooled) | worst simulated / limit | "
+            f"routes with a segment over | mean travel time / {reference} | not drivable |",
+            "|---|---:|---:|---:|---:|---:|",
+        ]
+        for t in self.totals:
+            fraction = f"{100 * t.over_fraction:.2f} %" if t.segments else "n/a"
+            lines.append(
+                f"| {t.label} | {t.over_count} of {t.segments} ({fraction}) | {t.worst_ratio:.2f} | "
+                f"{t.runs_over} of {t.runs - t.infeasible_runs} | {t.mean_time_ratio:.2f} | "
+                f"{t.infeasible_runs} of {t.runs} |"
+            )
+        return "\n".join(lines)
+
+
+def _totals(pairs: Sequence[tuple[ModelRun, ...]], model: str, reference_model: str) -> ModelTotals:
+    """Pool one model's runs; ``pairs`` holds each (route, vehicle) pair's runs."""
+    mine = [r for runs in pairs for r in runs if r.model == model]
+    done = [r for r in mine if r.planned]
+    worst = max(done, key=lambda r: r.worst_ratio, default=None)
+    ratios = []
+    for runs in pairs:
+        by_model = {r.model: r for r in runs}
+        run, ref = by_model.get(model), by_model.get(reference_model)
+        if run is not None and ref is not None and run.planned and ref.planned and ref.travel_time_s > 0:
+            ratios.append(run.travel_time_s / ref.travel_time_s)
+    return ModelTotals(
+        model=model,
+        label=get_model(model).label,
+        runs=len(mine),
+        infeasible_runs=len(mine) - len(done),
+        segments=sum(r.segments for r in done),
+        over_count=sum(r.over_count for r in done),
+        over_length_m=float(sum(r.over_length_m for r in done)),
+        worst_ratio=worst.worst_ratio if worst else math.nan,
+        worst_run=f"{worst.route}, {worst.vehicle}" if worst else "",
+        runs_over=sum(1 for r in done if r.over_count > 0),
+        travel_time_s=float(sum(r.travel_time_s for r in done)),
+        mean_time_ratio=float(np.mean(ratios)) if ratios else math.nan,
+    )
+
+
+def safety_study(
+    routes: Sequence["Route"],
+    vehicles: Sequence["Vehicle"],
+    models: Sequence[str] | None = None,
+    *,
+    segment_length_m: float = 5.0,
+    reference_model: str = "sbem_tf",
+) -> SafetyStudy:
+    """Plan every route for every vehicle with every model, simulate, and pool the results.
+
+    Parameters
+    ----------
+    routes : sequence of Route
+        The route set; every route is driven by every vehicle. (For a route meant for one
+        vehicle only, run two studies or pass that vehicle alone.)
+    vehicles : sequence of Vehicle
+    models : sequence of str, optional
+        Model keys; default all four (:data:`profileopt.forces.MODELS`) in their order.
+    segment_length_m : float, default 5
+        Segment length of every plan (m).
+    reference_model : str, default ``"sbem_tf"``
+        Model whose travel time the others are compared with (include it in ``models``,
+        else every ``mean_time_ratio`` is nan).
+
+    Returns
+    -------
+    SafetyStudy
+        Per (route, vehicle, model) :class:`ModelRun` rows and per-model
+        :class:`ModelTotals`. A model that cannot plan a pair (infeasible) is recorded in
+        its row and counted in ``infeasible_runs``; its pooled fraction is over the pairs it
+        did plan.
+
+    Raises
+    ------
+    InputError
+        A route too sparsely sampled for the segment length, an unknown model, ...
+    """
+    keys = tuple(get_model(m).key for m in (MODELS if models is None else models))
+    reference_key = get_model(reference_model).key
+    pairs = [
+        compare_models(route, vehicle, models=keys, segment_length_m=segment_length_m)
+        for route in routes
+        for vehicle in vehicles
+    ]
+    return SafetyStudy(
+        runs=tuple(r for runs in pairs for r in runs),
+        totals=tuple(_totals(pairs, key, reference_key) for key in keys),
+        models=keys,
+        reference_model=reference_key,
+        segment_length_m=float(segment_length_m),
+    )
