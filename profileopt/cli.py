@@ -12,7 +12,7 @@ import argparse
 import os
 import sys
 import traceback
-from typing import Callable, Sequence
+from typing import Callable, NoReturn, Sequence
 
 from .errors import InputError
 
@@ -40,9 +40,16 @@ def command(name: str, help_text: str,
     return decorate
 
 
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line (no usage block), exit status 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every registered sub-command."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="profileopt",
         description="Terrain-force-limited, minimum-time speed profiles for ground vehicles.",
     )
