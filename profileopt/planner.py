@@ -448,37 +448,57 @@ def read_profile(path: str | Path) -> Profile:
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(f"{path}: cannot read the profile file ({exc})") from None
     settings: dict[str, object] = {}
-    for line in lines:
+    settings_line = 1
+    for number, line in enumerate(lines, start=1):
         if line.startswith("# profileopt profile:"):
+            settings_line = number
             for item in line.split(":", 1)[1].split():
                 key, _, value = item.partition("=")
                 settings[key] = value
-    lines = [ln for ln in lines if ln.strip() and not ln.lstrip().startswith("#")]
+    # (file line number, text) of the lines that are neither blank nor comments
+    lines = [(n, ln) for n, ln in enumerate(lines, start=1) if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
         raise InputError(f"{path}: the profile file is empty; write one with 'profileopt plan -o'")
-    header = tuple(c.strip() for c in lines[0].split(","))
+    header_line, header_text = lines[0]
+    header = tuple(c.strip() for c in header_text.split(","))
     if header != PROFILE_COLUMNS:
-        raise InputError(f"{path}: line 1: header must be {','.join(PROFILE_COLUMNS)}; got {','.join(header)}")
+        raise InputError(f"{path}: line {header_line}: header must be {','.join(PROFILE_COLUMNS)}; "
+                         f"got {','.join(header)} (write the profile with 'profileopt plan -o')")
     rows = []
-    for number, line in enumerate(lines[1:], start=2):
-        cells = line.split(",")
-        try:
-            values = [float(c) for c in cells]
-        except ValueError:
-            raise InputError(f"{path}: line {number}: a cell is not a number") from None
-        if len(values) != len(PROFILE_COLUMNS) or not all(math.isfinite(v) for v in values):
-            raise InputError(f"{path}: line {number}: needs {len(PROFILE_COLUMNS)} finite numbers")
-        rows.append(values)
+    for number, line in lines[1:]:
+        cells = [c.strip() for c in line.split(",")]
+        if len(cells) != len(PROFILE_COLUMNS):
+            raise InputError(f"{path}: line {number}: {len(cells)} cells but the header has "
+                             f"{len(PROFILE_COLUMNS)}; make every row match the header")
+        for name, cell in zip(PROFILE_COLUMNS, cells):
+            try:
+                value = float(cell)
+            except ValueError:
+                raise InputError(f"{path}: line {number}: {name} = '{cell}' is not a number; "
+                                 "every cell must be a number in SI units") from None
+            if not math.isfinite(value):
+                raise InputError(f"{path}: line {number}: {name} = {cell} is not a finite number; "
+                                 "give a finite number")
+        rows.append([float(c) for c in cells])
+    numbers = [n for n, _ in lines[1:]]
     if len(rows) < 2:
-        raise InputError(f"{path}: a profile needs at least 2 rows")
+        raise InputError(f"{path}: {len(rows)} data row(s); a profile needs at least 2 (the start and the end "
+                         "of the route)")
     table = np.array(rows)
-    if np.any(np.diff(table[:, 0]) <= 0):
-        raise InputError(f"{path}: s_m must increase strictly")
-    if np.any(table[:, 1] < 0):
-        raise InputError(f"{path}: speed_mps must be >= 0")
+    bad = np.flatnonzero(np.diff(table[:, 0]) <= 0)
+    if bad.size:
+        i = bad[0] + 1
+        raise InputError(f"{path}: line {numbers[i]}: s_m = {table[i, 0]:g} m does not increase (previous "
+                         f"{table[i - 1, 0]:g} m); s_m must increase strictly, so sort the rows or drop duplicates")
+    bad = np.flatnonzero(table[:, 1] < 0)
+    if bad.size:
+        i = bad[0]
+        raise InputError(f"{path}: line {numbers[i]}: speed_mps = {table[i, 1]:g} m/s is negative; "
+                         "speeds must be >= 0")
     model = str(settings.get("model", "sbem_tf"))
     if model not in MODELS:
-        raise InputError(f"{path}: line 1: model={model} is unknown; it must be one of {', '.join(MODELS)}")
+        raise InputError(f"{path}: line {settings_line}: model={model} is unknown; it must be one of "
+                         f"{', '.join(MODELS)}")
     return Profile(**{name: table[:, i] for i, name in enumerate(PROFILE_COLUMNS)}, model=model,
                    settings=settings)
 
@@ -686,7 +706,10 @@ def plan(
     t = time.perf_counter()
     a_max, d_max = vehicle.max_accel_mps2, vehicle.max_decel_mps2
     args = (lower_mps, upper_mps, count, seg.length_m)
-    chosen = choose_bands(*args, a_max, d_max, v0_mps, vend_mps, seg.boundaries_m)
+    try:
+        chosen = choose_bands(*args, a_max, d_max, v0_mps, vend_mps, seg.boundaries_m)
+    except InfeasibleError as exc:  # name the route, as every input message does
+        raise InfeasibleError(f"{route.source}: {exc}") from None
     timings["choose"] = time.perf_counter() - t
 
     notes = list(seg.notes)

@@ -116,7 +116,7 @@ def _check_route_arrays(source: str, s: np.ndarray, z: np.ndarray, limit: np.nda
         if bad.size:
             i = bad[0]
             raise InputError(f"{source}: {what} {where[i]}: speed_limit = {limit[i]:g} m/s must be > 0; "
-                             "give a positive limit or leave the cell to a higher value")
+                             "give a positive limit in m/s")
 
 
 def read_route(path: str | Path) -> Route:
