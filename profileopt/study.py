@@ -387,27 +387,71 @@ class SafetyStudy:
 
     def pairs(self) -> list[tuple[str, str]]:
         """The (route, vehicle) pairs of the study, in order."""
-        seen: dict[tuple[str, str], None] = {}
+        return [(runs[0].route, runs[0].vehicle) for runs in self._grouped()]
+
+    def _grouped(self) -> list[tuple[ModelRun, ...]]:
+        """The runs of each (route, vehicle) pair, pairs in order."""
+        groups: dict[tuple[str, str], list[ModelRun]] = {}
         for run in self.runs:
-            seen.setdefault((run.route, run.vehicle), None)
-        return list(seen)
+            groups.setdefault((run.route, run.vehicle), []).append(run)
+        return [tuple(runs) for runs in groups.values()]
+
+    def totals_where_all_planned(self) -> tuple[ModelTotals, ...]:
+        """Per-model totals pooled over only the pairs that every model could plan.
+
+        The pooled :attr:`totals` of a model leave out the pairs it found infeasible, so
+        models that refuse different pairs are pooled over different segments; these totals
+        compare every model on the same segments.
+        """
+        pairs = [runs for runs in self._grouped() if all(r.planned for r in runs)]
+        return tuple(_totals(pairs, key, self.reference_model) for key in self.models)
 
     def markdown(self) -> str:
         """The pooled totals as a Markdown table (one row per model)."""
         reference = get_model(self.reference_model).label
         lines = [
-            f"| model | segments over the limit (pooled) | worst simulated / limit | "
-            f"routes with a segment over | mean travel time / {reference} | not drivable |",
+            f"| model | segments over the limit (pooled) | worst simulated / limit (where) | "
+            f"pairs with a segment over | mean travel time / {reference} | not drivable |",
             "|---|---:|---:|---:|---:|---:|",
         ]
         for t in self.totals:
             fraction = f"{100 * t.over_fraction:.2f} %" if t.segments else "n/a"
             lines.append(
-                f"| {t.label} | {t.over_count} of {t.segments} ({fraction}) | {t.worst_ratio:.2f} | "
+                f"| {t.label} | {t.over_count} of {t.segments} ({fraction}) | {t.worst_ratio:.2f} ({t.worst_run}) | "
                 f"{t.runs_over} of {t.runs - t.infeasible_runs} | {t.mean_time_ratio:.2f} | "
                 f"{t.infeasible_runs} of {t.runs} |"
             )
         return "\n".join(lines)
+
+    def exceedance_markdown(self, every_pair: bool = False) -> str:
+        """Segments over the limit per (route, vehicle) pair and model, as a Markdown table.
+
+        ``every_pair=False`` lists only the pairs where some model has a segment over the
+        limit. A cell reads ``over / segments (worst ratio)``, or ``not drivable``.
+        """
+        labels = [get_model(m).label for m in self.models]
+        lines = ["| route | vehicle | " + " | ".join(labels) + " |",
+                 "|---|---|" + "---:|" * len(labels)]
+        for route, vehicle in self.pairs():
+            runs = {r.model: r for r in self.runs if (r.route, r.vehicle) == (route, vehicle)}
+            if not every_pair and not any(r.planned and r.over_count for r in runs.values()):
+                continue
+            cells = []
+            for key in self.models:
+                run = runs[key]
+                if not run.planned:
+                    cells.append("not drivable" if run.outcome == INFEASIBLE else run.outcome)
+                elif run.over_count:
+                    cells.append(f"**{run.over_count}** / {run.segments} ({run.worst_ratio:.2f})")
+                else:
+                    cells.append(f"0 / {run.segments}")
+            lines.append(f"| {_short(route)} | {vehicle} | " + " | ".join(cells) + " |")
+        return "\n".join(lines)
+
+
+def _short(source: str) -> str:
+    """A route's file name (its source without folders)."""
+    return Path(source).name
 
 
 def _totals(pairs: Sequence[tuple[ModelRun, ...]], model: str, reference_model: str) -> ModelTotals:
@@ -430,7 +474,7 @@ def _totals(pairs: Sequence[tuple[ModelRun, ...]], model: str, reference_model: 
         over_count=sum(r.over_count for r in done),
         over_length_m=float(sum(r.over_length_m for r in done)),
         worst_ratio=worst.worst_ratio if worst else math.nan,
-        worst_run=f"{worst.route}, {worst.vehicle}" if worst else "",
+        worst_run=f"{_short(worst.route)}, {worst.vehicle}" if worst else "",
         runs_over=sum(1 for r in done if r.over_count > 0),
         travel_time_s=float(sum(r.travel_time_s for r in done)),
         mean_time_ratio=float(np.mean(ratios)) if ratios else math.nan,
