@@ -8,7 +8,7 @@ bundled vehicle, every plan is driven by the simulated quarter car
 The result is a Markdown table (printed, and written to --out if given): per model, the
 share of all driven segments over the limit, pooled over the whole set.
 
-Runtime: about 15 s on 2 cores (2 x 13 routes x 4 models = 104 plans and simulations).
+Runtime: 10-12 s on 2 cores (2 x 13 routes x 4 models = 104 plans and simulations).
 """
 
 from __future__ import annotations
@@ -60,7 +60,7 @@ def route_set() -> list[Route]:
 
 
 def run_study() -> SafetyStudy:
-    """Plan, simulate and pool (the expensive part: about 15 s)."""
+    """Plan, simulate and pool (the expensive part: 10-12 s on 2 cores)."""
     return safety_study(route_set(), [load_vehicle(name) for name in VEHICLES],
                         segment_length_m=SEGMENT_LENGTH_M)
 

@@ -21,6 +21,7 @@ from .simulate import QuarterCarRun, simulate_quarter_car, wheel_envelope_m
 # (profileopt.verify(route, profile, vehicle)); the module stays importable with
 # "from profileopt.verify import ...".
 from .verify import Verification, plot_verification, verify
+from .study import ModelRun, SafetyStudy, compare_models, safety_study
 
 __all__ = [
     "InputError",
@@ -50,6 +51,10 @@ __all__ = [
     "Verification",
     "plot_verification",
     "verify",
+    "ModelRun",
+    "SafetyStudy",
+    "compare_models",
+    "safety_study",
 ]
 
 __version__ = "0.1.0"
