@@ -21,8 +21,9 @@ from typing import Any, Callable
 
 import casadi as ca
 import numpy as np
+from numpy.typing import ArrayLike
 
-__all__ = ["elementwise", "is_symbolic", "scalar_function"]
+__all__ = ["elementwise", "is_symbolic", "scalar_function", "numpy_evaluator"]
 
 
 def is_symbolic(*args: Any) -> bool:
@@ -83,3 +84,153 @@ def elementwise(builder: Callable) -> Callable:
 
     wrapper.symbolic = builder  # type: ignore[attr-defined]
     return wrapper
+
+
+# ---------------------------------------------------------------------------------------
+# Evaluating a scalar SX Function on whole numpy arrays at once.
+
+#: How each supported SX operation acts on numpy arrays, exactly as CasADi's virtual
+#: machine does on doubles (casadi/core/calculus.hpp). Every one is correctly rounded in
+#: IEEE arithmetic (or exact), so the results are bitwise those of CasADi. Operations not
+#: listed (transcendental functions, whose last bit may differ between libraries) make
+#: :func:`numpy_evaluator` fall back to CasADi itself.
+_NUMPY_OPS: dict[int, Callable[..., Any]] = {
+    ca.OP_ASSIGN: lambda x: x,
+    ca.OP_ADD: np.add,
+    ca.OP_SUB: np.subtract,
+    ca.OP_MUL: np.multiply,
+    ca.OP_DIV: np.divide,
+    ca.OP_NEG: np.negative,
+    ca.OP_SQRT: np.sqrt,
+    ca.OP_SQ: lambda x: x * x,
+    ca.OP_TWICE: lambda x: x + x,
+    ca.OP_INV: lambda x: 1.0 / x,
+    ca.OP_FABS: np.fabs,
+    ca.OP_FLOOR: np.floor,
+    ca.OP_CEIL: np.ceil,
+    ca.OP_COPYSIGN: np.copysign,
+    ca.OP_FMIN: np.fmin,  # C fmin: a NaN argument is ignored
+    ca.OP_FMAX: np.fmax,
+    ca.OP_SIGN: lambda x: np.where(x < 0, -1.0, np.where(x > 0, 1.0, x)),  # sign(nan) = nan
+    ca.OP_LT: lambda x, y: np.where(x < y, 1.0, 0.0),
+    ca.OP_LE: lambda x, y: np.where(x <= y, 1.0, 0.0),
+    ca.OP_EQ: lambda x, y: np.where(x == y, 1.0, 0.0),
+    ca.OP_NE: lambda x, y: np.where(x != y, 1.0, 0.0),
+    ca.OP_NOT: lambda x: np.where(x == 0, 1.0, 0.0),  # !nan is false
+    ca.OP_AND: lambda x, y: np.where((x != 0) & (y != 0), 1.0, 0.0),
+    ca.OP_OR: lambda x, y: np.where((x != 0) | (y != 0), 1.0, 0.0),
+    ca.OP_IF_ELSE_ZERO: lambda x, y: np.where(x != 0, y, 0.0),  # x ? y : 0, nan is true
+}
+
+#: Elements evaluated at once by a numpy evaluator: small enough for the intermediate
+#: arrays to stay in the processor's cache, large enough to amortise numpy's call overhead.
+_CHUNK_ELEMENTS = 1 << 14
+
+
+def numpy_evaluator(fun: ca.Function) -> Callable[..., tuple[np.ndarray, ...]]:
+    """A numpy version of a CasADi Function of scalars, for many points at once.
+
+    The returned callable takes one array per input of ``fun`` (broadcast against each
+    other like numpy operands) and returns a tuple with one array per output, of the
+    broadcast shape. For an ``SXFunction`` whose inputs and outputs are all scalars and
+    whose operations are all in :data:`_NUMPY_OPS`, it runs the Function's own instruction
+    list (``fun.instruction_id``, ``instruction_input``, ``instruction_output``,
+    ``instruction_constant``) as whole-array numpy operations, so the values are bitwise
+    those of ``fun`` while each instruction costs one vectorised numpy call instead of one
+    virtual-machine step per point; an instruction that depends only on an input that
+    varies along one axis (a "row" input of shape (N, 1)) is computed once per row.
+    Large inputs are processed in slices along the first axis so that intermediates stay
+    in cache. Any other Function is evaluated by CasADi itself (``fun.map``) on the
+    broadcast inputs.
+
+    Parameters
+    ----------
+    fun : casadi.Function
+
+    Returns
+    -------
+    callable
+        ``evaluate(*arrays) -> tuple of numpy.ndarray``.
+    """
+    program = _numpy_program(fun)
+    n_out = fun.n_out()
+
+    def evaluate(*args: ArrayLike) -> tuple[np.ndarray, ...]:
+        arrays = [np.asarray(a, dtype=float) for a in args]
+        shape = np.broadcast_shapes(*(a.shape for a in arrays))
+        if program is None or int(np.prod(shape)) == 0:
+            return _casadi_evaluate(fun, arrays, shape)
+        rows = shape[0] if shape else 1
+        row_size = max(int(np.prod(shape[1:])), 1)
+        step = max(_CHUNK_ELEMENTS // row_size, 1)
+        if rows <= step:
+            return _run(program, arrays, shape, n_out)
+        outputs = tuple(np.empty(shape) for _ in range(n_out))
+        for start in range(0, rows, step):
+            stop = min(start + step, rows)
+            part = [a[start:stop] if a.ndim == len(shape) and a.shape[0] == rows else a for a in arrays]
+            for out, value in zip(outputs, _run(program, part, (stop - start,) + tuple(shape[1:]), n_out)):
+                out[start:stop] = value
+        return outputs
+
+    return evaluate
+
+
+def _numpy_program(fun: ca.Function) -> list[tuple] | None:
+    """The instruction list of ``fun`` as (op, inputs, output) tuples, or None if it
+    cannot be run with numpy exactly (not an SXFunction, an input that is not a dense
+    scalar, an output that is not 1x1, or an operation outside :data:`_NUMPY_OPS`)."""
+    if not fun.is_a("SXFunction"):
+        return None
+    scalar = ca.Sparsity.dense(1, 1)
+    if any(fun.sparsity_in(i) != scalar for i in range(fun.n_in())) or any(
+        fun.size_out(i) != (1, 1) for i in range(fun.n_out())  # a structural zero is fine
+    ):
+        return None
+    program = []
+    for k in range(fun.n_instructions()):
+        op = fun.instruction_id(k)
+        inputs, outputs = fun.instruction_input(k), fun.instruction_output(k)
+        if op == ca.OP_CONST:
+            program.append((op, fun.instruction_constant(k), outputs[0]))
+        elif op == ca.OP_INPUT:
+            program.append((op, inputs[0], outputs[0]))
+        elif op == ca.OP_OUTPUT:
+            program.append((op, inputs[0], outputs[0]))
+        elif op in _NUMPY_OPS:
+            arity = 2 if op in _BINARY_OPS else 1
+            program.append((op, tuple(inputs[:arity]), outputs[0]))
+        else:
+            return None
+    return program
+
+
+_BINARY_OPS = frozenset({ca.OP_ADD, ca.OP_SUB, ca.OP_MUL, ca.OP_DIV, ca.OP_COPYSIGN, ca.OP_FMIN, ca.OP_FMAX,
+                         ca.OP_LT, ca.OP_LE, ca.OP_EQ, ca.OP_NE, ca.OP_AND, ca.OP_OR, ca.OP_IF_ELSE_ZERO})
+
+
+def _run(program: list[tuple], arrays: list[np.ndarray], shape: tuple[int, ...], n_out: int) -> tuple[np.ndarray, ...]:
+    work: dict[int, Any] = {}
+    outputs: list[Any] = [0.0] * n_out  # a structurally zero output is never written
+    with np.errstate(all="ignore"):  # CasADi returns inf and nan silently, so do we
+        for op, arg, out in program:
+            if op == ca.OP_CONST:
+                work[out] = arg
+            elif op == ca.OP_INPUT:
+                work[out] = arrays[arg]
+            elif op == ca.OP_OUTPUT:
+                outputs[out] = work[arg]
+            else:
+                work[out] = _NUMPY_OPS[op](*(work[i] for i in arg))
+    return tuple(np.array(np.broadcast_to(o, shape), dtype=float) for o in outputs)
+
+
+def _casadi_evaluate(fun: ca.Function, arrays: list[np.ndarray], shape: tuple[int, ...]) -> tuple[np.ndarray, ...]:
+    """``fun`` (scalar inputs and outputs) at every point of the broadcast inputs, by CasADi."""
+    size = int(np.prod(shape))
+    if size == 0:
+        return tuple(np.empty(shape) for _ in range(fun.n_out()))
+    flat = [np.broadcast_to(a, shape).ravel()[None, :] for a in arrays]
+    result = fun.map(size)(*flat)
+    result = result if isinstance(result, (list, tuple)) else [result]
+    return tuple(np.asarray(r).reshape(shape) for r in result)

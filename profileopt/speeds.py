@@ -22,12 +22,13 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Callable, Literal
 
 import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ._casadi import numpy_evaluator
 from .forces import get_model
 from .terrain import _check_ri
 
@@ -94,12 +95,21 @@ def _constraint_derivatives(model: str, vehicle: "Vehicle") -> tuple[ca.Function
     )
 
 
-def _mapped(fun: ca.Function, x: np.ndarray, ri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Evaluate a two-output scalar Function at many points, shape (K,) each."""
-    if x.size == 0:
-        return np.empty(0), np.empty(0)
-    a, b = fun.map(x.size)(x[None, :], ri[None, :])
-    return np.asarray(a).ravel(), np.asarray(b).ravel()
+@functools.lru_cache(maxsize=64)
+def _constraint_evaluators(model: str, vehicle: "Vehicle") -> tuple[Callable, Callable]:
+    """numpy evaluators of the two Functions of :func:`_constraint_derivatives`.
+
+    They run those Functions' own instruction lists on whole arrays
+    (:func:`profileopt._casadi.numpy_evaluator`), bitwise equal to CasADi's evaluation.
+    """
+    return tuple(numpy_evaluator(fun) for fun in _constraint_derivatives(model, vehicle))
+
+
+def _mapped(evaluate: Callable, x: np.ndarray, ri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Evaluate a two-output scalar Function at many points; ``x`` and ``ri`` broadcast
+    together, and both outputs have their broadcast shape."""
+    a, b = evaluate(x, ri)
+    return a, b
 
 
 def safeguarded_newton(
@@ -179,14 +189,13 @@ def speed_bands(ri: ArrayLike, vehicle: "Vehicle", model: str = "sbem_tf") -> Sp
     _check_ri(ri)
     n = ri.size
     vmax = vehicle.max_speed_mps
-    value_slope, slope_curvature = _constraint_derivatives(model, vehicle)
+    value_slope, slope_curvature = _constraint_evaluators(model, vehicle)
     xtol = 1e-12 * vmax
 
     grid = np.concatenate([[0.0], vmax * np.logspace(-GRID_DECADES, 0.0, GRID_POINTS)])
     k = grid.size
     v = np.broadcast_to(grid, (n, k))
-    rr = np.broadcast_to(ri[:, None], (n, k))
-    g, dg = (o.reshape(n, k) for o in _mapped(value_slope, v.ravel(), rr.ravel()))
+    g, dg = _mapped(value_slope, grid[None, :], ri[:, None])  # (n, k) each
 
     # 2. interior extrema: g' changes sign inside a grid interval
     cand = np.empty((n, 2 * k - 1))

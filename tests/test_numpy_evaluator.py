@@ -1,0 +1,118 @@
+"""numpy_evaluator runs a CasADi Function's own instructions on arrays: CasADi's values, bitwise.
+
+The reference is CasADi's own evaluation of the same Function (``Function.map``), so any
+operation that numpy computes differently from CasADi's virtual machine fails here. The
+speed bands are checked the same way: once with the numpy evaluator (the default) and
+once with CasADi evaluating every point, on many random RI values for every model and
+both bundled vehicles.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from profileopt import _casadi, speeds
+from profileopt.forces import MODELS
+from profileopt.vehicle import load_vehicle
+
+VEHICLES = ("atv", "atv-resonant")
+SPECIAL = np.array([0.0, -0.0, 1.0, -1.0, 0.5, 2.0, 1e-300, -1e300, np.inf, -np.inf, np.nan])
+
+
+def casadi_values(fun: ca.Function, *arrays: np.ndarray) -> list[np.ndarray]:
+    shape = np.broadcast_shapes(*(a.shape for a in arrays))
+    flat = [np.broadcast_to(a, shape).ravel()[None, :] for a in arrays]
+    out = fun.map(int(np.prod(shape)))(*flat)
+    out = out if isinstance(out, (list, tuple)) else [out]
+    return [np.asarray(o).reshape(shape) for o in out]
+
+
+def assert_bitwise(actual, expected) -> None:
+    assert len(actual) == len(expected)
+    for a, e in zip(actual, expected):
+        assert a.shape == e.shape
+        # same bits, NaN included (signed zeros compare equal, which is all CasADi promises)
+        np.testing.assert_array_equal(a, e)
+
+
+@pytest.mark.parametrize("op", sorted(_casadi._NUMPY_OPS))
+def test_every_supported_operation_matches_casadi_on_special_values(op: int) -> None:
+    x, y = ca.SX.sym("x"), ca.SX.sym("y")
+    expr = ca.SX.binary(op, x, y) if op in _casadi._BINARY_OPS else ca.SX.unary(op, x)
+    fun = ca.Function("f", [x, y], [expr])
+    if op != ca.OP_ASSIGN:  # x itself: CasADi compiles the assignment away
+        assert op in {fun.instruction_id(k) for k in range(fun.n_instructions())}
+    assert _casadi._numpy_program(fun) is not None
+    a, b = np.meshgrid(SPECIAL, SPECIAL)
+    rng = np.random.default_rng(op)
+    a = np.concatenate([a.ravel(), rng.normal(scale=10, size=500)])
+    b = np.concatenate([b.ravel(), rng.normal(scale=10, size=500)])
+    assert_bitwise(_casadi.numpy_evaluator(fun)(a, b), casadi_values(fun, a, b))
+
+
+@pytest.mark.parametrize("vehicle_name", VEHICLES)
+@pytest.mark.parametrize("model", sorted(MODELS))
+def test_speed_band_functions_run_as_numpy_programs_bitwise(model: str, vehicle_name: str) -> None:
+    vehicle = load_vehicle(vehicle_name)
+    rng = np.random.default_rng(len(model))
+    speed = np.concatenate([[0.0, vehicle.max_speed_mps], rng.uniform(0, 1.2 * vehicle.max_speed_mps, 3000)])
+    ri = np.concatenate([[0.0, 0.0], rng.uniform(0, 2.0, 3000)])
+    ri[::50] = 0.0  # smooth ground: the models' if_else branch
+    for fun in speeds._constraint_derivatives(model, vehicle):
+        evaluate = _casadi.numpy_evaluator(fun)
+        # a Function the speed bands use must not silently take the slow path
+        assert _casadi._numpy_program(fun) is not None, fun.name()
+        assert_bitwise(evaluate(speed, ri), casadi_values(fun, speed, ri))
+        # broadcasting (grid of speeds x column of RI), sliced into cache-sized chunks
+        grid, column = speed[None, :100], ri[:400, None]
+        assert_bitwise(evaluate(grid, column), casadi_values(fun, grid, column))
+
+
+def test_unsupported_functions_fall_back_to_casadi() -> None:
+    x, y = ca.SX.sym("x"), ca.SX.sym("y")
+    transcendental = ca.Function("f", [x, y], [ca.exp(x) * y, ca.sin(y)])
+    vector = ca.Function("g", [ca.SX.sym("v", 2), y], [y * 2])
+    xm, ym = ca.MX.sym("x"), ca.MX.sym("y")
+    mx = ca.Function("h", [xm, ym], [xm * ym])
+    assert _casadi._numpy_program(transcendental) is None
+    assert _casadi._numpy_program(vector) is None
+    assert _casadi._numpy_program(mx) is None
+    a, b = np.linspace(-2, 2, 7)[:, None], np.linspace(0, 1, 5)[None, :]
+    assert_bitwise(_casadi.numpy_evaluator(transcendental)(a, b), casadi_values(transcendental, a, b))
+    assert _casadi.numpy_evaluator(transcendental)(np.empty(0), np.empty(0))[0].shape == (0,)
+
+
+def test_structurally_zero_output_is_zero() -> None:
+    x, y = ca.SX.sym("x"), ca.SX.sym("y")
+    fun = ca.Function("f", [x, y], [x * y, ca.jacobian(x * 3.0, x) * 0 + ca.SX(1, 1)])
+    assert fun.nnz_out(1) == 0
+    value, zero = _casadi.numpy_evaluator(fun)(np.arange(4.0), 2.0)
+    np.testing.assert_array_equal(value, 2.0 * np.arange(4.0))
+    np.testing.assert_array_equal(zero, np.zeros(4))
+
+
+@pytest.mark.parametrize("vehicle_name", VEHICLES)
+@pytest.mark.parametrize("model", sorted(MODELS))
+def test_speed_bands_unchanged_by_the_numpy_evaluator(model: str, vehicle_name: str, monkeypatch) -> None:
+    vehicle = load_vehicle(vehicle_name)
+    rng = np.random.default_rng(3 + len(model) + len(vehicle_name))
+    # RI from smooth to impassable, a dense sweep through the resonant vehicle's band changes
+    ri = np.concatenate([[0.0], rng.uniform(0, 0.05, 100), rng.uniform(0, 1.5, 300),
+                         np.linspace(0.1, 0.6, 200)])
+    fast = speeds.speed_bands(ri, vehicle, model)
+    if model == "sbem_tf" and vehicle_name == "atv-resonant":  # the multi-band path is exercised
+        assert fast.count.max() >= 2 and np.isfinite(fast.peaks_mps).any()
+
+    def casadi_evaluators(model_: str, vehicle_: object) -> tuple:
+        return tuple(lambda *a, f=f: casadi_values(f, *np.broadcast_arrays(*map(np.asarray, a)))
+                     for f in speeds._constraint_derivatives(model_, vehicle_))
+
+    monkeypatch.setattr(speeds, "_constraint_evaluators", casadi_evaluators)
+    slow = speeds.speed_bands(ri, vehicle, model)
+    np.testing.assert_array_equal(fast.count, slow.count)
+    for name in ("lower_mps", "upper_mps", "peaks_mps"):
+        a, b = getattr(fast, name), getattr(slow, name)
+        assert a.shape == b.shape
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=0, equal_nan=True)
