@@ -33,6 +33,7 @@ import casadi as ca
 import numpy as np
 
 from ._io import atomic_write
+from ._nlp import build_nlp
 from .errors import InfeasibleError, InputError
 from .forces import MODELS, get_model
 from .speeds import SpeedBands, speed_bands
@@ -62,8 +63,6 @@ MIN_SAMPLES_PER_SEGMENT = 8
 DEFAULT_SMOOTHING = 0.01
 #: Columns of a profile CSV, in order.
 PROFILE_COLUMNS = ("s_m", "speed_mps", "accel_mps2", "time_s", "ri", "e_max_m", "force_n", "force_limit_n")
-#: Speed (m/s) that keeps sqrt(b) differentiable at rest in the NLP's time and jerk terms.
-_SPEED_EPS_MPS = 1e-3
 #: Relative tolerance of the independent constraint check of every returned profile.
 _CHECK_RTOL = 1e-6
 
@@ -514,50 +513,17 @@ class _Nlp:
     with_jerk: bool
 
 
-_IPOPT_OPTIONS = {
-    "ipopt.print_level": 0,
-    "ipopt.sb": "yes",
-    "print_time": False,
-    "ipopt.tol": 1e-10,
-    "ipopt.acceptable_tol": 1e-7,
-    "ipopt.max_iter": 300,
-    "ipopt.mu_strategy": "adaptive",
-    "ipopt.bound_relax_factor": 0.0,
-}
-
-
 @functools.lru_cache(maxsize=8)
 def _build_nlp(n: int, with_jerk: bool) -> _Nlp:
-    """The NLP for N = n segments, in the scaled variable y = b / b_ref (b = v^2).
+    """The NLP for N = n segments, built once per size (:func:`profileopt._nlp.build_nlp`).
 
-    Parameters p (in order): segment lengths / L_ref (n), then b_ref (m^2/s^2), L_ref (m),
-    a_ref (m^2/s), T_ref (s), the smoothing weight (-) and 1/J (s^3/m). Constraints g:
-    the accelerations a_i / a_ref (n), then, with jerk, jerk_j / J at the n-1 interior
-    boundaries, where jerk_j = v_j (a_j - a_{j-1}) / ((ds_{j-1} + ds_j) / 2) (jerk = v da/ds).
-    Objective: (travel time + weight * integral (jerk / (1 m/s^3))^2 dt) / T_ref, with
-    integral jerk^2 dt = sum v_j (a_j - a_{j-1})^2 / dsm_j (dt = ds / v).
+    Variables y = b / b_ref (b = v^2) at the N+1 boundaries; parameters: segment lengths /
+    L_ref (n), then b_ref, L_ref, a_ref, T_ref, the smoothing weight and 1/J; constraints
+    a_i / a_ref and, with jerk, jerk_j / J; objective (travel time + weight * integral
+    jerk^2 dt) / T_ref. Its build time hardly grows with n (stage Functions mapped over the
+    segments, their exact derivatives supplied to IPOPT).
     """
-    y = ca.SX.sym("y", n + 1)
-    ds_scaled = ca.SX.sym("ds", n)
-    b_ref, l_ref, a_ref, t_ref, weight, inv_jerk = (ca.SX.sym(name) for name in
-                                                    ("b_ref", "l_ref", "a_ref", "t_ref", "weight", "inv_jerk"))
-    ds = l_ref * ds_scaled  # m
-    b = b_ref * y  # m^2/s^2
-    v = ca.sqrt(b + _SPEED_EPS_MPS**2)  # m/s, smooth at rest
-    travel = ca.sum1(2.0 * ds / (v[:-1] + v[1:]))  # s
-    accel = (b[1:] - b[:-1]) / (2.0 * ds)  # m/s^2
-    g = [accel / a_ref]
-    objective = travel
-    if n >= 2:
-        dsm = 0.5 * (ds[:-1] + ds[1:])
-        da = accel[1:] - accel[:-1]
-        objective = objective + weight * ca.sum1(v[1:-1] * da**2 / dsm)
-        if with_jerk:
-            g.append(v[1:-1] * da / dsm * inv_jerk)
-    p = ca.vertcat(ds_scaled, b_ref, l_ref, a_ref, t_ref, weight, inv_jerk)
-    nlp = {"x": y, "p": p, "f": objective / t_ref, "g": ca.vertcat(*g)}
-    solver = ca.nlpsol(f"profileopt_n{n}_{'jerk' if with_jerk else 'nojerk'}", "ipopt", nlp, _IPOPT_OPTIONS)
-    return _Nlp(solver=solver, n=n, with_jerk=with_jerk)
+    return _Nlp(solver=build_nlp(n, with_jerk), n=n, with_jerk=with_jerk)
 
 
 # ---------------------------------------------------------------------------------------

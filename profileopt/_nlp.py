@@ -1,0 +1,311 @@
+"""The planner's nonlinear program, built in a time that hardly grows with its size.
+
+The NLP of :func:`profileopt.planner.plan` (variables, parameters, objective, constraints
+and bounds are documented in :func:`build_nlp`) is a sum of small *stages*: one per
+segment (travel time and acceleration, on the two squared speeds at its ends) and one per
+interior boundary (the smoothing term and the jerk, on the three squared speeds around it).
+Each stage is written once, here, as a tiny CasADi SX expression. The problem handed to
+IPOPT is an MX graph that *maps* those stage Functions over all segments, so its size does
+not depend on N, and its derivatives are supplied as Functions too (the ``grad_f``,
+``jac_g`` and ``hess_lag`` options of ``casadi.nlpsol``): the exact CasADi derivatives of
+each stage, mapped, then scattered into the known banded sparsity with constant index
+arrays. No symbolic differentiation of the whole problem happens, which is what made
+building a 10,000-segment SX problem take seconds.
+
+Every stage contribution is an exact term of the objective or one entry of g, so the
+gradient, Jacobian and Hessian are exactly those of the whole problem (the tests check
+them against ``casadi.jacobian``/``casadi.hessian`` of an independently written SX NLP).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+__all__ = ["SPEED_EPS_MPS", "IPOPT_OPTIONS", "PARAMETERS", "build_nlp"]
+
+#: Speed (m/s) that keeps sqrt(b) differentiable at rest in the NLP's time and jerk terms.
+SPEED_EPS_MPS = 1e-3
+
+#: The global parameters after the N scaled segment lengths, in order (see build_nlp).
+PARAMETERS = ("b_ref", "l_ref", "a_ref", "t_ref", "weight", "inv_jerk")
+
+#: IPOPT settings of the planner's NLP.
+IPOPT_OPTIONS: dict[str, Any] = {
+    "ipopt.print_level": 0,
+    "ipopt.sb": "yes",
+    "print_time": False,
+    "ipopt.tol": 1e-10,
+    "ipopt.acceptable_tol": 1e-7,
+    "ipopt.max_iter": 300,
+    "ipopt.mu_strategy": "adaptive",
+    "ipopt.bound_relax_factor": 0.0,
+}
+
+
+# ---------------------------------------------------------------------------------------
+# The formulas, each written once (symbolic; SX or MX arguments).
+
+
+def speed_mps(b: Any) -> Any:
+    """v = sqrt(b + eps^2) (m/s) from the squared speed b (m^2/s^2), smooth at rest."""
+    return ca.sqrt(b + SPEED_EPS_MPS**2)
+
+
+def accel_mps2(b_left: Any, b_right: Any, ds_m: Any) -> Any:
+    """Constant acceleration a = (b_right - b_left) / (2 ds) (m/s^2) of a segment of length ds (m)."""
+    return (b_right - b_left) / (2.0 * ds_m)
+
+
+def travel_s(b_left: Any, b_right: Any, ds_m: Any) -> Any:
+    """Time (s) to drive ds (m) at constant acceleration: 2 ds / (v_left + v_right)."""
+    return 2.0 * ds_m / (speed_mps(b_left) + speed_mps(b_right))
+
+
+def jerk_terms(b: tuple[Any, Any, Any], ds_m: tuple[Any, Any]) -> tuple[Any, Any]:
+    """At an interior boundary j: (v_j da^2 / dsm_j, jerk_j = v_j da / dsm_j).
+
+    ``b`` holds b_{j-1}, b_j, b_{j+1} (m^2/s^2), ``ds_m`` the lengths of the segments
+    before and after boundary j (m); da = a_j - a_{j-1} (m/s^2) and dsm_j is their mean
+    (m). The first term is the integral of jerk^2 dt over the boundary's share of the
+    route (dt = ds / v; units m^2/s^5), the second the jerk v da/ds (m/s^3).
+    """
+    dsm = 0.5 * (ds_m[0] + ds_m[1])
+    da = accel_mps2(b[1], b[2], ds_m[1]) - accel_mps2(b[0], b[1], ds_m[0])
+    v = speed_mps(b[1])
+    return v * da**2 / dsm, v * da / dsm
+
+
+# ---------------------------------------------------------------------------------------
+# Stages and their exact derivatives (tiny SX Functions).
+
+#: Upper-triangle entries (row, column) of a stage's local Hessian, in output order.
+_TRIU_2 = ((0, 0), (0, 1), (1, 1))
+_TRIU_3 = ((0, 0), (0, 1), (1, 1), (0, 2), (1, 2), (2, 2))
+
+
+def _stages() -> dict[str, ca.Function]:
+    """The two kinds of stage, as Functions of their values and exact derivatives.
+
+    Segment stage, inputs (z = [y_i, y_{i+1}], ds_scaled_i, q): f = travel_i / T_ref and
+    g = a_i / a_ref. Boundary stage, inputs (z = [y_{j-1}, y_j, y_{j+1}], [ds_scaled_{j-1},
+    ds_scaled_j], q): f = weight v_j da^2 / dsm_j / T_ref and g = jerk_j / J. q holds
+    :data:`PARAMETERS`. For each kind (``seg``, ``bnd``), ``*_f`` returns f, ``*_g`` g,
+    ``*_fdf`` f and grad f, ``*_gdg`` g and grad g (gradients are columns, w.r.t. z), and
+    ``*_h`` takes (z, ds, lam_g, q, lam_f) and return the upper triangle of
+    the Hessian of lam_f f + lam_g g w.r.t. z (entries :data:`_TRIU_2` / :data:`_TRIU_3`).
+    """
+    q = ca.SX.sym("q", len(PARAMETERS))
+    b_ref, l_ref, a_ref, t_ref, weight, inv_jerk = (q[k] for k in range(len(PARAMETERS)))
+    lam_f, lam_g = ca.SX.sym("lam_f"), ca.SX.sym("lam_g")
+    out: dict[str, ca.Function] = {}
+
+    z = ca.SX.sym("z", 2)
+    ds = ca.SX.sym("ds")
+    b, length = b_ref * z, l_ref * ds
+    f = travel_s(b[0], b[1], length) / t_ref
+    g = accel_mps2(b[0], b[1], length) / a_ref
+    out.update(_stage_functions("seg", z, ds, q, f, g, lam_f, lam_g, _TRIU_2))
+
+    z = ca.SX.sym("z", 3)
+    ds = ca.SX.sym("ds", 2)
+    b, length = b_ref * z, l_ref * ds
+    smooth, jerk = jerk_terms((b[0], b[1], b[2]), (length[0], length[1]))
+    f = weight * smooth / t_ref
+    g = jerk * inv_jerk
+    out.update(_stage_functions("bnd", z, ds, q, f, g, lam_f, lam_g, _TRIU_3))
+    return out
+
+
+def _stage_functions(name: str, z: ca.SX, ds: ca.SX, q: ca.SX, f: ca.SX, g: ca.SX, lam_f: ca.SX,
+                     lam_g: ca.SX, triu: tuple[tuple[int, int], ...]) -> dict[str, ca.Function]:
+    hess = ca.hessian(lam_f * f + lam_g * g, z)[0]
+    return {
+        f"{name}_f": ca.Function(f"{name}_f", [z, ds, q], [f]),
+        f"{name}_g": ca.Function(f"{name}_g", [z, ds, q], [g]),
+        f"{name}_fdf": ca.Function(f"{name}_fdf", [z, ds, q], [f, ca.gradient(f, z)]),
+        f"{name}_gdg": ca.Function(f"{name}_gdg", [z, ds, q], [g, ca.gradient(g, z)]),
+        f"{name}_h": ca.Function(f"{name}_h", [z, ds, lam_g, q, lam_f], [ca.vertcat(*(hess[r, c] for r, c in triu))]),
+    }
+
+
+# ---------------------------------------------------------------------------------------
+# Scattering stage values into the problem's vectors and sparse matrices.
+
+
+def _scatter(target: np.ndarray, size: int) -> ca.DM:
+    """The 0/1 matrix (size x K) that adds entry k of a vector into entry target[k]."""
+    k = target.size
+    sp = ca.Sparsity.triplet(size, k, target.astype(np.int64).tolist(), list(range(k)))
+    return ca.DM(sp, 1.0)
+
+
+def _ccs_position(rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int]) -> tuple[ca.Sparsity, np.ndarray]:
+    """Sparsity of the given (row, col) entries and each entry's nonzero index in it."""
+    sp = ca.Sparsity.triplet(shape[0], shape[1], rows.astype(np.int64).tolist(), cols.astype(np.int64).tolist())
+    colind = np.asarray(sp.colind(), dtype=np.int64)
+    row = np.asarray(sp.row(), dtype=np.int64)
+    # nonzeros of a column are sorted by row: search each entry's row within its column
+    key = cols.astype(np.int64) * shape[0] + rows
+    ccs_key = np.repeat(np.arange(shape[1]), np.diff(colind)) * shape[0] + row
+    position = np.searchsorted(ccs_key, key)
+    assert np.array_equal(ccs_key[position], key)
+    return sp, position
+
+
+def build_nlp(n: int, with_jerk: bool) -> ca.Function:
+    """The IPOPT solver of the planner's NLP for N = n segments, in y = b / b_ref (b = v^2).
+
+    Parameters
+    ----------
+    n : int
+        Number of segments N >= 1; there are N + 1 variables y (squared speeds at the
+        boundaries over b_ref).
+    with_jerk : bool
+        Whether g holds the jerk constraints (only when N >= 2).
+
+    Returns
+    -------
+    casadi.Function
+        ``casadi.nlpsol`` (IPOPT, :data:`IPOPT_OPTIONS`, exact Hessian) with x = y, shape
+        (N+1,), and parameters p, shape (N+6,): segment lengths / L_ref (N), then b_ref
+        (m^2/s^2), L_ref (m), a_ref (m/s^2), T_ref (s), the smoothing weight (-) and 1/J
+        (s^3/m). Constraints g: the accelerations a_i / a_ref (N), then, with jerk and
+        N >= 2, jerk_j / J at the N-1 interior boundaries, jerk_j = v_j (a_j - a_{j-1}) /
+        dsm_j (jerk = v da/ds, dsm_j = (ds_{j-1} + ds_j) / 2). Objective: (travel time +
+        weight * integral (jerk / (1 m/s^3))^2 dt) / T_ref, with travel time = sum 2 ds_i /
+        (v_i + v_{i+1}), integral jerk^2 dt = sum v_j (a_j - a_{j-1})^2 / dsm_j, and
+        v = sqrt(b + eps^2), eps = :data:`SPEED_EPS_MPS`.
+
+    Notes
+    -----
+    The objective and g are maps of the stage Functions of :func:`_stages` (graph size
+    independent of N); ``grad_f``, ``jac_g`` and ``hess_lag`` are the mapped exact stage
+    derivatives scattered into the banded structure (Hessian bandwidth 2) by constant
+    sparse matrices, so IPOPT receives exactly the derivatives of the whole problem.
+    """
+    n = int(n)
+    if n < 1:
+        raise ValueError(f"the NLP needs at least one segment, got n = {n}")
+    jerk = bool(with_jerk) and n >= 2
+    nx, m = n + 1, n - 1  # variables, interior boundaries
+    st = _stages()
+
+    x = ca.MX.sym("y", nx)
+    p = ca.MX.sym("p", n + len(PARAMETERS))
+    lam_f = ca.MX.sym("lam_f")
+    ds = p[:n].T
+    q = p[n:]
+    seg = (ca.vertcat(x[:n].T, x[1:].T), ds)  # per-segment inputs: 2 x n, 1 x n
+    if m:
+        bnd = (ca.vertcat(x[:m].T, x[1:n].T, x[2:].T), ca.vertcat(ds[:, :m], ds[:, 1:]))  # 3 x m, 2 x m
+
+    # objective and constraints (the oracle's f and g)
+    (f_seg,), (g_seg,) = _map_stages(st["seg_f"], seg, (q,)), _map_stages(st["seg_g"], seg, (q,))
+    f = ca.sum2(f_seg)
+    g_parts = [g_seg.T]
+    if m:
+        (f_bnd,) = _map_stages(st["bnd_f"], bnd, (q,))
+        f = f + ca.sum2(f_bnd)
+        if jerk:
+            (g_bnd,) = _map_stages(st["bnd_g"], bnd, (q,))
+            g_parts.append(g_bnd.T)
+    g = ca.vertcat(*g_parts)
+    ng = g.size1()
+
+    # gradient of f: the stage gradients scattered onto the variables they act on
+    f_seg, df_seg = _map_stages(st["seg_fdf"], seg, (q,))
+    f_d = ca.sum2(f_seg)
+    grad = ca.mtimes(_scatter(_local_to_global(np.arange(2), n), nx), ca.vec(df_seg))
+    if m:
+        f_bnd, df_bnd = _map_stages(st["bnd_fdf"], bnd, (q,))
+        f_d = f_d + ca.sum2(f_bnd)
+        grad = grad + ca.mtimes(_scatter(_local_to_global(np.arange(3), m), nx), ca.vec(df_bnd))
+
+    # Jacobian of g: row i (segment) holds columns i, i+1; row n + j - 1 (boundary j)
+    # holds columns j-1, j, j+1. A permutation of the stacked stage gradients.
+    g_seg, dg_seg = _map_stages(st["seg_gdg"], seg, (q,))
+    g_d = [g_seg.T]
+    rows = [np.repeat(np.arange(n), 2)]
+    cols = [_local_to_global(np.arange(2), n)]
+    values = [ca.vec(dg_seg)]
+    if jerk:
+        g_bnd, dg_bnd = _map_stages(st["bnd_gdg"], bnd, (q,))
+        g_d.append(g_bnd.T)
+        rows.append(n + np.repeat(np.arange(m), 3))
+        cols.append(_local_to_global(np.arange(3), m))
+        values.append(ca.vec(dg_bnd))
+    jac_sp, position = _ccs_position(np.concatenate(rows), np.concatenate(cols), (ng, nx))
+    jac = ca.MX(jac_sp, ca.vertcat(*values)[np.argsort(position).tolist()])
+
+    # Hessian of the Lagrangian, upper triangle: the stage Hessians scattered and summed
+    lam_g = ca.MX.sym("lam_g", ng)
+    pairs = np.array(_TRIU_2)
+    (h_seg,) = _map_stages(st["seg_h"], seg + (lam_g[:n].T,), (q, lam_f))
+    h_rows = [_local_to_global(pairs[:, 0], n)]
+    h_cols = [_local_to_global(pairs[:, 1], n)]
+    h_values = [ca.vec(h_seg)]
+    if m:
+        pairs = np.array(_TRIU_3)
+        lam_jerk = lam_g[n:].T if jerk else ca.MX.zeros(1, m)
+        (h_bnd,) = _map_stages(st["bnd_h"], bnd + (lam_jerk,), (q, lam_f))
+        h_rows.append(_local_to_global(pairs[:, 0], m))
+        h_cols.append(_local_to_global(pairs[:, 1], m))
+        h_values.append(ca.vec(h_bnd))
+    hess_sp, position = _ccs_position(np.concatenate(h_rows), np.concatenate(h_cols), (nx, nx))
+    hess = ca.MX(hess_sp, ca.mtimes(_scatter(position, hess_sp.nnz()), ca.vertcat(*h_values)))
+
+    name = f"profileopt_n{n}_{'jerk' if with_jerk else 'nojerk'}"
+    options = dict(IPOPT_OPTIONS)
+    options["grad_f"] = ca.Function(f"{name}_grad_f", [x, p], [f_d, grad], ["x", "p"], ["f", "grad_f_x"])
+    options["jac_g"] = ca.Function(f"{name}_jac_g", [x, p], [ca.vertcat(*g_d), jac], ["x", "p"], ["g", "jac_g_x"])
+    options["hess_lag"] = ca.Function(f"{name}_hess_lag", [x, p, lam_f, lam_g], [hess],
+                                      ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
+    return ca.nlpsol(name, "ipopt", {"x": x, "p": p, "f": f, "g": g}, options)
+
+
+def _map_stages(fun: ca.Function, per_stage: tuple, shared: tuple) -> list[ca.MX]:
+    """Evaluate a stage Function on every stage: ``fun(*per_stage, *shared)``.
+
+    ``per_stage`` are MX of ``count`` columns (one per stage), ``shared`` the same for all
+    stages. Stages are evaluated ``_BATCH`` at a time by one SX Function that holds
+    ``_BATCH`` inlined copies of ``fun`` (so the per-call overhead of a casadi map is paid
+    once per batch, not once per stage); the last batch is padded with ones and its
+    padding cut off the outputs, each of shape (rows, count).
+    """
+    count = per_stage[0].size2()
+    batch = min(_BATCH, count)
+    n_batches = -(-count // batch)
+    pad = n_batches * batch - count
+    if pad:
+        per_stage = tuple(ca.horzcat(a, ca.MX.ones(a.size1(), pad)) for a in per_stage)
+    outputs = _batched(fun, batch, len(shared)).map(n_batches)(*per_stage, *shared)
+    outputs = outputs if isinstance(outputs, (list, tuple)) else [outputs]
+    return [o[:, :count] if pad else o for o in outputs]
+
+
+#: Stages evaluated by one call of a batched stage Function.
+_BATCH = 64
+
+
+def _batched(fun: ca.Function, batch: int, n_shared: int) -> ca.Function:
+    """``fun`` on ``batch`` stages at once, inlined into one SX Function.
+
+    The first inputs of ``fun`` are per stage and get ``batch`` times their columns; the
+    last ``n_shared`` are shared by all stages and keep their shape.
+    """
+    n_per_stage = fun.n_in() - n_shared
+    inputs = [ca.SX.sym(fun.name_in(i), fun.size1_in(i), fun.size2_in(i) * (batch if i < n_per_stage else 1))
+              for i in range(fun.n_in())]
+    outputs = fun.map(batch)(*inputs)
+    outputs = outputs if isinstance(outputs, (list, tuple)) else [outputs]
+    return ca.Function(f"{fun.name()}_x{batch}", inputs, list(outputs))
+
+
+def _local_to_global(local: np.ndarray, count: int) -> np.ndarray:
+    """Global variable index of local index ``local[e]`` of stage k, for every entry e of
+    every stage k, in the column-major order of a mapped (entries x count) output."""
+    k, e = np.divmod(np.arange(local.size * count), local.size)
+    return k + local[e]
