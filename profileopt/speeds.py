@@ -187,6 +187,27 @@ def speed_bands(ri: ArrayLike, vehicle: "Vehicle", model: str = "sbem_tf") -> Sp
     """
     ri = np.atleast_1d(np.asarray(ri, dtype=float))
     _check_ri(ri)
+    if ri.size > _BLOCK_ROWS:  # rows are independent: bound the (rows x grid) temporaries
+        blocks = [_speed_bands(ri[i:i + _BLOCK_ROWS], vehicle, model) for i in range(0, ri.size, _BLOCK_ROWS)]
+        return SpeedBands(*(_stack_padded([getattr(b, name) for b in blocks]) for name in
+                            ("lower_mps", "upper_mps", "count", "peaks_mps")))
+    return _speed_bands(ri, vehicle, model)
+
+
+#: RI values whose bands are found together; the work arrays are (rows x 2 grid points).
+_BLOCK_ROWS = 2048
+
+
+def _stack_padded(parts: list[np.ndarray]) -> np.ndarray:
+    """Stack row blocks of NaN-padded (rows, width) arrays (or 1-D counts) into one."""
+    if parts[0].ndim == 1:
+        return np.concatenate(parts)
+    width = max(p.shape[1] for p in parts)
+    return np.concatenate([np.pad(p, ((0, 0), (0, width - p.shape[1])), constant_values=np.nan) for p in parts])
+
+
+def _speed_bands(ri: np.ndarray, vehicle: "Vehicle", model: str) -> SpeedBands:
+    """:func:`speed_bands` for validated RI values, shape (N,), all at once."""
     n = ri.size
     vmax = vehicle.max_speed_mps
     value_slope, slope_curvature = _constraint_evaluators(model, vehicle)

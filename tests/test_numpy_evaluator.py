@@ -116,3 +116,15 @@ def test_speed_bands_unchanged_by_the_numpy_evaluator(model: str, vehicle_name: 
         a, b = getattr(fast, name), getattr(slow, name)
         assert a.shape == b.shape
         np.testing.assert_allclose(a, b, rtol=1e-12, atol=0, equal_nan=True)
+
+
+def test_speed_bands_in_row_blocks_equal_all_at_once(monkeypatch) -> None:
+    # rows are independent, so splitting a long RI array into blocks changes nothing
+    vehicle = load_vehicle("atv-resonant")
+    ri = np.concatenate([np.linspace(0.0, 0.6, 150), [0.0, 5.0]])  # one band and two bands
+    whole = speeds.speed_bands(ri, vehicle, "sbem_tf")
+    monkeypatch.setattr(speeds, "_BLOCK_ROWS", 7)
+    blocks = speeds.speed_bands(ri, vehicle, "sbem_tf")
+    assert set(whole.count) == {1, 2}
+    for name in ("lower_mps", "upper_mps", "count", "peaks_mps"):
+        np.testing.assert_array_equal(getattr(blocks, name), getattr(whole, name))
