@@ -444,23 +444,54 @@ def test_internal_error_is_one_line_and_exit_1(tmp_path: Path, monkeypatch: pyte
 # neither a partial file nor a temporary one.
 
 
-def test_every_output_writer_uses_the_atomic_helpers() -> None:
-    """Source check: the modules that write user-facing files write them only through _io."""
-    writers = {
-        "profileopt/planner.py": "atomic_write(path)",  # plan -o (Profile.to_csv)
-        "profileopt/plots.py": "atomic_path(path)",  # plan --plot
-        "profileopt/verify.py": "atomic_path(path)",  # verify --plot (and atomic_write for -o)
-        "profileopt/figures.py": "atomic_path(png)",  # figures
-        "profileopt/codegen.py": "atomic_write(directory / file_name)",  # export-c
-    }
-    for name, call in writers.items():
-        text = (REPO / name).read_text(encoding="utf-8")
-        assert call in text, name
-        # no direct writes next to them: every savefig goes to the temporary path
-        for line in text.splitlines():
-            if "savefig(" in line and "def " not in line:
-                assert "savefig(tmp" in line or "savefig(path" in line, (name, line)
-    assert "atomic_write(path)" in (REPO / "profileopt/verify.py").read_text(encoding="utf-8")
+WRITERS = ["plan -o", "plan --plot", "verify -o", "verify --plot", "figures", "export-c"]
+
+
+def _write(writer: str, folder: Path) -> None:
+    """What each command does to write its outputs into ``folder``."""
+    from profileopt.codegen import export_c
+    from profileopt.figures import figure_1, write_figure
+    from profileopt.plots import plot_profile
+    from profileopt.verify import plot_verification, verify
+
+    vehicle = load_vehicle("atv")
+    route = read_route_text(folder, SHORT_ROUTE)
+    profile = plan(route, vehicle)
+    if writer == "plan -o":
+        profile.to_csv(folder / "out.csv")
+    elif writer == "plan --plot":
+        plot_profile(profile, folder / "out.png")
+    elif writer == "verify -o":
+        verify(route, profile, vehicle).to_csv(folder / "v.csv")
+    elif writer == "verify --plot":
+        plot_verification(verify(route, profile, vehicle), folder / "v.png")
+    elif writer == "figures":
+        write_figure(figure_1(), folder)
+    elif writer == "export-c":
+        export_c(vehicle, folder)
+    else:  # pragma: no cover
+        raise AssertionError(writer)
+
+
+@pytest.mark.parametrize("writer", WRITERS)
+def test_every_output_goes_through_a_temporary_file(writer: str, tmp_path: Path,
+                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    """Interrupt every writer at its last step (the rename of the finished temporary file):
+    nothing may appear. A writer that wrote its file directly, not through profileopt._io,
+    would leave it behind; one that did not clean up would leave the temporary file."""
+    _write(writer, tmp_path)  # it works ...
+    written = {p.name for p in tmp_path.iterdir()} - {"route.csv"}
+    assert written
+    for name in written:
+        (tmp_path / name).unlink()
+
+    def interrupted(src: object, dst: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(os, "replace", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        _write(writer, tmp_path)  # ... and interrupted, leaves nothing
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["route.csv"]
 
 
 @pytest.mark.parametrize("error", [RuntimeError("disk full"), KeyboardInterrupt()], ids=["error", "interrupt"])
