@@ -10,13 +10,35 @@ from typing import IO, Iterator
 
 from .errors import InputError
 
-__all__ = ["atomic_write", "atomic_path"]
+__all__ = ["atomic_write", "atomic_path", "check_output_path"]
 
 
 def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
     return mask
+
+
+def check_output_path(path: str | os.PathLike) -> Path:
+    """Refuse, before any work is done, an output path that cannot be written.
+
+    Commands call it for every output first, so that a run that would fail at its second
+    output never writes its first one.
+
+    Raises
+    ------
+    InputError
+        The folder does not exist or is not writable, or the path is a folder.
+    """
+    target = Path(path)
+    directory = target.parent if str(target.parent) else Path(".")
+    if not directory.is_dir():
+        raise InputError(f"{target}: the folder {directory} does not exist; create it or choose another path")
+    if target.is_dir():
+        raise InputError(f"{target}: is a folder; give the path of a file to write")
+    if not os.access(directory, os.W_OK | os.X_OK):
+        raise InputError(f"{target}: cannot write in {directory} (permission denied); choose another path")
+    return target
 
 
 @contextlib.contextmanager
@@ -27,12 +49,8 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     file there) is left untouched. Use it for writers that want a file name (matplotlib's
     ``savefig``, C code generators); :func:`atomic_write` for text.
     """
-    target = Path(path)
-    directory = target.parent if str(target.parent) else Path(".")
-    if not directory.is_dir():
-        raise InputError(f"{target}: the folder {directory} does not exist; create it or choose another path")
-    if target.is_dir():
-        raise InputError(f"{target}: is a folder; give the path of a file to write")
+    target = check_output_path(path)
+    directory = target.parent
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=target.suffix or ".tmp", dir=directory)
     except OSError as exc:

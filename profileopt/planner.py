@@ -849,7 +849,8 @@ def summarize(profile: Profile) -> dict:
         reason = "braking at max_decel_mps2 (for a slower point after it)"
 
     def worst(values: np.ndarray, limit: float, where: np.ndarray) -> dict:
-        if values.size == 0 or not math.isfinite(limit):
+        # None: the constraint is off, or never used (no segment accelerates, say)
+        if values.size == 0 or not math.isfinite(limit) or values.max() <= 0:
             return {"ratio": None, "s_m": None}
         k = int(np.argmax(values))
         return {"ratio": float(values[k] / limit), "s_m": float(where[k])}

@@ -365,8 +365,6 @@ def test_a_failed_run_keeps_a_good_earlier_output(tmp_path: Path) -> None:
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.csv", "route.csv"]
 
 
-@pytest.mark.xfail(strict=True, reason="plan writes -o before it finds that the --plot folder is missing "
-                                        "(output paths are not checked before planning)")
 def test_a_bad_plot_path_writes_no_csv(tmp_path: Path) -> None:
     (tmp_path / "route.csv").write_text(SHORT_ROUTE)
     done = run_cli(tmp_path, "plan", "route.csv", "-o", "out.csv", "--plot", "nowhere/p.png")

@@ -6,6 +6,7 @@ import argparse
 import json
 import sys
 
+from .._io import check_output_path
 from ..cli import command
 from ..forces import MODELS
 from ..planner import DEFAULT_SMOOTHING, plan, summarize
@@ -48,6 +49,9 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
+    for output in (args.output, args.plot):
+        if output:
+            check_output_path(output)  # before planning: a bad --plot must not leave an -o behind
     vehicle = load_vehicle(args.vehicle)
     route = read_route(args.route)
     for note in route.notes:
@@ -74,7 +78,7 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _ratio(m: dict) -> str:
-    return "off" if m["ratio"] is None else f"{100 * m['ratio']:.1f} % of limit at s = {m['s_m']:g} m"
+    return "off or unused" if m["ratio"] is None else f"{100 * m['ratio']:.1f} % of limit at s = {m['s_m']:g} m"
 
 
 def _human(summary: dict, args: argparse.Namespace) -> str:

@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import json
 
+from .._io import check_output_path
 from ..cli import command
 from ..forces import MODELS, get_model
 from ..vehicle import load_vehicle
@@ -26,6 +27,9 @@ def _verify(args: argparse.Namespace) -> int:
     from ..route import read_route
     from ..verify import plot_verification, verify
 
+    for output in (args.output, args.plot):
+        if output:
+            check_output_path(output)  # before simulating: a bad --plot must not leave an -o behind
     vehicle = load_vehicle(args.vehicle)
     route = read_route(args.route)
     profile = read_profile(args.profile)
