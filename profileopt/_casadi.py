@@ -50,14 +50,23 @@ def _evaluate(fun: ca.Function, args: tuple) -> Any:
                                 else float(a), (int(np.prod(shape)),)) for a in args]
         out = np.asarray(fun(*[f[None, :] for f in flat])).ravel()
         return ca.DM(out.reshape(shape, order="F"))
-    arrays = np.broadcast_arrays(*[np.asarray(a, dtype=float) for a in args])
-    shape = arrays[0].shape
-    if arrays[0].size == 0:
+    arrays = [np.asarray(a, dtype=float) for a in args]
+    shape = np.broadcast_shapes(*(a.shape for a in arrays))
+    size = int(np.prod(shape))
+    if size == 0:
         return np.zeros(shape)
+    if size >= _NUMPY_MIN_SIZE:  # the same instructions as whole-array numpy operations
+        return _cached_evaluator(fun)(*arrays)[0]
+    arrays = np.broadcast_arrays(*arrays)
     out = np.asarray(fun(*[a.ravel()[None, :] for a in arrays])).reshape(shape)
     if shape == ():
         return float(out)
     return out
+
+
+#: From this many points on, numbers are evaluated by :func:`numpy_evaluator` (bitwise the
+#: same values; below it, one CasADi call is cheaper than one numpy call per instruction).
+_NUMPY_MIN_SIZE = 64
 
 
 def elementwise(builder: Callable) -> Callable:
@@ -174,6 +183,9 @@ def numpy_evaluator(fun: ca.Function) -> Callable[..., tuple[np.ndarray, ...]]:
         return outputs
 
     return evaluate
+
+
+_cached_evaluator = functools.lru_cache(maxsize=256)(numpy_evaluator)
 
 
 def _numpy_program(fun: ca.Function) -> list[tuple] | None:

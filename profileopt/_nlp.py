@@ -8,8 +8,8 @@ Each stage is written once, here, as a tiny CasADi SX expression. The problem ha
 IPOPT is an MX graph that *maps* those stage Functions over all segments, so its size does
 not depend on N, and its derivatives are supplied as Functions too (the ``grad_f``,
 ``jac_g`` and ``hess_lag`` options of ``casadi.nlpsol``): the exact CasADi derivatives of
-each stage, mapped, then scattered into the known banded sparsity with constant index
-arrays. No symbolic differentiation of the whole problem happens, which is what made
+each stage, mapped, then placed on the diagonals of the known banded sparsity (stage k
+acts on the boundaries k, k+1 (and k+2), so its entries are stage 0's shifted by k). No symbolic differentiation of the whole problem happens, which is what made
 building a 10,000-segment SX problem take seconds.
 
 Every stage contribution is an exact term of the objective or one entry of g, so the
@@ -22,7 +22,6 @@ from __future__ import annotations
 from typing import Any
 
 import casadi as ca
-import numpy as np
 
 __all__ = ["SPEED_EPS_MPS", "IPOPT_OPTIONS", "PARAMETERS", "build_nlp"]
 
@@ -132,27 +131,20 @@ def _stage_functions(name: str, z: ca.SX, ds: ca.SX, q: ca.SX, f: ca.SX, g: ca.S
 
 
 # ---------------------------------------------------------------------------------------
-# Scattering stage values into the problem's vectors and sparse matrices.
+# Placing stage values in the problem's vectors and banded matrices (no index arrays: the
+# pattern of stage k is the same as that of stage 0, shifted by k).
 
 
-def _scatter(target: np.ndarray, size: int) -> ca.DM:
-    """The 0/1 matrix (size x K) that adds entry k of a vector into entry target[k]."""
-    k = target.size
-    sp = ca.Sparsity.triplet(size, k, target.astype(np.int64).tolist(), list(range(k)))
-    return ca.DM(sp, 1.0)
+def _shifted(v: ca.MX, before: int, after: int) -> ca.MX:
+    """Column vector v with ``before`` zeros above and ``after`` below."""
+    return ca.vertcat(ca.MX.zeros(before, 1), v, ca.MX.zeros(after, 1)) if before or after else v
 
 
-def _ccs_position(rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int]) -> tuple[ca.Sparsity, np.ndarray]:
-    """Sparsity of the given (row, col) entries and each entry's nonzero index in it."""
-    sp = ca.Sparsity.triplet(shape[0], shape[1], rows.astype(np.int64).tolist(), cols.astype(np.int64).tolist())
-    colind = np.asarray(sp.colind(), dtype=np.int64)
-    row = np.asarray(sp.row(), dtype=np.int64)
-    # nonzeros of a column are sorted by row: search each entry's row within its column
-    key = cols.astype(np.int64) * shape[0] + rows
-    ccs_key = np.repeat(np.arange(shape[1]), np.diff(colind)) * shape[0] + row
-    position = np.searchsorted(ccs_key, key)
-    assert np.array_equal(ccs_key[position], key)
-    return sp, position
+def _diagonal(v: ca.MX, rows: int, cols: int, offset: int) -> ca.MX:
+    """A (rows x cols) sparse matrix whose entries (k, k + offset) are v[k] (v a column)."""
+    k = v.size1()
+    block = ca.diag(v)  # k x k, sparse diagonal
+    return ca.vertcat(ca.horzcat(ca.MX(k, offset), block, ca.MX(k, cols - offset - k)), ca.MX(rows - k, cols))
 
 
 def build_nlp(n: int, with_jerk: bool) -> ca.Function:
@@ -183,8 +175,8 @@ def build_nlp(n: int, with_jerk: bool) -> ca.Function:
     -----
     The objective and g are maps of the stage Functions of :func:`_stages` (graph size
     independent of N); ``grad_f``, ``jac_g`` and ``hess_lag`` are the mapped exact stage
-    derivatives scattered into the banded structure (Hessian bandwidth 2) by constant
-    sparse matrices, so IPOPT receives exactly the derivatives of the whole problem.
+    derivatives placed on the diagonals of the banded structure (Hessian bandwidth 2), so
+    IPOPT receives exactly the derivatives of the whole problem.
     """
     n = int(n)
     if n < 1:
@@ -215,47 +207,39 @@ def build_nlp(n: int, with_jerk: bool) -> ca.Function:
     g = ca.vertcat(*g_parts)
     ng = g.size1()
 
-    # gradient of f: the stage gradients scattered onto the variables they act on
+    # gradient of f: entry r of stage k's gradient belongs to variable k + r
     f_seg, df_seg = _map_stages(st["seg_fdf"], seg, (q,))
     f_d = ca.sum2(f_seg)
-    grad = ca.mtimes(_scatter(_local_to_global(np.arange(2), n), nx), ca.vec(df_seg))
+    grad = _shifted(df_seg[0, :].T, 0, 1) + _shifted(df_seg[1, :].T, 1, 0)
     if m:
         f_bnd, df_bnd = _map_stages(st["bnd_fdf"], bnd, (q,))
         f_d = f_d + ca.sum2(f_bnd)
-        grad = grad + ca.mtimes(_scatter(_local_to_global(np.arange(3), m), nx), ca.vec(df_bnd))
+        grad = grad + sum(_shifted(df_bnd[r, :].T, r, 2 - r) for r in range(3))
 
     # Jacobian of g: row i (segment) holds columns i, i+1; row n + j - 1 (boundary j)
-    # holds columns j-1, j, j+1. A permutation of the stacked stage gradients.
+    # holds columns j-1, j, j+1: shifted diagonals of the stage gradients.
     g_seg, dg_seg = _map_stages(st["seg_gdg"], seg, (q,))
     g_d = [g_seg.T]
-    rows = [np.repeat(np.arange(n), 2)]
-    cols = [_local_to_global(np.arange(2), n)]
-    values = [ca.vec(dg_seg)]
+    blocks = [sum(_diagonal(dg_seg[r, :].T, n, nx, r) for r in range(2))]
     if jerk:
         g_bnd, dg_bnd = _map_stages(st["bnd_gdg"], bnd, (q,))
         g_d.append(g_bnd.T)
-        rows.append(n + np.repeat(np.arange(m), 3))
-        cols.append(_local_to_global(np.arange(3), m))
-        values.append(ca.vec(dg_bnd))
-    jac_sp, position = _ccs_position(np.concatenate(rows), np.concatenate(cols), (ng, nx))
-    jac = ca.MX(jac_sp, ca.vertcat(*values)[np.argsort(position).tolist()])
+        blocks.append(sum(_diagonal(dg_bnd[r, :].T, m, nx, r) for r in range(3)))
+    jac = ca.vertcat(*blocks)
 
-    # Hessian of the Lagrangian, upper triangle: the stage Hessians scattered and summed
+    # Hessian of the Lagrangian, upper triangle: entry (r, c) of stage k's local Hessian
+    # lands on (k + r, k + c); the stage Hessians are summed where they overlap.
     lam_g = ca.MX.sym("lam_g", ng)
-    pairs = np.array(_TRIU_2)
     (h_seg,) = _map_stages(st["seg_h"], seg + (lam_g[:n].T,), (q, lam_f))
-    h_rows = [_local_to_global(pairs[:, 0], n)]
-    h_cols = [_local_to_global(pairs[:, 1], n)]
-    h_values = [ca.vec(h_seg)]
+    parts = [(h_seg[e, :].T, r, c, n) for e, (r, c) in enumerate(_TRIU_2)]
     if m:
-        pairs = np.array(_TRIU_3)
         lam_jerk = lam_g[n:].T if jerk else ca.MX.zeros(1, m)
         (h_bnd,) = _map_stages(st["bnd_h"], bnd + (lam_jerk,), (q, lam_f))
-        h_rows.append(_local_to_global(pairs[:, 0], m))
-        h_cols.append(_local_to_global(pairs[:, 1], m))
-        h_values.append(ca.vec(h_bnd))
-    hess_sp, position = _ccs_position(np.concatenate(h_rows), np.concatenate(h_cols), (nx, nx))
-    hess = ca.MX(hess_sp, ca.mtimes(_scatter(position, hess_sp.nnz()), ca.vertcat(*h_values)))
+        parts += [(h_bnd[e, :].T, r, c, m) for e, (r, c) in enumerate(_TRIU_3)]
+    by_offset: dict[int, list[ca.MX]] = {}
+    for v, r, c, count in parts:  # diagonal c - r, starting at row r
+        by_offset.setdefault(c - r, []).append(_shifted(v, r, nx - (c - r) - r - count))
+    hess = sum(_diagonal(sum(vs), nx, nx, offset) for offset, vs in sorted(by_offset.items()))
 
     name = f"profileopt_n{n}_{'jerk' if with_jerk else 'nojerk'}"
     options = dict(IPOPT_OPTIONS)
@@ -304,8 +288,3 @@ def _batched(fun: ca.Function, batch: int, n_shared: int) -> ca.Function:
     return ca.Function(f"{fun.name()}_x{batch}", inputs, list(outputs))
 
 
-def _local_to_global(local: np.ndarray, count: int) -> np.ndarray:
-    """Global variable index of local index ``local[e]`` of stage k, for every entry e of
-    every stage k, in the column-major order of a mapped (entries x count) output."""
-    k, e = np.divmod(np.arange(local.size * count), local.size)
-    return k + local[e]

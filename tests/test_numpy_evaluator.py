@@ -4,16 +4,19 @@ The reference is CasADi's own evaluation of the same Function (``Function.map``)
 operation that numpy computes differently from CasADi's virtual machine fails here. The
 speed bands are checked the same way: once with the numpy evaluator (the default) and
 once with CasADi evaluating every point, on many random RI values for every model and
-both bundled vehicles.
+both bundled vehicles. Every public physics function, which evaluates arrays of numbers
+through numpy_evaluator, is checked against CasADi's evaluation too.
 """
 
 from __future__ import annotations
+
+import inspect
 
 import casadi as ca
 import numpy as np
 import pytest
 
-from profileopt import _casadi, speeds
+from profileopt import _casadi, forces, speeds, terrain
 from profileopt.forces import MODELS
 from profileopt.vehicle import load_vehicle
 
@@ -128,3 +131,30 @@ def test_speed_bands_in_row_blocks_equal_all_at_once(monkeypatch) -> None:
     assert set(whole.count) == {1, 2}
     for name in ("lower_mps", "upper_mps", "count", "peaks_mps"):
         np.testing.assert_array_equal(getattr(blocks, name), getattr(whole, name))
+
+
+ELEMENTWISE = [forces.base_frequency_radps, forces.iecm_force_n, forces.sbem_ef_force_n, forces.sbem_tf_force_n,
+               forces.prev_bem_force_n, terrain.step_width] + [m.of_ri for m in MODELS.values()]
+
+
+@pytest.mark.parametrize("vehicle_name", VEHICLES)
+@pytest.mark.parametrize("public", ELEMENTWISE, ids=lambda f: f.__name__)
+def test_numeric_model_evaluation_is_casadis_bitwise(public, vehicle_name: str) -> None:
+    # every physics function evaluates arrays of numbers with numpy_evaluator (bitwise
+    # CasADi's own evaluation of the very same Function)
+    vehicle = load_vehicle(vehicle_name)
+    builder = public.symbolic
+    n_inputs = len(inspect.signature(builder).parameters) - 1
+    fun = _casadi.scalar_function(builder, n_inputs, vehicle, builder.__name__)
+    assert _casadi._numpy_program(fun) is not None
+    rng = np.random.default_rng(11)
+    # speeds (column) against RI or elevation (row), up to past the wheel radius (the
+    # saturated step width), zeros included (the smooth-ground branch)
+    terrain_values = np.concatenate([[0.0, 0.0], rng.uniform(0, 2 * vehicle.wheel_radius_m, 28)])
+    if n_inputs == 2:
+        args = [rng.uniform(0, vehicle.max_speed_mps, size=(40, 1)), terrain_values[None, :]]
+    else:
+        args = [np.tile(terrain_values, (3, 1))]
+    value = public(*args, vehicle)
+    assert value.shape == np.broadcast_shapes(*(a.shape for a in args))
+    assert_bitwise([value], casadi_values(fun, *args))
