@@ -84,7 +84,10 @@ def test_excitation_datum_is_the_segment_trend_so_a_grade_adds_nothing() -> None
     profile = constant_speed_profile(0.0, 5000.0, "sbem_ef")
     flat = verify(base, profile, ATV)
     steep = verify(graded, profile, ATV)
-    assert np.allclose(steep.excitation_peak_n, flat.excitation_peak_n, rtol=1e-4)
+    # 3e-3: on a grade g the rigid wheel touches r g / sqrt(1 + g^2) ahead of its centre, so
+    # its input leads the flat road's by k r g = 0.3 % of a radian (simulate.wheel_envelope_m);
+    # that moves the wave against the segment's fixed datum (measured 0.13 %), not its size:
+    assert np.allclose(steep.excitation_peak_n, flat.excitation_peak_n, rtol=3e-3)
     # (1e-4: PCHIP is not linear in its data, so a grade changes the interpolant a little)
     assert np.allclose(steep.transmitted_peak_n, flat.transmitted_peak_n, rtol=1e-4)
     # without the detrending the grade would count: k * 0.05 m/m * 5 m = 225 N at least
@@ -223,11 +226,13 @@ def test_compare_is_reproducible_and_sbem_keeps_the_limit_on_krc_1in() -> None:
     for label in ("Prev:BEM", "IECM", "SBEM:EF", "SBEM:TF"):
         assert f"| {label} |" in first.stdout
     # Measured on the real KRC 1-inch course (Table 1 ATV, 5 m segments, default planner
-    # options): Prev:BEM and IECM plans exceed the 5000 N limit in simulation (8 and 3 of
-    # 101 segments), the SBEM plans do not. Regression guard on the paper's central claim.
+    # options): Prev:BEM and IECM plans exceed the 5000 N limit in simulation (7 and 1 of
+    # 101 segments, Prev:BEM by up to 1.68 times), the SBEM plans do not. Regression guard
+    # on the paper's central claim. (Before the wheel rolled on the ground between samples,
+    # 8 and 3 segments, Prev:BEM 2.42 times: simulate.wheel_envelope_m.)
     data = json.loads(_run("compare", str(KRC_1IN), "--json").stdout)
     by_model = {row["model"]: row for row in data["models"]}
     assert by_model["sbem_tf"]["over_count"] == 0 and by_model["sbem_ef"]["over_count"] == 0
-    assert by_model["prev_bem"]["over_count"] >= 5 and by_model["prev_bem"]["worst_ratio"] > 2.0
+    assert by_model["prev_bem"]["over_count"] >= 5 and by_model["prev_bem"]["worst_ratio"] > 1.5
     assert by_model["iecm"]["over_count"] >= 1
     assert by_model["prev_bem"]["travel_time_s"] < by_model["sbem_tf"]["travel_time_s"]
