@@ -23,7 +23,7 @@ import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["elementwise", "is_symbolic", "scalar_function", "numpy_evaluator"]
+__all__ = ["elementwise", "is_symbolic", "scalar_function", "numpy_evaluator", "mx_replay"]
 
 
 def is_symbolic(*args: Any) -> bool:
@@ -246,3 +246,61 @@ def _casadi_evaluate(fun: ca.Function, arrays: list[np.ndarray], shape: tuple[in
     result = fun.map(size)(*flat)
     result = result if isinstance(result, (list, tuple)) else [result]
     return tuple(np.asarray(r).reshape(shape) for r in result)
+
+
+# ---------------------------------------------------------------------------------------
+# Evaluating a small SX Function on whole MX vectors at once.
+
+
+def mx_replay(fun: ca.Function, inputs: list[list[ca.MX]]) -> list[list[ca.MX | None]]:
+    """Run the instruction list of an SX Function with MX vectors as operands.
+
+    Each instruction of ``fun`` (``fun.instruction_id`` etc.) becomes one elementwise MX
+    operation (``MX.unary``/``MX.binary`` with the same operation code) on column vectors
+    holding one value per evaluation point, so evaluating the result computes ``fun`` at
+    every point with exactly its instruction sequence (bitwise the same values), but as
+    one tight loop per instruction instead of one virtual-machine pass per point. The
+    MX graph has one node per instruction whatever the number of points. Operands that
+    do not depend on a varying input stay scalars (computed once).
+
+    Parameters
+    ----------
+    fun : casadi.Function
+        An ``SXFunction``.
+    inputs : list of list of casadi.MX
+        For every input of ``fun``, one MX per structural nonzero (in nonzero order):
+        column vectors of one common length, or scalars shared by all points.
+
+    Returns
+    -------
+    list of list of (casadi.MX or None)
+        For every output of ``fun``, one MX per entry of its dense column-major shape;
+        ``None`` for a structural zero.
+    """
+    if not fun.is_a("SXFunction"):
+        raise TypeError(f"mx_replay needs an SXFunction, got {fun.class_name()} {fun.name()}")
+    work: dict[int, ca.MX] = {}
+    nonzeros: list[list[ca.MX | None]] = [[None] * fun.nnz_out(i) for i in range(fun.n_out())]
+    for k in range(fun.n_instructions()):
+        op = fun.instruction_id(k)
+        args, out = fun.instruction_input(k), fun.instruction_output(k)
+        if op == ca.OP_CONST:
+            work[out[0]] = ca.MX(fun.instruction_constant(k))
+        elif op == ca.OP_INPUT:
+            work[out[0]] = inputs[args[0]][args[1]]
+        elif op == ca.OP_OUTPUT:
+            nonzeros[out[0]][out[1]] = work[args[0]]
+        elif len(args) == 2:
+            work[out[0]] = ca.MX.binary(op, work[args[0]], work[args[1]])
+        elif len(args) == 1:
+            work[out[0]] = ca.MX.unary(op, work[args[0]])
+        else:
+            raise TypeError(f"mx_replay: instruction {k} of {fun.name()} (operation {op}) is not elementwise")
+    dense: list[list[ca.MX | None]] = []
+    for i in range(fun.n_out()):
+        sp = fun.sparsity_out(i)
+        entries: list[ca.MX | None] = [None] * sp.numel()
+        for position, value in zip(sp.find(), nonzeros[i]):
+            entries[position] = value
+        dense.append(entries)
+    return dense

@@ -4,13 +4,17 @@ The NLP of :func:`profileopt.planner.plan` (variables, parameters, objective, co
 and bounds are documented in :func:`build_nlp`) is a sum of small *stages*: one per
 segment (travel time and acceleration, on the two squared speeds at its ends) and one per
 interior boundary (the smoothing term and the jerk, on the three squared speeds around it).
-Each stage is written once, here, as a tiny CasADi SX expression. The problem handed to
-IPOPT is an MX graph that *maps* those stage Functions over all segments, so its size does
-not depend on N, and its derivatives are supplied as Functions too (the ``grad_f``,
-``jac_g`` and ``hess_lag`` options of ``casadi.nlpsol``): the exact CasADi derivatives of
-each stage, mapped, then placed on the diagonals of the known banded sparsity (stage k
-acts on the boundaries k, k+1 (and k+2), so its entries are stage 0's shifted by k). No symbolic differentiation of the whole problem happens, which is what made
-building a 10,000-segment SX problem take seconds.
+Each stage is written once, here, as a tiny CasADi SX expression, and differentiated
+exactly by CasADi (``casadi.gradient``/``casadi.hessian`` of the stage alone). The problem
+handed to IPOPT is an MX graph that runs each stage Function's instruction list once on
+whole vectors, one elementwise MX operation per instruction
+(:func:`profileopt._casadi.mx_replay`), so the graph does not grow with N and every
+evaluation is a few tight loops. Its derivatives are supplied as Functions too (the
+``grad_f``, ``jac_g`` and ``hess_lag`` options of ``casadi.nlpsol``): the stage
+derivatives placed on the diagonals of the known banded sparsity (stage k acts on the
+boundaries k, k+1 (and k+2), so its entries are stage 0's shifted by k). No symbolic
+differentiation of the whole problem happens, which is what made building a
+10,000-segment SX problem take seconds.
 
 Every stage contribution is an exact term of the objective or one entry of g, so the
 gradient, Jacobian and Hessian are exactly those of the whole problem (the tests check
@@ -22,6 +26,8 @@ from __future__ import annotations
 from typing import Any
 
 import casadi as ca
+
+from ._casadi import mx_replay
 
 __all__ = ["SPEED_EPS_MPS", "IPOPT_OPTIONS", "PARAMETERS", "build_nlp"]
 
@@ -93,7 +99,7 @@ def _stages() -> dict[str, ca.Function]:
     ds_scaled_j], q): f = weight v_j da^2 / dsm_j / T_ref and g = jerk_j / J. q holds
     :data:`PARAMETERS`. For each kind (``seg``, ``bnd``), ``*_f`` returns f, ``*_g`` g,
     ``*_fdf`` f and grad f, ``*_gdg`` g and grad g (gradients are columns, w.r.t. z), and
-    ``*_h`` takes (z, ds, lam_g, q, lam_f) and return the upper triangle of
+    ``*_h`` takes (z, ds, lam_g, q, lam_f) and returns the upper triangle of
     the Hessian of lam_f f + lam_g g w.r.t. z (entries :data:`_TRIU_2` / :data:`_TRIU_3`).
     """
     q = ca.SX.sym("q", len(PARAMETERS))
@@ -173,8 +179,8 @@ def build_nlp(n: int, with_jerk: bool) -> ca.Function:
 
     Notes
     -----
-    The objective and g are maps of the stage Functions of :func:`_stages` (graph size
-    independent of N); ``grad_f``, ``jac_g`` and ``hess_lag`` are the mapped exact stage
+    The objective and g run the stage Functions of :func:`_stages` on all stages at once
+    (graph size independent of N); ``grad_f``, ``jac_g`` and ``hess_lag`` are the exact stage
     derivatives placed on the diagonals of the banded structure (Hessian bandwidth 2), so
     IPOPT receives exactly the derivatives of the whole problem.
     """
@@ -188,54 +194,56 @@ def build_nlp(n: int, with_jerk: bool) -> ca.Function:
     x = ca.MX.sym("y", nx)
     p = ca.MX.sym("p", n + len(PARAMETERS))
     lam_f = ca.MX.sym("lam_f")
-    ds = p[:n].T
-    q = p[n:]
-    seg = (ca.vertcat(x[:n].T, x[1:].T), ds)  # per-segment inputs: 2 x n, 1 x n
-    if m:
-        bnd = (ca.vertcat(x[:m].T, x[1:n].T, x[2:].T), ca.vertcat(ds[:, :m], ds[:, 1:]))  # 3 x m, 2 x m
+    q = [p[n + k] for k in range(len(PARAMETERS))]
+    # stage inputs: one column per scalar input, one entry per stage
+    seg = [[x[:n], x[1:]], [p[:n]]]
+    bnd = [[x[:m], x[1:n], x[2:]], [p[:m], p[1:n]]] if m else None
+
+    def stages(kind: str, what: str, extra: list | None = None, shared: list | None = None) -> list[list[ca.MX]]:
+        """The outputs of stage Function ``kind_what`` at every stage, as columns."""
+        inputs, count = (seg, n) if kind == "seg" else (bnd, m)
+        outputs = mx_replay(st[f"{kind}_{what}"], inputs + (extra or []) + [q] + (shared or []))
+        return [[_column(v, count) for v in out] for out in outputs]
 
     # objective and constraints (the oracle's f and g)
-    (f_seg,), (g_seg,) = _map_stages(st["seg_f"], seg, (q,)), _map_stages(st["seg_g"], seg, (q,))
-    f = ca.sum2(f_seg)
-    g_parts = [g_seg.T]
+    f = ca.sum1(stages("seg", "f")[0][0])
+    g_parts = [stages("seg", "g")[0][0]]
     if m:
-        (f_bnd,) = _map_stages(st["bnd_f"], bnd, (q,))
-        f = f + ca.sum2(f_bnd)
+        f = f + ca.sum1(stages("bnd", "f")[0][0])
         if jerk:
-            (g_bnd,) = _map_stages(st["bnd_g"], bnd, (q,))
-            g_parts.append(g_bnd.T)
+            g_parts.append(stages("bnd", "g")[0][0])
     g = ca.vertcat(*g_parts)
     ng = g.size1()
 
     # gradient of f: entry r of stage k's gradient belongs to variable k + r
-    f_seg, df_seg = _map_stages(st["seg_fdf"], seg, (q,))
-    f_d = ca.sum2(f_seg)
-    grad = _shifted(df_seg[0, :].T, 0, 1) + _shifted(df_seg[1, :].T, 1, 0)
+    (f_seg,), df_seg = stages("seg", "fdf")
+    f_d = ca.sum1(f_seg)
+    grad = _shifted(df_seg[0], 0, 1) + _shifted(df_seg[1], 1, 0)
     if m:
-        f_bnd, df_bnd = _map_stages(st["bnd_fdf"], bnd, (q,))
-        f_d = f_d + ca.sum2(f_bnd)
-        grad = grad + sum(_shifted(df_bnd[r, :].T, r, 2 - r) for r in range(3))
+        (f_bnd,), df_bnd = stages("bnd", "fdf")
+        f_d = f_d + ca.sum1(f_bnd)
+        grad = grad + sum(_shifted(df_bnd[r], r, 2 - r) for r in range(3))
 
     # Jacobian of g: row i (segment) holds columns i, i+1; row n + j - 1 (boundary j)
     # holds columns j-1, j, j+1: shifted diagonals of the stage gradients.
-    g_seg, dg_seg = _map_stages(st["seg_gdg"], seg, (q,))
-    g_d = [g_seg.T]
-    blocks = [sum(_diagonal(dg_seg[r, :].T, n, nx, r) for r in range(2))]
+    (g_seg,), dg_seg = stages("seg", "gdg")
+    g_d = [g_seg]
+    blocks = [sum(_diagonal(dg_seg[r], n, nx, r) for r in range(2))]
     if jerk:
-        g_bnd, dg_bnd = _map_stages(st["bnd_gdg"], bnd, (q,))
-        g_d.append(g_bnd.T)
-        blocks.append(sum(_diagonal(dg_bnd[r, :].T, m, nx, r) for r in range(3)))
+        (g_bnd,), dg_bnd = stages("bnd", "gdg")
+        g_d.append(g_bnd)
+        blocks.append(sum(_diagonal(dg_bnd[r], m, nx, r) for r in range(3)))
     jac = ca.vertcat(*blocks)
 
     # Hessian of the Lagrangian, upper triangle: entry (r, c) of stage k's local Hessian
     # lands on (k + r, k + c); the stage Hessians are summed where they overlap.
     lam_g = ca.MX.sym("lam_g", ng)
-    (h_seg,) = _map_stages(st["seg_h"], seg + (lam_g[:n].T,), (q, lam_f))
-    parts = [(h_seg[e, :].T, r, c, n) for e, (r, c) in enumerate(_TRIU_2)]
+    (h_seg,) = stages("seg", "h", [[lam_g[:n]]], [[lam_f]])
+    parts = [(h_seg[e], r, c, n) for e, (r, c) in enumerate(_TRIU_2)]
     if m:
-        lam_jerk = lam_g[n:].T if jerk else ca.MX.zeros(1, m)
-        (h_bnd,) = _map_stages(st["bnd_h"], bnd + (lam_jerk,), (q, lam_f))
-        parts += [(h_bnd[e, :].T, r, c, m) for e, (r, c) in enumerate(_TRIU_3)]
+        lam_jerk = lam_g[n:] if jerk else ca.MX(0.0)
+        (h_bnd,) = stages("bnd", "h", [[lam_jerk]], [[lam_f]])
+        parts += [(h_bnd[e], r, c, m) for e, (r, c) in enumerate(_TRIU_3)]
     by_offset: dict[int, list[ca.MX]] = {}
     for v, r, c, count in parts:  # diagonal c - r, starting at row r
         by_offset.setdefault(c - r, []).append(_shifted(v, r, nx - (c - r) - r - count))
@@ -250,41 +258,9 @@ def build_nlp(n: int, with_jerk: bool) -> ca.Function:
     return ca.nlpsol(name, "ipopt", {"x": x, "p": p, "f": f, "g": g}, options)
 
 
-def _map_stages(fun: ca.Function, per_stage: tuple, shared: tuple) -> list[ca.MX]:
-    """Evaluate a stage Function on every stage: ``fun(*per_stage, *shared)``.
-
-    ``per_stage`` are MX of ``count`` columns (one per stage), ``shared`` the same for all
-    stages. Stages are evaluated ``_BATCH`` at a time by one SX Function that holds
-    ``_BATCH`` inlined copies of ``fun`` (so the per-call overhead of a casadi map is paid
-    once per batch, not once per stage); the last batch is padded with ones and its
-    padding cut off the outputs, each of shape (rows, count).
-    """
-    count = per_stage[0].size2()
-    batch = min(_BATCH, count)
-    n_batches = -(-count // batch)
-    pad = n_batches * batch - count
-    if pad:
-        per_stage = tuple(ca.horzcat(a, ca.MX.ones(a.size1(), pad)) for a in per_stage)
-    outputs = _batched(fun, batch, len(shared)).map(n_batches)(*per_stage, *shared)
-    outputs = outputs if isinstance(outputs, (list, tuple)) else [outputs]
-    return [o[:, :count] if pad else o for o in outputs]
-
-
-#: Stages evaluated by one call of a batched stage Function.
-_BATCH = 64
-
-
-def _batched(fun: ca.Function, batch: int, n_shared: int) -> ca.Function:
-    """``fun`` on ``batch`` stages at once, inlined into one SX Function.
-
-    The first inputs of ``fun`` are per stage and get ``batch`` times their columns; the
-    last ``n_shared`` are shared by all stages and keep their shape.
-    """
-    n_per_stage = fun.n_in() - n_shared
-    inputs = [ca.SX.sym(fun.name_in(i), fun.size1_in(i), fun.size2_in(i) * (batch if i < n_per_stage else 1))
-              for i in range(fun.n_in())]
-    outputs = fun.map(batch)(*inputs)
-    outputs = outputs if isinstance(outputs, (list, tuple)) else [outputs]
-    return ca.Function(f"{fun.name()}_x{batch}", inputs, list(outputs))
-
-
+def _column(v: ca.MX | None, count: int) -> ca.MX:
+    """A stage output as a column of ``count`` entries (a structural zero or a value the
+    same for every stage, such as a parameter-only derivative, is repeated)."""
+    if v is None:
+        return ca.MX.zeros(count, 1)
+    return v if v.size1() == count else ca.repmat(v, count, 1)

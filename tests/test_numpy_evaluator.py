@@ -158,3 +158,25 @@ def test_numeric_model_evaluation_is_casadis_bitwise(public, vehicle_name: str) 
     value = public(*args, vehicle)
     assert value.shape == np.broadcast_shapes(*(a.shape for a in args))
     assert_bitwise([value], casadi_values(fun, *args))
+
+
+def test_mx_replay_is_the_function_on_every_entry_bitwise() -> None:
+    # one MX vector operation per instruction: the stage Functions of the NLP, a
+    # parameter-only entry (stays a scalar) and a structural zero (None)
+    z, q = ca.SX.sym("z", 2), ca.SX.sym("q")
+    expr = ca.sqrt(z[0] + 1e-6) * z[1] / (q + 2.0) - ca.fmin(z[0], q) ** 2
+    fun = ca.Function("stage", [z, q], [ca.vertcat(expr, 2.0 * q, ca.SX(1, 1)), ca.gradient(expr, z)])
+    rng = np.random.default_rng(5)
+    a, b, qq = rng.uniform(0, 2, 50), rng.normal(size=50), 0.7
+    za, zb, qm = ca.MX.sym("a", 50), ca.MX.sym("b", 50), ca.MX.sym("q")
+    (value, only_q, zero), gradient = _casadi.mx_replay(fun, [[za, zb], [qm]])
+    assert zero is None and only_q.size1() == 1
+    replayed = ca.Function("r", [za, zb, qm], [value, only_q, gradient[0], gradient[1]])
+    got = [np.asarray(o).ravel() for o in replayed(a, b, qq)]
+    reference = fun.map(50)(np.stack([a, b]), qq)
+    ref_value = np.asarray(reference[0])  # 3 x 50
+    ref_grad = np.asarray(reference[1])  # 2 x 50
+    np.testing.assert_array_equal(got[0], ref_value[0])
+    np.testing.assert_array_equal(got[1], [2.0 * qq])
+    np.testing.assert_array_equal(got[2], ref_grad[0])
+    np.testing.assert_array_equal(got[3], ref_grad[1])
