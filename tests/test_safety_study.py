@@ -46,19 +46,23 @@ def study(example) -> SafetyStudy:
 
 
 def test_sbem_tf_pooled_fraction_is_what_was_measured(study: SafetyStudy) -> None:
-    # Measured on 2026-11-22 with `python examples/safety_study.py` (the README's comparison):
-    # SBEM:TF plans drive 2634 segments on the 26 route-vehicle pairs, and the simulated
-    # transmitted force exceeds the limit in 3 of them: the two curb.csv segments holding the
-    # 0.15 m step down (atv and atv-resonant) and one KRC 1-inch segment (atv-resonant,
-    # 380-385 m, a narrow 0.09 m bump). The ratios nearest to 1 are 0.990 (KRC 1-inch,
-    # atv-resonant, 390-395 m) and 1.10: a 1 % margin, far beyond solver tolerances.
+    # Measured on 2026-11-22 with `python examples/safety_study.py` (the README's comparison),
+    # after the wheel envelope learned to roll on the ground between samples
+    # (simulate.wheel_envelope_m): SBEM:TF plans drive 2634 segments on the 26 route-vehicle
+    # pairs, and the simulated transmitted force exceeds the limit in none of them. The
+    # largest ratios are 0.861 (krc_rms_1in.csv, atv-resonant) and 0.842 (the curb's step
+    # down, atv-resonant): a 14 % margin, far beyond solver tolerances. (Before, with circles
+    # on the samples alone, 3 segments: the two step-down segments of curb.csv, 1.39 and
+    # 1.36, and KRC 1-inch 380-385 m for atv-resonant, 1.10. The step-down force depends on
+    # the sample resolution: the drop off a 0.15 m step sampled every 5 cm is spread over a
+    # sample interval, see wheel_envelope_m.)
     tf = study.total("sbem_tf")
-    assert (tf.over_count, tf.segments) == (3, 2634)
+    assert (tf.over_count, tf.segments) == (0, 2634)
     assert tf.infeasible_runs == 0 and tf.runs == 26
+    assert tf.worst_ratio < 0.9
     where = sorted((Path(r.route).name, r.vehicle, e.s_start_m)
                    for r in study.runs if r.model == "sbem_tf" for e in r.exceedances)
-    assert where == [("curb.csv", "atv", 150.0), ("curb.csv", "atv-resonant", 150.0),
-                     ("krc_rms_1in.csv", "atv-resonant", 380.0)]
+    assert where == []
 
 
 def test_the_paper_claim_holds_on_the_pooled_set(study: SafetyStudy) -> None:
@@ -115,17 +119,24 @@ def test_infeasible_exactly_where_a_segment_is_over_the_limit_at_standstill(exam
     assert sum(run.outcome == INFEASIBLE for run in study.runs) == 6
 
 
-def test_curb_exceedances_are_at_the_step_down(study: SafetyStudy) -> None:
+def test_curb_exceedances_are_at_the_edges(study: SafetyStudy) -> None:
     # curb.csv (examples/routes/make_routes.py): 0.15 m up at s = 102.5 m, down at 152.5 m.
-    # Where an SBEM plan exceeds the limit there, the force peaks within a wheel radius or
-    # two of the edge (the rigid wheel meets the edge X_w = r = 0.1 m before it).
+    # Where a plan exceeds the limit there, the force peaks within a wheel radius or two of
+    # an edge (the rigid wheel meets the edge X_w = r = 0.1 m before it). Only Prev:BEM
+    # plans exceed it there now (both edges, both vehicles).
+    edges = (102.5, 152.5)
+    found = 0
     for run in study.runs:
-        if Path(run.route).name == "curb.csv" and run.model.startswith("sbem"):
+        if Path(run.route).name == "curb.csv":
             for e in run.exceedances:
-                assert e.s_start_m < 152.5 < e.s_end_m
-                assert abs(e.peak_s_m - 152.5) < 0.25
-                # the plan is at the model's limit there: the prediction has no margin left
-                assert math.isclose(e.predicted_n, e.limit_n, rel_tol=1e-6)
+                edge = min(edges, key=lambda x: abs(e.peak_s_m - x))
+                assert e.s_start_m < edge < e.s_end_m
+                assert abs(e.peak_s_m - edge) < 0.25
+                found += 1
+                if run.model.startswith("sbem"):
+                    # an SBEM plan is at the model's limit there: no margin left
+                    assert math.isclose(e.predicted_n, e.limit_n, rel_tol=1e-6)
+    assert found == 4
 
 
 def test_example_prints_and_writes_the_same_markdown(example, study, tmp_path, monkeypatch, capsys) -> None:
@@ -135,7 +146,7 @@ def test_example_prints_and_writes_the_same_markdown(example, study, tmp_path, m
     printed = capsys.readouterr().out
     written = out.read_text()
     assert printed.startswith(written)  # then "wrote ..."
-    assert "| SBEM:TF | 3 of 2634 (0.11 %) |" in written
+    assert "| SBEM:TF | 0 of 2634 (0.00 %) |" in written
     assert "`python examples/safety_study.py`" in written
     for label in ("Prev:BEM", "IECM", "SBEM:EF", "SBEM:TF"):
         assert f"| {label} |" in written
