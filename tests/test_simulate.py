@@ -344,7 +344,7 @@ def test_washboard_force_at_20_mps_does_not_depend_on_the_sample_spacing() -> No
     # form no longer holds) under atv-resonant at 20 m/s, as Prev:BEM plans it (its closed
     # form: 916 N). Reference: the exact offset curve (offset_curve_m, independent of
     # wheel_envelope_m) sampled every 5 mm and fed in as the base input. The envelope of
-    # the samples 5 cm apart gives within 1.5 % of it (measured -1.0 % to -1.4 %: the
+    # the samples 5 cm apart gives within 1.5 % of it (measured -1.2 % to -1.4 %: the
     # polyline through 13 samples per wavelength sags up to A k^2 h^2 / 8 = 1.1 mm below
     # the sinusoid). Circles on the samples alone gave +8 % to +10 %, above 1000 N.
     amplitude, wavelength, speed, length = 0.04, 2.0 / 3.0, 20.0, 400.0
