@@ -292,6 +292,14 @@ def choose_bands(
         b = greatest_profile(lower, upper, length_m, accel_mps2, decel_mps2)
         short = b < lower - tol
         if not short.any():
+            standstill = np.flatnonzero((b[:-1] <= tol) & (b[1:] <= tol))
+            if standstill.size:  # v = 0 at both ends: constant acceleration never moves
+                i = standstill[0]
+                raise InfeasibleError(
+                    f"segment {i} ({where[i]:g} to {where[i + 1]:g} m) would have to start and end at "
+                    "0 m/s, so it can never be driven; use shorter segments (--segment-length) or "
+                    "nonzero --v0/--vend"
+                )
             return _Bounds(lower_b=lower, upper_b=upper, band=band.copy(), greatest_b=np.maximum(b, lower))
         j = np.flatnonzero(short)
         # the segments on either side of boundary j whose own lower edge is out of reach
