@@ -28,6 +28,7 @@ from typing import Any
 import casadi as ca
 
 from ._casadi import mx_replay
+from .kinematics import boundary_jerk_mps3, jerk_squared_time, segment_accel_mps2, segment_time_s
 
 __all__ = ["SPEED_EPS_MPS", "IPOPT_OPTIONS", "PARAMETERS", "build_nlp"]
 
@@ -63,28 +64,18 @@ def speed_mps(b: Any) -> Any:
     return ca.sqrt(b + SPEED_EPS_MPS**2)
 
 
-def accel_mps2(b_left: Any, b_right: Any, ds_m: Any) -> Any:
-    """Constant acceleration a = (b_right - b_left) / (2 ds) (m/s^2) of a segment of length ds (m)."""
-    return (b_right - b_left) / (2.0 * ds_m)
-
-
-def travel_s(b_left: Any, b_right: Any, ds_m: Any) -> Any:
-    """Time (s) to drive ds (m) at constant acceleration: 2 ds / (v_left + v_right)."""
-    return 2.0 * ds_m / (speed_mps(b_left) + speed_mps(b_right))
-
-
 def jerk_terms(b: tuple[Any, Any, Any], ds_m: tuple[Any, Any]) -> tuple[Any, Any]:
     """At an interior boundary j: (v_j da^2 / dsm_j, jerk_j = v_j da / dsm_j).
 
     ``b`` holds b_{j-1}, b_j, b_{j+1} (m^2/s^2), ``ds_m`` the lengths of the segments
-    before and after boundary j (m); da = a_j - a_{j-1} (m/s^2) and dsm_j is their mean
-    (m). The first term is the integral of jerk^2 dt over the boundary's share of the
-    route (dt = ds / v; units m^2/s^5), the second the jerk v da/ds (m/s^3).
+    before and after boundary j (m). See :func:`profileopt.kinematics.jerk_squared_time`
+    and :func:`profileopt.kinematics.boundary_jerk_mps3`.
     """
-    dsm = 0.5 * (ds_m[0] + ds_m[1])
-    da = accel_mps2(b[1], b[2], ds_m[1]) - accel_mps2(b[0], b[1], ds_m[0])
+    a_before = segment_accel_mps2(b[0], b[1], ds_m[0])
+    a_after = segment_accel_mps2(b[1], b[2], ds_m[1])
     v = speed_mps(b[1])
-    return v * da**2 / dsm, v * da / dsm
+    return (jerk_squared_time(v, a_before, a_after, ds_m[0], ds_m[1]),
+            boundary_jerk_mps3(v, a_before, a_after, ds_m[0], ds_m[1]))
 
 
 # ---------------------------------------------------------------------------------------
@@ -114,8 +105,8 @@ def _stages() -> dict[str, ca.Function]:
     z = ca.SX.sym("z", 2)
     ds = ca.SX.sym("ds")
     b, length = b_ref * z, l_ref * ds
-    f = travel_s(b[0], b[1], length) / t_ref
-    g = accel_mps2(b[0], b[1], length) / a_ref
+    f = segment_time_s(speed_mps(b[0]), speed_mps(b[1]), length) / t_ref
+    g = segment_accel_mps2(b[0], b[1], length) / a_ref
     out.update(_stage_functions("seg", z, ds, q, f, g, lam_f, lam_g, _TRIU_2))
 
     z = ca.SX.sym("z", 3)

@@ -36,6 +36,7 @@ from ._io import atomic_write
 from ._nlp import build_nlp
 from .errors import InfeasibleError, InputError
 from .forces import MODELS, get_model
+from .kinematics import boundary_jerk_mps3, jerk_squared_time, segment_accel_mps2, segment_time_s
 from .speeds import SpeedBands, speed_bands
 from .terrain import segment_roughness_index, worst_case_elevation
 
@@ -591,14 +592,14 @@ def _violations(b: np.ndarray, lower: np.ndarray, upper: np.ndarray, length_m: n
                 accel: float, decel: float, jerk: float) -> dict[str, float]:
     """Largest relative violation of each constraint by the squared speeds b (0 if none)."""
     scale_b = max(float(upper.max()), 1.0)
-    a = np.diff(b) / (2.0 * length_m)
+    a = segment_accel_mps2(b[:-1], b[1:], length_m)
     out = {
         "speed": float(max(np.max(lower - b), np.max(b - upper), 0.0)) / scale_b,
         "accel": float(max(np.max(a - accel), np.max(-decel - a), 0.0)) / accel,
         "jerk": 0.0,
     }
     if math.isfinite(jerk) and length_m.size >= 2:
-        j = np.sqrt(np.maximum(b[1:-1], 0.0)) * np.diff(a) / (0.5 * (length_m[:-1] + length_m[1:]))
+        j = boundary_jerk_mps3(np.sqrt(np.maximum(b[1:-1], 0.0)), a[:-1], a[1:], length_m[:-1], length_m[1:])
         out["jerk"] = float(max(np.max(np.abs(j)) - jerk, 0.0)) / jerk
     return out
 
@@ -722,11 +723,11 @@ def plan(
 def _objective(b: np.ndarray, length_m: np.ndarray, smoothing: float) -> float:
     """Travel time plus the smoothing term (s) of a squared-speed profile, exactly."""
     v = np.sqrt(np.maximum(b, 0.0))
-    travel = float(np.sum(2.0 * length_m / (v[:-1] + v[1:])))
+    travel = float(np.sum(segment_time_s(v[:-1], v[1:], length_m)))
     if length_m.size < 2 or smoothing == 0:
         return travel
-    a = np.diff(b) / (2.0 * length_m)
-    return travel + smoothing * float(np.sum(v[1:-1] * np.diff(a) ** 2 / (0.5 * (length_m[:-1] + length_m[1:]))))
+    a = segment_accel_mps2(b[:-1], b[1:], length_m)
+    return travel + smoothing * float(np.sum(jerk_squared_time(v[1:-1], a[:-1], a[1:], length_m[:-1], length_m[1:])))
 
 
 def _solve_nlp(seg: Segments, chosen: _Bounds, vehicle: "Vehicle", smoothing: float,
@@ -780,9 +781,8 @@ def _fallback(args: tuple, vehicle: "Vehicle", jerk: float, v0: float, vend: flo
 def _assemble(seg: Segments, b: np.ndarray, vehicle: "Vehicle", model: str, bands: SpeedBands,
               lower_mps: np.ndarray, upper_mps: np.ndarray, count: np.ndarray, chosen: _Bounds) -> Profile:
     speed = np.sqrt(np.maximum(b, 0.0))
-    accel = np.diff(b) / (2.0 * seg.length_m)
-    with np.errstate(divide="ignore"):
-        dt = 2.0 * seg.length_m / (speed[:-1] + speed[1:])
+    accel = segment_accel_mps2(b[:-1], b[1:], seg.length_m)
+    dt = segment_time_s(speed[:-1], speed[1:], seg.length_m)
     time_s = np.concatenate([[0.0], np.cumsum(dt)])
     force = _max_force_over_segments(model, vehicle, seg.ri, speed, bands.peaks_mps)
     rows = np.arange(seg.count)
@@ -814,7 +814,7 @@ def jerk_mps3(profile: Profile) -> np.ndarray:
     """Jerk v da/ds at the interior boundaries (m/s^3), shape (N-1,)."""
     ds = np.diff(profile.s_m)
     a = profile.accel_mps2[:-1]
-    return profile.speed_mps[1:-1] * np.diff(a) / (0.5 * (ds[:-1] + ds[1:]))
+    return boundary_jerk_mps3(profile.speed_mps[1:-1], a[:-1], a[1:], ds[:-1], ds[1:])
 
 
 def summarize(profile: Profile) -> dict:

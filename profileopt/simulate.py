@@ -76,6 +76,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .errors import InputError
+from .kinematics import segment_accel_mps2, segment_time_s
 
 if TYPE_CHECKING:
     from .vehicle import Vehicle
@@ -344,7 +345,7 @@ def boundary_times_s(boundaries_m: np.ndarray, speed_mps: np.ndarray) -> np.ndar
             f"speed profile: the segment from {b[i]:g} to {b[i + 1]:g} m has speed 0 at both ends, "
             "so the vehicle never crosses it; give it a speed > 0 at one end at least"
         )
-    return np.concatenate([[0.0], np.cumsum(2.0 * np.diff(b) / both)])
+    return np.concatenate([[0.0], np.cumsum(segment_time_s(v[:-1], v[1:], np.diff(b)))])
 
 
 def position_at_time(
@@ -374,7 +375,7 @@ def position_at_time(
     t = np.asarray(time_s, dtype=float)
     seg = np.clip(np.searchsorted(times_s, t, side="right") - 1, 0, b.size - 2)
     length = np.diff(b)
-    accel = (v[1:] ** 2 - v[:-1] ** 2) / (2.0 * length)
+    accel = segment_accel_mps2(v[:-1] ** 2, v[1:] ** 2, length)
     tau = t - times_s[seg]
     s = b[seg] + v[seg] * tau + 0.5 * accel[seg] * tau * tau
     speed = np.maximum(v[seg] + accel[seg] * tau, 0.0)
