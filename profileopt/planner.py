@@ -702,7 +702,8 @@ def plan(
                 status, success = f"solution breaks a limit ({max(worst, key=worst.get)})", False
         if not success:
             notes.append(f"IPOPT did not converge ({status}); returning a slower profile that keeps every limit")
-            b = _fallback(args, vehicle, jerk, v0_mps, vend_mps, seg)
+            chosen = _fallback(args, vehicle, jerk, v0_mps, vend_mps, seg)
+            b = chosen.greatest_b
             status = f"fallback: {status}"
     b = np.clip(b, chosen.lower_b, chosen.upper_b) if success else b
     profile = _assemble(seg, b, vehicle, model, speed_sets, lower_mps, upper_mps, count, chosen)
@@ -759,7 +760,7 @@ def _solve_nlp(seg: Segments, chosen: _Bounds, vehicle: "Vehicle", smoothing: fl
     return b, status, int(stats.get("iter_count", 0)), {"build": build, "solve": solve}
 
 
-def _fallback(args: tuple, vehicle: "Vehicle", jerk: float, v0: float, vend: float, seg: Segments) -> np.ndarray:
+def _fallback(args: tuple, vehicle: "Vehicle", jerk: float, v0: float, vend: float, seg: Segments) -> _Bounds:
     """A profile that keeps every limit: forward-backward with acceleration bounds so low
     that the jerk bound holds at every boundary whatever the pattern of accelerations.
 
@@ -775,7 +776,7 @@ def _fallback(args: tuple, vehicle: "Vehicle", jerk: float, v0: float, vend: flo
         chosen = choose_bands(*args, a, d, v0, vend, seg.boundaries_m)
     except InfeasibleError as exc:
         raise PlanningError(f"IPOPT failed and no jerk-limited fallback exists ({exc})") from None
-    return chosen.greatest_b
+    return chosen
 
 
 def _assemble(seg: Segments, b: np.ndarray, vehicle: "Vehicle", model: str, bands: SpeedBands,
