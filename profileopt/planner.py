@@ -141,6 +141,12 @@ def segment_route(route: "Route", vehicle: "Vehicle", segment_length_m: float = 
             "choose a shorter segment length"
         )
     s, z = route.s_m, route.z_m
+    if total / length > s.size:  # more segments than samples: refuse before allocating them
+        raise InputError(
+            f"--segment-length = {length:g} m cuts {route.source} ({total:g} m, {s.size} samples) into more "
+            f"segments than it can fill with {MIN_SAMPLES_PER_SEGMENT} samples each; use at least "
+            f"{MIN_SAMPLES_PER_SEGMENT * total / s.size:.3g} m"
+        )
     n_full = max(int(math.floor(total / length + 1e-9)), 1)
     bounds = s[0] + length * np.arange(n_full + 1)
     if total - n_full * length > 1e-9 * max(total, 1.0):
@@ -310,26 +316,50 @@ def choose_bands(
                                              right[lo[right] ** 2 > b[right] + tol]]))
         lowerable = culprits[band[culprits] > 0]
         if lowerable.size == 0:
-            raise InfeasibleError(_infeasible_message(int(j[0]), b, lower, upper, where, v0_mps, vend_mps))
+            raise InfeasibleError(_infeasible_message(int(j[0]), b, lower, where, v0_mps, vend_mps,
+                                                      (bands_lower_mps, bands_upper_mps, count)))
         band[lowerable] -= 1
 
 
-def _infeasible_message(j: int, b: np.ndarray, lower: np.ndarray, upper: np.ndarray, where: np.ndarray,
-                        v0: float, vend: float) -> str:
+def _bands_text(lower_mps: np.ndarray, upper_mps: np.ndarray, count: int) -> str:
+    """The admissible speed bands of one segment, e.g. "[0, 0.32] and [0.53, 3.39] m/s"."""
+    parts = [f"[{lower_mps[k]:.3g}, {upper_mps[k]:.3g}]" for k in range(count)]
+    return " and ".join(parts) + " m/s"
+
+
+def _infeasible_message(j: int, b: np.ndarray, lower: np.ndarray, where: np.ndarray, v0: float, vend: float,
+                        bands: tuple[np.ndarray, np.ndarray, np.ndarray]) -> str:
+    """Why boundary j cannot be reached, named from the segments' full band lists ``bands``
+    (lower edges (N, B), upper edges (N, B), counts (N,)), not from the lowered assignment."""
     n = where.size - 1
     reach = math.sqrt(max(b[j], 0.0))
-    if j == 0:
-        if upper[0] < v0**2:
-            return (f"--v0 = {v0:g} m/s is above the allowable speed {math.sqrt(max(upper[0], 0.0)):.3g} m/s "
-                    "of the first segment; start slower")
-        return (f"starting at --v0 = {v0:g} m/s the vehicle cannot brake in time for the limits ahead "
-                f"(it can only be at {reach:.3g} m/s); start slower or raise max_decel_mps2")
-    if j == n:
-        if upper[-1] < vend**2:
-            return (f"--vend = {vend:g} m/s is above the allowable speed {math.sqrt(max(upper[-1], 0.0)):.3g} "
-                    "m/s of the last segment; end slower")
-        return (f"the route cannot end at --vend = {vend:g} m/s: the vehicle can reach only {reach:.3g} m/s "
-                "there; lower --vend or raise max_accel_mps2")
+    if j in (0, n):
+        i, flag, speed = (0, "--v0", v0) if j == 0 else (n - 1, "--vend", vend)
+        lo_row, hi_row, cnt = bands[0][i], bands[1][i], int(bands[2][i])
+        where_text = "first" if j == 0 else "last"
+        inside = [k for k in range(cnt) if lo_row[k] - 1e-12 <= speed <= hi_row[k] + 1e-12]
+        if cnt == 1:  # one band from rest: the plain story of speed limits and braking
+            if speed > hi_row[0]:
+                return (f"{flag} = {speed:g} m/s is above the allowable speed {hi_row[0]:.3g} m/s of the "
+                        f"{where_text} segment; {'start' if j == 0 else 'end'} slower")
+            if j == 0:
+                return (f"starting at --v0 = {speed:g} m/s the vehicle cannot brake in time for the limits "
+                        f"ahead (it can only be at {reach:.3g} m/s); start slower or raise max_decel_mps2")
+            return (f"the route cannot end at --vend = {speed:g} m/s: the vehicle can reach only {reach:.3g} "
+                    "m/s there; lower --vend or raise max_accel_mps2")
+        if not inside:
+            return (f"{flag} = {speed:g} m/s is not an admissible speed of the {where_text} segment, whose "
+                    f"admissible speeds are {_bands_text(lo_row, hi_row, cnt)}; choose {flag} in one of them")
+        if j == 0:
+            return (f"starting at --v0 = {speed:g} m/s (in the band [{lo_row[inside[0]]:.3g}, "
+                    f"{hi_row[inside[0]]:.3g}] m/s of the first segment) the vehicle cannot meet the limits "
+                    f"ahead: it can only be at {reach:.3g} m/s there (braking in time, or leaving the band "
+                    "would pass through speeds the force limit forbids); start at another speed or raise "
+                    "max_decel_mps2")
+        return (f"the route cannot end at --vend = {speed:g} m/s (in the band [{lo_row[inside[0]]:.3g}, "
+                f"{hi_row[inside[0]]:.3g}] m/s of the last segment): the vehicle can only be at {reach:.3g} "
+                "m/s there (reaching that band would pass through speeds the force limit forbids, or "
+                "needs more acceleration); choose another --vend or raise max_accel_mps2")
     return (f"at s = {where[j]:g} m the speed must be at least {math.sqrt(lower[j]):.3g} m/s but the "
             f"acceleration bounds allow only {reach:.3g} m/s; relax --v0/--vend or the vehicle's "
             "acceleration limits")
@@ -673,9 +703,9 @@ def plan(
 
     t = time.perf_counter()
     speed_sets = speed_bands(seg.ri, vehicle, model)
-    if bands == "first":
-        speed_sets = _first_band_only(speed_sets)
-    lower_mps, upper_mps, count = _cap_bands(speed_sets, seg.speed_cap_mps)
+    all_bands = _cap_bands(speed_sets, seg.speed_cap_mps)  # every band, for reports and messages
+    lower_mps, upper_mps, count = _cap_bands(_first_band_only(speed_sets), seg.speed_cap_mps) \
+        if bands == "first" else all_bands
     timings["bands"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -701,12 +731,19 @@ def plan(
             if max(worst.values()) > _CHECK_RTOL:
                 status, success = f"solution breaks a limit ({max(worst, key=worst.get)})", False
         if not success:
-            notes.append(f"IPOPT did not converge ({status}); returning a slower profile that keeps every limit")
+            notes.append(f"IPOPT gave no usable solution ({status}); returning a slower profile that keeps "
+                         "every limit")
             chosen = _fallback(args, vehicle, jerk, v0_mps, vend_mps, seg)
             b = chosen.greatest_b
             status = f"fallback: {status}"
     b = np.clip(b, chosen.lower_b, chosen.upper_b) if success else b
-    profile = _assemble(seg, b, vehicle, model, speed_sets, lower_mps, upper_mps, count, chosen)
+    profile = _assemble(seg, b, vehicle, model, speed_sets, all_bands, lower_mps, upper_mps, chosen)
+    worst_force = float(np.max(profile.force_n / profile.force_limit_n))
+    if worst_force > 1.0 + _CHECK_RTOL:  # the bands promise this; never hand back a breach
+        raise PlanningError(
+            f"{route.source}: the planned profile reaches {worst_force:.4g} times the force limit although "
+            "every speed was taken from the admissible bands; please report this with the route and vehicle"
+        )
     settings = {
         "vehicle": Path(vehicle.name).stem if vehicle.name else "vehicle", "model": model,
         "segment_length_m": float(segment_length_m), "smoothing": float(smoothing),
@@ -780,15 +817,19 @@ def _fallback(args: tuple, vehicle: "Vehicle", jerk: float, v0: float, vend: flo
 
 
 def _assemble(seg: Segments, b: np.ndarray, vehicle: "Vehicle", model: str, bands: SpeedBands,
-              lower_mps: np.ndarray, upper_mps: np.ndarray, count: np.ndarray, chosen: _Bounds) -> Profile:
+              all_bands: tuple[np.ndarray, np.ndarray, np.ndarray], lower_mps: np.ndarray,
+              upper_mps: np.ndarray, chosen: _Bounds) -> Profile:
+    """The Profile of squared speeds b: per-row arrays, the largest force per segment, and
+    the allowable speeds under both semantics from ``all_bands`` (every band, capped)."""
     speed = np.sqrt(np.maximum(b, 0.0))
     accel = segment_accel_mps2(b[:-1], b[1:], seg.length_m)
     dt = segment_time_s(speed[:-1], speed[1:], seg.length_m)
     time_s = np.concatenate([[0.0], np.cumsum(dt)])
     force = _max_force_over_segments(model, vehicle, seg.ri, speed, bands.peaks_mps)
     rows = np.arange(seg.count)
-    first = np.where((count > 0) & (lower_mps[:, 0] == 0), upper_mps[:, 0], 0.0)
-    largest = np.where(count > 0, upper_mps[rows, np.maximum(count - 1, 0)], 0.0)
+    every_lower, every_upper, every_count = all_bands
+    first = np.where((every_count > 0) & (every_lower[:, 0] == 0), every_upper[:, 0], 0.0)
+    largest = np.where(every_count > 0, every_upper[rows, np.maximum(every_count - 1, 0)], 0.0)
 
     def per_row(x: np.ndarray) -> np.ndarray:
         return np.append(x, x[-1])

@@ -73,10 +73,15 @@ class Route:
             raise InputError(f"{self.source}: s and z must be 1-D arrays of the same length")
         if s.size < 2:
             raise InputError(f"{self.source}: a route needs at least 2 samples, got {s.size}; add rows")
-        lines = np.arange(s.size)  # sample indices, used when no file lines are known
-        _check_route_arrays(self.source, s, z, self.speed_limit_mps, lines, "sample")
+        limit = None
         if self.speed_limit_mps is not None:
-            object.__setattr__(self, "speed_limit_mps", np.ascontiguousarray(self.speed_limit_mps, dtype=float))
+            limit = np.ascontiguousarray(self.speed_limit_mps, dtype=float)
+            if limit.shape != s.shape:
+                raise InputError(f"{self.source}: speed_limit_mps has shape {limit.shape} but s has {s.shape}; "
+                                 "give one speed limit per sample")
+            object.__setattr__(self, "speed_limit_mps", limit)
+        lines = np.arange(s.size)  # sample indices, used when no file lines are known
+        _check_route_arrays(self.source, s, z, limit, lines, "sample")
 
     @property
     def length_m(self) -> float:
@@ -189,7 +194,7 @@ def read_route(path: str | Path) -> Route:
         raise InputError(f"{name}: {len(rows)} data row(s); a route needs at least 2 (better: many, "
                          "dense enough to measure roughness)")
 
-    table = _parse_table(name, rows, line_numbers, len(header))
+    table = _parse_table(name, rows, line_numbers, len(header), sorted(columns.values()), header)
     where = np.asarray(line_numbers)
     z = table[:, columns["z"]]
     limit = table[:, columns["speed_limit"]] if "speed_limit" in columns else None
@@ -220,24 +225,36 @@ def _is_number(text: str) -> bool:
     return True
 
 
-def _parse_table(name: str, rows: list[str], line_numbers: list[int], width: int) -> np.ndarray:
-    """Parse the data rows into an (M, width) float array; one line's error if any cell is bad."""
-    joined = ",".join(rows)
-    cells = joined.split(",")
-    if len(cells) == len(rows) * width:
+def _parse_table(name: str, rows: list[str], line_numbers: list[int], width: int,
+                 used: list[int], header: list[str]) -> np.ndarray:
+    """Parse the used columns of the data rows into an (M, width) float array.
+
+    Every row must have exactly ``width`` cells (a row with one cell too many next to a row
+    with one too few must not shift the table); only the columns in ``used`` must be
+    numbers (ignored columns may hold text). Columns not used are NaN. One line's error if
+    anything is wrong.
+    """
+    commas = np.fromiter((row.count(",") for row in rows), dtype=np.int64, count=len(rows))
+    bad = np.flatnonzero(commas != width - 1)
+    if bad.size:
+        i = bad[0]
+        raise InputError(f"{name}: line {line_numbers[i]}: {commas[i] + 1} cells but the header has {width}; "
+                         "make every row match the header")
+    flat = ",".join(rows).split(",")
+    if len(used) == width:  # every column is used: one conversion of the whole table
         try:
-            return np.array(cells, dtype=float).reshape(len(rows), width)
+            return np.array(flat, dtype=float).reshape(len(rows), width)
         except ValueError:
-            pass  # find the offending line below
-    for row, number in zip(rows, line_numbers):
-        parts = row.split(",")
-        if len(parts) != width:
-            raise InputError(f"{name}: line {number}: {len(parts)} cells but the header has {width}; "
-                             "make every row match the header")
-        for cell in parts:
-            try:
-                float(cell)
-            except ValueError:
-                raise InputError(f"{name}: line {number}: '{cell.strip()}' is not a number; "
-                                 "every cell must be a number in SI units") from None
-    raise AssertionError("unreachable: the table parsed line by line but not as a whole")  # pragma: no cover
+            pass  # find the offending cell below
+    cells = np.array(flat, dtype=object).reshape(len(rows), width)
+    table = np.full((len(rows), width), np.nan)
+    for col in used:
+        try:
+            table[:, col] = cells[:, col].astype(float)
+        except ValueError:
+            for i, cell in enumerate(cells[:, col]):
+                if not _is_number(cell):
+                    raise InputError(f"{name}: line {line_numbers[i]}: {header[col]} = '{cell.strip()}' is not a "
+                                     "number; every cell of that column must be a number in SI units") from None
+            raise  # pragma: no cover - astype failed on a column every cell of which parses
+    return table

@@ -55,10 +55,19 @@ def check_profile(profile, route, vehicle, *, jerk=None, rtol=1e-6, grid=64):
     if math.isfinite(j_max) and ds.size >= 2:
         jerk_values = v[1:-1] * np.diff(accel) / (0.5 * (ds[:-1] + ds[1:]))
         assert np.all(np.abs(jerk_values) <= j_max * (1 + rtol))
+    # each segment's RI again, from the route's own samples: Eq. (1) on the residual of a
+    # least-squares line (numpy.polyfit), population std over the clearance h
+    seg_of_sample = np.clip(np.searchsorted(s, route.s_m, side="right") - 1, 0, s.size - 2)
+    ri_route = np.empty(s.size - 1)
+    for i in range(s.size - 1):
+        xs, zs = route.s_m[seg_of_sample == i], route.z_m[seg_of_sample == i]
+        residual = zs - np.polyval(np.polyfit(xs - xs[0], zs, 1), xs - xs[0])
+        ri_route[i] = np.std(residual) / vehicle.ground_clearance_m
+    np.testing.assert_allclose(profile.ri[:-1], ri_route, rtol=1e-6, atol=1e-9)
     # the force over every speed between the two boundary speeds of each segment
     frac = np.linspace(0.0, 1.0, grid)
     speeds = v[:-1, None] + (v[1:] - v[:-1])[:, None] * frac[None, :]
-    ri = profile.ri[:-1, None] * np.ones_like(frac)[None, :]
+    ri = ri_route[:, None] * np.ones_like(frac)[None, :]
     forces = force_n(profile.model, speeds, ri, vehicle)
     limit = profile.force_limit_n[0]
     assert np.all(forces <= limit * (1 + rtol)), f"force ratio {forces.max() / limit}"
@@ -208,7 +217,7 @@ def test_fallback_keeps_every_limit_when_ipopt_fails(monkeypatch, atv):
     profile = plan(route, atv)
     assert not profile.success
     assert profile.status == "fallback: Maximum_Iterations_Exceeded"
-    assert any("IPOPT did not converge" in note for note in profile.notes)
+    assert any("IPOPT gave no usable solution" in note for note in profile.notes)
     check_profile(profile, route, atv)
 
 
@@ -263,3 +272,31 @@ def test_cli_plan_end_to_end(tmp_path):
     assert summary["solver"]["status"] == "exact"
     assert summary["margins"]["jerk"]["ratio"] is None
     assert summary["distance_m"] == pytest.approx(200.0)
+
+
+def test_bands_first_still_reports_the_largest_allowable_speed(resonant):
+    # "first" restricts the plan, not the report: the washboard's upper band stays visible
+    route = read_route(ROUTES / "washboard.csv")
+    fast, safe = plan(route, resonant), plan(route, resonant, bands="first")
+    np.testing.assert_array_equal(safe.allowable_largest_mps, fast.allowable_largest_mps)
+    np.testing.assert_array_equal(safe.allowable_first_mps, fast.allowable_first_mps)
+    washboard = (safe.s_m[:-1] > 155) & (safe.s_m[:-1] < 295)
+    assert np.all(safe.allowable_largest_mps[washboard] > 3.0)
+
+
+def test_boundary_speed_between_two_bands_is_named_as_such(resonant):
+    route = read_route(ROUTES / "washboard.csv")
+    keep = (route.s_m >= 160) & (route.s_m <= 260)  # washboard only: bands [0, ~0.32], [~0.53, ~3.4]
+    washboard = Route(route.s_m[keep] - 160.0, route.z_m[keep], source="washboard-only")
+    with pytest.raises(InfeasibleError, match=r"--v0 = 0.4 m/s is not an admissible speed.*\[0, 0.32\] and"):
+        plan(washboard, resonant, v0_mps=0.4)
+
+
+def test_text_in_an_ignored_column_is_ignored(tmp_path, atv):
+    s = np.arange(0.0, 50.0 + 1e-9, 0.25)
+    lines = ["s,z,comment"] + [f"{a:.2f},{0.01 * math.sin(a):.5f},note {k}" for k, a in enumerate(s)]
+    (tmp_path / "r.csv").write_text("\n".join(lines) + "\n")
+    route = read_route(tmp_path / "r.csv")
+    assert route.notes and "comment" in route.notes[0]
+    np.testing.assert_allclose(route.s_m, np.round(s, 2))
+    check_profile(plan(route, atv), route, atv)

@@ -102,9 +102,6 @@ def _human(summary: dict, args: argparse.Namespace) -> str:
         lines.append(f"wrote {args.output}")
     if args.plot:
         lines.append(f"wrote {args.plot}")
-    if not solver["success"]:
-        print(f"profileopt plan: warning: IPOPT did not converge ({solver['status']}); the profile keeps every "
-              "limit but is slower than optimal", file=sys.stderr)
     return "\n".join(lines)
 
 
