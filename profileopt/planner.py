@@ -39,6 +39,7 @@ from .forces import MODELS, get_model
 from .kinematics import boundary_jerk_mps3, jerk_squared_time, segment_accel_mps2, segment_time_s
 from .speeds import SpeedBands, speed_bands
 from .terrain import segment_roughness_index, worst_case_elevation
+from .vehicle import vehicle_reference
 
 if TYPE_CHECKING:
     from .route import Route
@@ -745,7 +746,7 @@ def plan(
             "every speed was taken from the admissible bands; please report this with the route and vehicle"
         )
     settings = {
-        "vehicle": Path(vehicle.name).stem if vehicle.name else "vehicle", "model": model,
+        "vehicle": vehicle_reference(vehicle) or "unnamed", "model": model,
         "segment_length_m": float(segment_length_m), "smoothing": float(smoothing),
         "max_speed_mps": vehicle.max_speed_mps, "max_accel_mps2": a_max, "max_decel_mps2": d_max,
         "max_jerk_mps3": jerk,

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from .errors import InputError
 
-__all__ = ["Vehicle", "load_vehicle", "bundled_vehicles"]
+__all__ = ["Vehicle", "load_vehicle", "bundled_vehicles", "vehicle_reference"]
 
 # key -> (unit, what it is). Order is the order of the dataclass fields and of the files.
 _UNITS: dict[str, tuple[str, str]] = {
@@ -148,6 +148,21 @@ def bundled_vehicles() -> list[str]:
             if entry.name.endswith(".toml"):
                 names.add(entry.name[: -len(".toml")])
     return sorted(names)
+
+
+def vehicle_reference(vehicle: Vehicle) -> str:
+    """How to load ``vehicle`` again: its bundled name, or the path of its file.
+
+    Written into a profile's settings line so that ``profileopt verify`` checks a plan with
+    the vehicle it was planned for.
+    """
+    if not vehicle.name:
+        return ""
+    path = Path(vehicle.name)
+    for d in _bundled_dirs():
+        if path.parent == Path(str(d)) and path.suffix == ".toml":
+            return path.stem
+    return str(path)
 
 
 def load_vehicle(name_or_path: str | Path) -> Vehicle:

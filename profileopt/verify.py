@@ -26,6 +26,7 @@ from ._io import atomic_path, atomic_write
 from .errors import InputError
 from .forces import get_model
 from .simulate import QuarterCarRun, simulate_quarter_car
+from .terrain import segment_roughness_index
 
 if TYPE_CHECKING:
     from .planner import Profile
@@ -248,8 +249,8 @@ def verify(
     vehicle : Vehicle
         The quarter car (m, wn, zeta, r) and the force limits (N).
     model : str, optional
-        The force model the profile was planned with; default ``profile.model`` (a profile
-        read from CSV does not record it and says ``"sbem_tf"``).
+        The force model to check against; default ``profile.model`` (the model the profile
+        was planned with, recorded in its CSV).
     detrend : bool, default True
         Datum of the excitation force: each segment's trend line (True, as the RI) or
         mean (False).
@@ -261,8 +262,9 @@ def verify(
     Raises
     ------
     InputError
-        The profile does not lie on the route, or a segment is never crossed (speed 0 at
-        both of its ends), or the model is unknown.
+        The profile does not lie on the route, its RI column does not match the route's
+        segments (another route, or a vehicle with another ground clearance), a segment is
+        never crossed (speed 0 at both of its ends), or the model is unknown.
     """
     t_start = time.perf_counter()
     key = profile.model if model is None else model
@@ -276,6 +278,16 @@ def verify(
         raise InputError(
             f"{route.source}: the profile covers s = {s[0]:g} to {s[-1]:g} m but the route {route.s_m[0]:g} to "
             f"{route.s_m[-1]:g} m; verify a profile planned on this route"
+        )
+    starts = np.searchsorted(route.s_m, s[:-1], side="left")
+    ri_here = segment_roughness_index(route.s_m, route.z_m, starts, vehicle.ground_clearance_m)
+    mismatch = np.flatnonzero(~np.isclose(np.asarray(profile.ri, dtype=float)[:-1], ri_here, rtol=1e-6, atol=1e-9))
+    if mismatch.size:
+        i = mismatch[0]
+        raise InputError(
+            f"{route.source}: segment {i} ({s[i]:g} to {s[i + 1]:g} m) has RI {ri_here[i]:.4g} on this route "
+            f"but {profile.ri[i]:.4g} in the profile; verify a profile on the route and vehicle (ground "
+            "clearance) it was planned for"
         )
     notes: list[str] = []
     limit = force_model.limit_n(vehicle)

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from profileopt.terrain import segment_roughness_index
 from profileopt.errors import InputError
 from profileopt.planner import Profile
 from profileopt.route import Route
@@ -48,13 +49,16 @@ def sinusoid_route() -> Route:
     return Route(s_m=s, z_m=AMPLITUDE_M * np.sin(2 * np.pi * s / WAVELENGTH_M), source="sinusoid")
 
 
-def constant_speed_profile(predicted_n: float, limit_n: float, model: str, speed_mps: float = SPEED_MPS) -> Profile:
+def constant_speed_profile(predicted_n: float, limit_n: float, model: str, speed_mps: float = SPEED_MPS,
+                           route: Route | None = None) -> Profile:
     """A stand-in for a planned profile: constant speed over whole-wavelength segments."""
     s = np.arange(0.0, LENGTH_M + SEGMENT_M / 2, SEGMENT_M)
     n = s.size
+    route = sinusoid_route() if route is None else route  # verify checks the ri column is the route's own
+    ri = segment_roughness_index(route.s_m, route.z_m, np.searchsorted(route.s_m, s[:-1]), ATV.ground_clearance_m)
     return Profile(
         s_m=s, speed_mps=np.full(n, speed_mps), accel_mps2=np.zeros(n), time_s=s / speed_mps,
-        ri=np.full(n, AMPLITUDE_M / math.sqrt(2) / ATV.ground_clearance_m), e_max_m=np.full(n, 0.1),
+        ri=np.append(ri, ri[-1]), e_max_m=np.full(n, 0.1),
         force_n=np.full(n, predicted_n), force_limit_n=np.full(n, limit_n), model=model,
     )
 
@@ -101,7 +105,7 @@ def test_lift_off_where_the_suspension_would_pull_the_wheel_down() -> None:
     speed, amplitude = 15.0, 0.4
     force = inman_transmitted_n(amplitude, 2 * math.pi * speed / WAVELENGTH_M, ATV)
     route = Route(s_m=sinusoid_route().s_m, z_m=sinusoid_route().z_m * (amplitude / AMPLITUDE_M), source="x20")
-    v = verify(route, constant_speed_profile(0.0, 5000.0, "sbem_tf", speed), ATV, detrend=False)
+    v = verify(route, constant_speed_profile(0.0, 5000.0, "sbem_tf", speed, route), ATV, detrend=False)
     settled = v.s_m[:-1] >= 150.0
     assert force > v.weight_n == pytest.approx(100.0 * 9.80665)
     assert np.all(v.lift_off[settled])
@@ -114,6 +118,13 @@ def test_lift_off_where_the_suspension_would_pull_the_wheel_down() -> None:
 
 def test_a_profile_off_the_route_is_an_input_error() -> None:
     profile = constant_speed_profile(0.0, 5000.0, "sbem_tf")
+    short = Route(s_m=np.linspace(0.0, 100.0, 1001), z_m=np.zeros(1001), source="short.csv")
+    with pytest.raises(InputError, match="short.csv: the profile covers"):
+        verify(short, profile, ATV)
+    # a profile of another route with the same extent: its RI column gives it away
+    flat = Route(s_m=sinusoid_route().s_m, z_m=np.zeros(sinusoid_route().s_m.size), source="flat.csv")
+    with pytest.raises(InputError, match="flat.csv: segment 0 .* has RI 0 on this route"):
+        verify(flat, profile, ATV)
     short = Route(s_m=np.linspace(0.0, 100.0, 1001), z_m=np.zeros(1001), source="short.csv")
     with pytest.raises(InputError, match="short.csv: the profile covers"):
         verify(short, profile, ATV)
@@ -213,7 +224,7 @@ def test_verify_command_bad_input_fails_cleanly(tmp_path: Path) -> None:
     profile = tmp_path / "p.csv"
     profile.write_text("s_m,speed_mps,accel_mps2,time_s,ri,e_max_m,force_n,force_limit_n\n"
                        "0,1,0,0,0,0,0,5000\n9000,1,0,9000,0,0,0,5000\n")
-    done = _run("verify", str(KRC_1IN), str(profile), "-o", str(out))
+    done = _run("verify", str(KRC_1IN), str(profile), "--vehicle", "atv", "-o", str(out))
     assert done.returncode == 2 and "the profile covers" in done.stderr
     assert not out.exists()
 
@@ -236,3 +247,17 @@ def test_compare_is_reproducible_and_sbem_keeps_the_limit_on_krc_1in() -> None:
     assert by_model["prev_bem"]["over_count"] >= 5 and by_model["prev_bem"]["worst_ratio"] > 1.5
     assert by_model["iecm"]["over_count"] >= 1
     assert by_model["prev_bem"]["travel_time_s"] < by_model["sbem_tf"]["travel_time_s"]
+
+
+def test_verify_takes_the_vehicle_the_profile_was_planned_for(tmp_path: Path) -> None:
+    route = REPO / "examples" / "routes" / "washboard.csv"
+    profile = tmp_path / "p.csv"
+    done = _run("plan", str(route), "--vehicle", "atv-resonant", "-o", str(profile))
+    assert done.returncode == 0, done.stderr
+    assert "vehicle=atv-resonant" in profile.read_text().splitlines()[0]
+    done = _run("verify", str(route), str(profile))
+    assert done.returncode == 0, done.stderr
+    assert "with vehicle atv-resonant" in done.stdout and "limit 1000 N" in done.stdout
+    done = _run("verify", str(route), str(profile), "--vehicle", "atv")
+    assert done.returncode == 2
+    assert "planned for vehicle 'atv-resonant' but --vehicle is 'atv'" in done.stderr

@@ -14,11 +14,27 @@ from __future__ import annotations
 
 import argparse
 import json
+from pathlib import Path
 
 from .._io import check_output_path
 from ..cli import command
+from ..errors import InputError
 from ..forces import MODELS, get_model
 from ..vehicle import load_vehicle
+
+
+def _vehicle_of(args: argparse.Namespace, profile) -> str:
+    """The vehicle to verify with: the one the profile records, unless --vehicle names it."""
+    recorded = str(profile.settings.get("vehicle", ""))
+    if recorded in ("", "unnamed"):
+        if args.vehicle is None:
+            raise InputError(f"{args.profile}: the profile does not record its vehicle; pass --vehicle")
+        return args.vehicle
+    if args.vehicle is not None and Path(args.vehicle).stem != Path(recorded).stem:
+        raise InputError(f"{args.profile}: the profile was planned for vehicle '{recorded}' but --vehicle is "
+                         f"'{args.vehicle}'; pass --vehicle {recorded} (or leave it out), or plan again")
+    args.vehicle = args.vehicle or recorded
+    return args.vehicle
 
 
 def _verify(args: argparse.Namespace) -> int:
@@ -30,9 +46,9 @@ def _verify(args: argparse.Namespace) -> int:
     for output in (args.output, args.plot):
         if output:
             check_output_path(output)  # before simulating: a bad --plot must not leave an -o behind
-    vehicle = load_vehicle(args.vehicle)
     route = read_route(args.route)
     profile = read_profile(args.profile)
+    vehicle = load_vehicle(_vehicle_of(args, profile))
     result = verify(route, profile, vehicle, model=args.model)
     if args.output:
         result.to_csv(args.output)
@@ -69,11 +85,11 @@ def _verify(args: argparse.Namespace) -> int:
 def _verify_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("route", help="route CSV (the terrain the profile was planned on)")
     parser.add_argument("profile", help="profile CSV written by 'profileopt plan -o'")
-    parser.add_argument("--vehicle", default="atv", metavar="NAME_OR_TOML",
-                        help="bundled vehicle name or .toml file (default: atv)")
+    parser.add_argument("--vehicle", default=None, metavar="NAME_OR_TOML",
+                        help="bundled vehicle name or .toml file (default: the vehicle the profile "
+                             "records; a different one is refused)")
     parser.add_argument("--model", default=None, choices=list(MODELS),
-                        help="force model the profile was planned with (a profile CSV does not "
-                             "record it; default: sbem_tf)")
+                        help="force model to check against (default: the model the profile records)")
     parser.add_argument("-o", "--output", metavar="CSV", help="write one row per segment to this CSV")
     parser.add_argument("--plot", metavar="PNG", help="write forces along s and simulated vs predicted")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
