@@ -237,7 +237,10 @@ def export_c(
         "example.c": _example_c(base, example_fn, n_stages),
         "README.md": _readme(vehicle, base, exported, example_fn, n_stages),
     }
-    directory.mkdir(parents=True, exist_ok=True)
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"-o {directory}: cannot create the folder ({exc.strerror}); choose another path") from None
     with contextlib.ExitStack() as stack:
         for file_name, text in files.items():
             stack.enter_context(atomic_write(directory / file_name)).write(text)

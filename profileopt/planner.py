@@ -868,7 +868,8 @@ def summarize(profile: Profile) -> dict:
     dict
         ``distance_m``, ``travel_time_s``, ``mean_speed_mps``; ``slowest_segment`` (index,
         ``s_start_m``, ``s_end_m``, ``top_speed_mps``, ``ri`` and ``reason``: which limit
-        holds the vehicle back there); ``margins`` (the largest ratio of each constrained
+        holds the vehicle back there; of the segments whose top speed is held by a limit,
+        the slowest, so not the run-up from rest); ``margins`` (the largest ratio of each constrained
         quantity to its limit, and where: force, acceleration, deceleration, jerk); and
         ``solver`` (status, success, iterations, time_s). Plain Python numbers only.
     """
@@ -877,9 +878,13 @@ def summarize(profile: Profile) -> dict:
     spec = get_model(profile.model)
     v = profile.speed_mps
     top = np.maximum(v[:-1], v[1:])
-    i = int(np.argmin(top))
     accel = profile.accel_mps2[:-1]
     tol = 1e-6 * max(float(v.max()), 1.0)
+    # The slowest segment that a limit holds back (its speed reaches its band's upper edge);
+    # the run-up from rest and the final braking are slow too, but tell nothing.
+    held = np.flatnonzero(top >= profile.band_upper_mps - tol) if profile.band_upper_mps is not None \
+        else np.empty(0, dtype=int)
+    i = int(held[np.argmin(top[held])]) if held.size else int(np.argmin(top))
     a_max = float(settings.get("max_accel_mps2", math.nan))
     d_max = float(settings.get("max_decel_mps2", math.nan))
     j_max = float(settings.get("max_jerk_mps3", math.inf))

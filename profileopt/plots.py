@@ -5,8 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-
-
 from ._io import atomic_path
 from .forces import get_model
 

@@ -130,8 +130,8 @@ class QuarterCarRun:
     time_step_s : float
         dt (s).
     steps_per_sample : float
-        Grid steps per route sample interval at the top speed (>= 4 unless the step count
-        was capped at :data:`MAX_STEPS`).
+        Grid steps per route sample interval at the top speed (>= 4; a profile that would
+        need more than :data:`MAX_STEPS` steps is refused).
     timings_s : dict
         Wall-clock seconds: ``envelope``, ``integrate``, ``total``.
     """
@@ -542,7 +542,13 @@ def simulate_quarter_car(
             spacing, float(np.max(v)), vehicle.natural_frequency_radps, float(np.min(np.diff(times)))
         )
     steps = max(int(math.ceil(total / time_step_s)), 1)
-    steps = min(steps, MAX_STEPS)
+    if steps > MAX_STEPS:  # capping would break the step rules (and leave segments unsampled)
+        slowest = int(np.argmax(np.diff(times)))
+        raise InputError(
+            f"speed profile: simulating it needs {steps:,} time steps of {time_step_s:.3g} s (at most "
+            f"{MAX_STEPS:,}): it takes {total:.4g} s, the longest segment ({b[slowest]:g} to {b[slowest + 1]:g} m) "
+            f"{times[slowest + 1] - times[slowest]:.4g} s; verify a profile that keeps moving"
+        )
     dt = total / steps
     grid_t = np.linspace(0.0, total, steps + 1)
     grid_s, grid_v = position_at_time(grid_t, b, v, times)

@@ -128,6 +128,8 @@ def test_every_band_edge_is_a_root(key, vehicle):
     for edges in (bands.lower_mps, bands.upper_mps):
         interior = np.isfinite(edges) & (edges > 0) & (edges < vehicle.max_speed_mps)
         np.testing.assert_allclose(force_n(key, edges[interior], rows[interior], vehicle), limit, rtol=1e-9)
+    # Reference: Eq. (13) set equal to 1000 N and solved independently with scipy's brentq on
+    # [0.2, 0.4] m/s for atv-resonant at RI 0.154 (e_max = 4.7534 * 0.154 * 0.1 m): 0.3417451789.
     assert allowable_speed(0.154, RES, "sbem_tf", "first") == pytest.approx(0.34174518, rel=1e-6)
 
 

@@ -182,23 +182,10 @@ def _run(*args: str, cwd: Path = REPO) -> "subprocess.CompletedProcess[str]":
                           capture_output=True, text=True, timeout=120)
 
 
-def _has_plan_command() -> bool:
-    from profileopt import commands  # noqa: F401  (registers the sub-commands)
-    from profileopt.cli import _COMMANDS
-
-    return "plan" in _COMMANDS
-
-
 def test_verify_command_end_to_end(tmp_path: Path) -> None:
-    from profileopt.planner import plan
-    from profileopt.route import read_route
-
     profile_csv = tmp_path / "profile.csv"
-    if _has_plan_command():
-        done = _run("plan", str(KRC_1IN), "--vehicle", "atv", "--model", "prev_bem", "-o", str(profile_csv))
-        assert done.returncode == 0, done.stderr
-    else:  # until 'profileopt plan' exists: the same profile through the library
-        plan(read_route(KRC_1IN), ATV, model="prev_bem").to_csv(profile_csv)
+    done = _run("plan", str(KRC_1IN), "--vehicle", "atv", "--model", "prev_bem", "-o", str(profile_csv))
+    assert done.returncode == 0, done.stderr
     out_csv, out_png = tmp_path / "verify.csv", tmp_path / "verify.png"
     done = _run("verify", str(KRC_1IN), str(profile_csv), "--vehicle", "atv", "--model", "prev_bem",
                 "-o", str(out_csv), "--plot", str(out_png))
