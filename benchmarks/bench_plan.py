@@ -75,6 +75,10 @@ from profileopt.synthetic import iso8608_sections
 
 REPO = Path(__file__).resolve().parent.parent
 
+# As `profileopt plan` does (profileopt.cli.main): CasADi's OpenBLAS, loaded with the first
+# IPOPT solver, on one thread, so the in-process rows time what the command runs.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 #: Segment length (m) of every plan, the command's default.
 SEGMENT_LENGTH_M = 5.0
 #: Force model of every plan.
