@@ -77,6 +77,7 @@ import numpy as np
 
 from .errors import InputError
 from .kinematics import segment_accel_mps2, segment_time_s
+from .terrain import segment_line_fit
 
 if TYPE_CHECKING:
     from .vehicle import Vehicle
@@ -431,38 +432,19 @@ def _segment_trend(s: np.ndarray, y: np.ndarray, boundaries: np.ndarray, detrend
     """Reference line y_ref = level + slope (s - s0) of each segment (datum of F = k y + c y').
 
     The segment's samples are those with s_i <= s < s_{i+1} (the last segment closed), as in
-    :func:`profileopt.planner.segment_route`. Returns (s0, level, slope), each shape (N,).
+    :func:`profileopt.planner.segment_route`; the line is their least-squares fit
+    (:func:`profileopt.terrain.segment_line_fit`, the fit the RI removes), or their mean
+    without detrending. A segment without samples gets the interpolated height at its
+    middle, flat. Returns (s0, level, slope), each shape (N,).
     """
-    n = boundaries.size - 1
     starts = np.searchsorted(s, boundaries[:-1], side="left")
     stops = np.append(starts[1:], np.searchsorted(s, boundaries[-1], side="right"))
-    counts = stops - starts
-    s0 = boundaries[:-1].copy()
-    level = np.empty(n)
-    slope = np.zeros(n)
-    has = counts > 0
-    if np.any(has):
-        seg = np.repeat(np.arange(n)[has], counts[has])
-        take = np.concatenate([np.arange(a, b) for a, b in zip(starts[has], stops[has])])
-        ds = s[take] - s0[seg]
-        dy = y[take] - y[starts[seg]]  # shifted to the first sample: no loss at large elevations
-        cnt = counts[has].astype(float)
-        where = np.flatnonzero(has)
-
-        def mean(x: np.ndarray) -> np.ndarray:
-            return np.bincount(seg, weights=x, minlength=n)[where] / cnt
-
-        ms, my = mean(ds), mean(dy)
-        if detrend:
-            var_s = mean(ds * ds) - ms * ms
-            cov = mean(ds * dy) - ms * my
-            ok = var_s > 1e-12 * np.maximum(ms * ms, 1e-30)
-            slope[where] = np.where(ok, cov / np.where(ok, var_s, 1.0), 0.0)
-        level[where] = y[starts[has]] + my - slope[where] * ms
-    empty = np.flatnonzero(~has)  # no sample inside: the interpolated mid-segment height
+    fit = segment_line_fit(s, y, starts, stops, detrend=detrend)
+    s0, level, slope = fit.s0_m.copy(), fit.level_m.copy(), fit.slope.copy()
+    empty = np.flatnonzero(fit.count == 0)
     if empty.size:
-        level[empty] = np.interp(0.5 * (boundaries[empty] + boundaries[empty + 1]), s, y)
-        s0[empty] = 0.5 * (boundaries[empty] + boundaries[empty + 1])
+        middle = 0.5 * (boundaries[empty] + boundaries[empty + 1])
+        s0[empty], level[empty], slope[empty] = middle, np.interp(middle, s, y), 0.0
     return s0, level, slope
 
 

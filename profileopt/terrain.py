@@ -8,6 +8,7 @@ errata in ``NOTES.md``.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import TYPE_CHECKING, Any
 
@@ -23,6 +24,8 @@ if TYPE_CHECKING:
 __all__ = [
     "roughness_index",
     "segment_roughness_index",
+    "SegmentLineFit",
+    "segment_line_fit",
     "elevation_z_score",
     "worst_case_elevation",
     "step_width",
@@ -126,25 +129,96 @@ def segment_roughness_index(
     numpy.ndarray, shape (N,)
         RI of each segment (dimensionless).
     """
+    starts = np.asarray(starts, dtype=np.intp)
+    fit = segment_line_fit(positions_m, elevations_m, starts, np.append(starts[1:], np.size(positions_m)),
+                           detrend=detrend)
+    return np.sqrt(fit.residual_variance_m2) / clearance_m
+
+
+@dataclasses.dataclass(frozen=True)
+class SegmentLineFit:
+    """The least-squares line z ~ level_m + slope (s - s0_m) of each segment's samples.
+
+    Attributes
+    ----------
+    s0_m, level_m : numpy.ndarray, shape (N,)
+        A point of each line: at distance s0_m (the segment's first sample) it is at
+        level_m (m).
+    slope : numpy.ndarray, shape (N,)
+        Its slope dz/ds (dimensionless); 0 without detrending or with fewer than two
+        distinct positions.
+    residual_variance_m2 : numpy.ndarray, shape (N,)
+        Population variance of the samples about the line (m^2), >= 0.
+    count : numpy.ndarray of int, shape (N,)
+        Samples in each segment; a segment without samples has NaN in the other fields.
+    """
+
+    s0_m: np.ndarray
+    level_m: np.ndarray
+    slope: np.ndarray
+    residual_variance_m2: np.ndarray
+    count: np.ndarray
+
+
+def segment_line_fit(positions_m: ArrayLike, elevations_m: ArrayLike, starts: ArrayLike, stops: ArrayLike,
+                     detrend: bool = True) -> SegmentLineFit:
+    """Least-squares line of the samples ``starts[i] <= j < stops[i]`` of each segment i.
+
+    Computed from the segment's moments: slope = cov(s, z) / var(s), residual variance
+    var(z) - cov(s, z)^2 / var(s), with each segment shifted to its first sample so that
+    absolute positions and elevations (kilometres, hundreds of metres) lose no precision.
+    With ``detrend=False`` the line is flat at the mean (slope 0). The RI of Eq. (1)
+    (:func:`segment_roughness_index`) and the simulator's excitation datum use this one fit.
+
+    Parameters
+    ----------
+    positions_m, elevations_m : array_like, shape (M,)
+        Distance (m) and elevation (m) of the samples, s increasing.
+    starts, stops : array_like of int, shape (N,)
+        Sample ranges of the segments, non-decreasing (a segment may be empty).
+    detrend : bool, default True
+
+    Returns
+    -------
+    SegmentLineFit
+    """
     s = np.asarray(positions_m, dtype=float)
     z = np.asarray(elevations_m, dtype=float)
     starts = np.asarray(starts, dtype=np.intp)
-    counts = np.diff(np.append(starts, s.size)).astype(float)
-    seg = np.repeat(np.arange(starts.size), counts.astype(np.intp))
-    ds = s - s[starts][seg]
-    dz = z - z[starts][seg]
+    stops = np.asarray(stops, dtype=np.intp)
+    n = starts.size
+    count = stops - starts
+    has = count > 0
+    idx = np.flatnonzero(has)
+    nan = np.full(n, np.nan)
+    s0, level, slope, variance = nan.copy(), nan.copy(), nan.copy(), nan.copy()
+    if idx.size:
+        seg = np.repeat(np.arange(idx.size), count[idx])
+        take = np.concatenate([np.arange(a, b) for a, b in zip(starts[idx], stops[idx])]) \
+            if idx.size < n or stops[-1] != s.size or np.any(starts[1:] != stops[:-1]) else np.arange(s.size)
+        first = starts[idx]
+        ds = s[take] - s[first][seg]
+        dz = z[take] - z[first][seg]
+        cnt = count[idx].astype(float)
 
-    def mean(x: np.ndarray) -> np.ndarray:
-        return np.add.reduceat(x, starts) / counts
+        def mean(x: np.ndarray) -> np.ndarray:
+            return np.bincount(seg, weights=x, minlength=idx.size) / cnt
 
-    ms, mz = mean(ds), mean(dz)
-    var_z = mean(dz * dz) - mz * mz
-    if detrend:
-        var_s = mean(ds * ds) - ms * ms
-        cov = mean(ds * dz) - ms * mz
-        with np.errstate(invalid="ignore", divide="ignore"):
-            var_z = var_z - np.where(var_s > 0, cov * cov / np.where(var_s > 0, var_s, 1.0), 0.0)
-    return np.sqrt(np.maximum(var_z, 0.0)) / clearance_m
+        ms, mz = mean(ds), mean(dz)
+        var_z = mean(dz * dz) - mz * mz
+        b = np.zeros(idx.size)
+        if detrend:
+            var_s = mean(ds * ds) - ms * ms
+            cov = mean(ds * dz) - ms * mz
+            ok = var_s > 0
+            safe_var_s = np.where(ok, var_s, 1.0)
+            b = np.where(ok, cov / safe_var_s, 0.0)
+            var_z = var_z - np.where(ok, cov * cov / safe_var_s, 0.0)
+        s0[idx] = s[first]
+        level[idx] = z[first] + mz - b * ms
+        slope[idx] = b
+        variance[idx] = np.maximum(var_z, 0.0)
+    return SegmentLineFit(s0_m=s0, level_m=level, slope=slope, residual_variance_m2=variance, count=count)
 
 
 def elevation_z_score(confidence: float) -> float:
