@@ -1,0 +1,299 @@
+"""LAS point clouds (profileopt.realdata.read_las), the RI of real 3-D terrain patches and
+examples/lidar_roughness.py.
+
+Reference values: numbers stated by the data's README (shared/data/real/README.md: point
+counts, 92 % ground, extents in metres), the file size, the ASPRS LAS 1.2/1.4 header layout
+(written here independently with ``struct``), and a plane fit with np.linalg.lstsq.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from profileopt import load_vehicle, roughness_index
+from profileopt.errors import InputError
+from profileopt.realdata import LAS_GROUND, read_las
+
+REPO = Path(__file__).resolve().parents[1]
+EXAMPLE = REPO / "examples" / "lidar_roughness.py"
+LIDAR = Path(__file__).resolve().parents[2] / "shared" / "data" / "real" / "pdal-lidar"
+HEXBIN = LIDAR / "hexbin-crop.las"
+CROP_4_6 = LIDAR / "4_6_crop.las"
+needs_lidar = pytest.mark.skipif(not HEXBIN.is_file(), reason=f"LiDAR data not found at {LIDAR}")
+
+US_SURVEY_FOOT_M = 1200.0 / 3937.0  # the US survey foot, exactly (EPSG unit 9003)
+H_M = 0.1  # ground clearance of the Table 1 ATV (models/atv.toml)
+
+
+# --------------------------------------------------------------- the two PDAL LAS files
+
+
+@needs_lidar
+@pytest.mark.parametrize("path, count", [(HEXBIN, 38367), (CROP_4_6, 23875)])  # counts: data README
+def test_point_count_matches_header_readme_and_file_size(path: Path, count: int) -> None:
+    cloud = read_las(path)
+    assert len(cloud) == cloud.header.point_count == count
+    assert cloud.z_m.shape == cloud.classification.shape == (count,)
+    # The records fill the file from the offset to point data (bytes 96-99) to its end.
+    offset = struct.unpack_from("<I", path.read_bytes(), 96)[0]
+    assert (path.stat().st_size - offset) == count * cloud.header.record_length_bytes
+
+
+@needs_lidar
+@pytest.mark.parametrize("path", [HEXBIN, CROP_4_6])
+def test_coordinate_range_equals_header_bounds(path: Path) -> None:
+    cloud = read_las(path)
+    low, high = cloud.header.bounds_m
+    units = np.array([cloud.header.horizontal_unit_m] * 2 + [cloud.header.vertical_unit_m])
+    # Within half an integer step of X, Y, Z (in metres): a header written from the rounded
+    # values agrees to rounding, and a reader off by one step fails.
+    half_step_m = 0.5 * np.asarray(cloud.header.scale) * units
+    for axis, values in enumerate((cloud.x_m, cloud.y_m, cloud.z_m)):
+        assert values.min() == pytest.approx(low[axis], abs=half_step_m[axis])
+        assert values.max() == pytest.approx(high[axis], abs=half_step_m[axis])
+
+
+@needs_lidar
+def test_hexbin_is_metres_utm_and_92_percent_ground() -> None:
+    cloud = read_las(HEXBIN)
+    assert cloud.header.version == (1, 2) and cloud.header.point_format == 1
+    assert cloud.header.crs == "EPSG:32642"  # WGS 84 / UTM zone 42N
+    assert cloud.header.horizontal_unit_m == cloud.header.vertical_unit_m == 1.0
+    counts = cloud.class_counts()
+    assert set(counts) <= set(range(32))  # format 1 keeps the class in 5 bits
+    assert counts[LAS_GROUND] / len(cloud) == pytest.approx(0.92, abs=0.005)  # README: 92 % ground
+    # README: 293 x 201 m.
+    assert np.ptp(cloud.x_m) == pytest.approx(293, abs=0.5)
+    assert np.ptp(cloud.y_m) == pytest.approx(201, abs=0.5)
+
+
+@needs_lidar
+def test_4_6_crop_is_converted_from_us_survey_feet() -> None:
+    cloud = read_las(CROP_4_6)
+    assert cloud.header.point_format == 3
+    assert cloud.header.crs == "EPSG:2903"
+    assert cloud.header.horizontal_unit_m == cloud.header.vertical_unit_m == US_SURVEY_FOOT_M
+    # README: 61 x 61 m; the header says 199.98 ft (x) and 199.98 ft (y).
+    assert np.ptp(cloud.x_m) == pytest.approx(61, abs=0.1)
+    assert np.ptp(cloud.y_m) == pytest.approx(61, abs=0.1)
+    # z: the header's 7077.92 ft is 2157.35 m (hand: 7077.92 * 1200 / 3937).
+    assert cloud.z_m.min() == pytest.approx(7077.92 * 1200 / 3937, abs=1e-6)
+    # Forcing metres (units_m) leaves the numbers as stored.
+    raw = read_las(CROP_4_6, units_m=1.0)
+    np.testing.assert_allclose(raw.z_m * US_SURVEY_FOOT_M, cloud.z_m, rtol=1e-15)
+    counts = cloud.class_counts()
+    assert 0 < counts[LAS_GROUND] < len(cloud)  # ground under vegetation: both kinds present
+
+
+def _real_patch() -> np.ndarray:
+    """The ground points of a 10 m square in the middle of hexbin-crop.las, shape (M, 3)."""
+    ground = read_las(HEXBIN).xyz_m(LAS_GROUND)
+    x0, y0 = 393_770.0 + 100.0, 3_689_070.0 + 100.0
+    inside = (ground[:, 0] >= x0) & (ground[:, 0] < x0 + 10) & (ground[:, 1] >= y0) & (ground[:, 1] < y0 + 10)
+    return ground[inside]
+
+
+@needs_lidar
+def test_ri_of_a_real_patch_against_a_plane_fit() -> None:
+    patch = _real_patch()
+    assert len(patch) >= 30
+    # Independent: least-squares plane z = a + b (x - x0) + c (y - y0) about the first point
+    # (shifted so that UTM coordinates lose no digits), RI = STD(residual) / h (Eq. 1).
+    x, y, z = patch.T
+    design = np.column_stack([np.ones(len(z)), x - x[0], y - y[0]])
+    coef, *_ = np.linalg.lstsq(design, z, rcond=None)
+    expected = np.std(z - design @ coef) / H_M
+    assert roughness_index(patch, H_M) == pytest.approx(expected, rel=1e-9)
+    assert expected > 0.1  # real ground is not a plane: the check is not 0 == 0
+
+
+@needs_lidar
+def test_ri_of_a_real_patch_ignores_a_tilt() -> None:
+    patch = _real_patch()
+    before = roughness_index(patch, H_M)
+    tilted = patch.copy()
+    # A 30 % grade one way and -45 % the other, plus a height offset: a plane, not roughness.
+    tilted[:, 2] += 12.0 + 0.3 * (patch[:, 0] - patch[0, 0]) - 0.45 * (patch[:, 1] - patch[0, 1])
+    assert roughness_index(tilted, H_M) == pytest.approx(before, rel=1e-9)
+    # Without detrending the tilt counts, so the test could fail.
+    assert roughness_index(tilted, H_M, detrend=False) > 2 * before
+
+
+@needs_lidar
+def test_example_runs(tmp_path: Path) -> None:
+    out = tmp_path / "map.png"
+    start = time.perf_counter()
+    run = subprocess.run([sys.executable, str(EXAMPLE), "--out", str(out)], capture_output=True, text=True,
+                         cwd=tmp_path, timeout=120)
+    elapsed = time.perf_counter() - start
+    assert run.returncode == 0, run.stderr
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "38367 points, 35318 ground" in run.stdout
+    assert "of patches below 5 m/s" in run.stdout
+    assert elapsed < 30  # about 1.5 s; generous for 2 busy cores
+
+
+def test_example_without_data_says_so_in_one_line(tmp_path: Path) -> None:
+    missing = tmp_path / "nowhere.las"
+    run = subprocess.run([sys.executable, str(EXAMPLE), str(missing), "--out", str(tmp_path / "x.png")],
+                         capture_output=True, text=True, timeout=60)
+    assert run.returncode == 2
+    assert run.stderr.strip().count("\n") == 0 and str(missing) in run.stderr and "not found" in run.stderr
+    assert not (tmp_path / "x.png").exists()
+
+
+# ----------------------------------------------- hand-built files (no data folder needed)
+
+
+def _geokeys(*keys: tuple[int, int, int, int]) -> bytes:
+    """A GeoKeyDirectory payload (GeoTIFF 1.0: version 1.1.0, then KeyID, location, count, value)."""
+    flat = [1, 1, 0, len(keys)] + [v for key in keys for v in key]
+    return struct.pack(f"<{len(flat)}H", *flat)
+
+
+def _write_las(
+    path: Path,
+    counts_xyz: np.ndarray,
+    classes: list[int],
+    *,
+    point_format: int = 0,
+    minor: int = 2,
+    scale: tuple[float, float, float] = (0.01, 0.01, 0.001),
+    offset: tuple[float, float, float] = (1000.0, 2000.0, 100.0),
+    vlrs: tuple[tuple[str, int, bytes], ...] = (),
+    extra_bytes: int = 0,
+    global_encoding: int = 0,
+    signature: bytes = b"LASF",
+    point_count: int | None = None,
+) -> None:
+    """A LAS file laid out by the ASPRS specification (1.2 Table 3, 1.4 Table 3), with
+    point format 0 (20 bytes) or 6 (30 bytes) records followed by ``extra_bytes`` zeros."""
+    n = len(counts_xyz)
+    header_bytes = {2: 227, 3: 235, 4: 375}[minor]
+    vlr_blob = b"".join(struct.pack("<H16sHH32s", 0, user.encode(), rid, len(data), b"") + data
+                        for user, rid, data in vlrs)
+    layout = point_format & 0x3F  # the LAZ test sets bit 7 on a format 0 file
+    record_length = {0: 20, 6: 30}[layout] + extra_bytes
+    xyz = counts_xyz * np.array(scale) + np.array(offset)
+    count = n if point_count is None else point_count
+    legacy = 0 if (minor == 4 and point_format >= 6) else count
+    header = struct.pack(
+        "<4sHH16sBB32s32sHHHIIBHI5I3d3d6d", signature, 0, global_encoding, b"", 1, minor, b"test", b"test",
+        1, 2024, header_bytes, header_bytes + len(vlr_blob), len(vlrs), point_format, record_length, legacy,
+        legacy, 0, 0, 0, 0, *scale, *offset,
+        xyz[:, 0].max(), xyz[:, 0].min(), xyz[:, 1].max(), xyz[:, 1].min(), xyz[:, 2].max(), xyz[:, 2].min(),
+    )
+    if minor >= 3:
+        header += struct.pack("<Q", 0)  # start of waveform data
+    if minor >= 4:
+        header += struct.pack("<QIQ15Q", 0, 0, count, count, *([0] * 14))
+    assert len(header) == header_bytes
+    records = b""
+    for (x, y, z), cls in zip(counts_xyz.astype(int), classes):
+        if layout == 0:
+            records += struct.pack("<iiiHBBbBH", x, y, z, 7, 0x09, cls, 0, 0, 1)
+        else:
+            records += struct.pack("<iiiHBBBBhHd", x, y, z, 7, 0x11, 0, cls, 0, 0, 1, 0.0)
+        records += bytes(extra_bytes)
+    path.write_bytes(header + vlr_blob + records)
+
+
+COUNTS = np.array([[0, 0, 0], [1000, 0, 50], [0, 2000, -70], [123, 456, 789]])
+FEET = (("LASF_Projection", 34735, _geokeys((1024, 0, 1, 1), (3072, 0, 1, 2903), (3076, 0, 1, 9003),
+                                            (4099, 0, 1, 9003))),)
+
+
+def test_hand_built_las_12_in_us_survey_feet(tmp_path: Path) -> None:
+    path = tmp_path / "feet.las"
+    _write_las(path, COUNTS, [2, 1, 2, 31], vlrs=FEET, extra_bytes=3)
+    cloud = read_las(path)
+    feet = COUNTS * np.array([0.01, 0.01, 0.001]) + np.array([1000.0, 2000.0, 100.0])
+    np.testing.assert_allclose(cloud.xyz_m(), feet * US_SURVEY_FOOT_M, rtol=1e-15)
+    assert cloud.classification.tolist() == [2, 1, 2, 31]
+    assert cloud.header.record_length_bytes == 23
+    assert cloud.header.crs == "EPSG:2903"
+    np.testing.assert_allclose(cloud.xyz_m(LAS_GROUND)[:, 2], feet[[0, 2], 2] * US_SURVEY_FOOT_M)
+
+
+def test_class_byte_flags_are_not_part_of_the_class(tmp_path: Path) -> None:
+    # Format 0: bit 5 synthetic, 6 key-point, 7 withheld (LAS 1.2 Table 5).
+    path = tmp_path / "flags.las"
+    _write_las(path, COUNTS, [2 | 0x20, 2 | 0x80, 1 | 0x40, 6], vlrs=FEET)
+    assert read_las(path).classification.tolist() == [2, 2, 1, 6]
+
+
+def test_hand_built_las_14_format_6_with_wkt(tmp_path: Path) -> None:
+    wkt = ('COMPD_CS["test",PROJCS["NAD83 / UTM zone 13N",GEOGCS["NAD83",DATUM["x",SPHEROID["GRS 1980",6378137,'
+           '298.257222101]],UNIT["degree",0.0174532925199433]],PROJECTION["Transverse_Mercator"],UNIT["metre",1]],'
+           'VERT_CS["NAVD88 height (ftUS)",VERT_DATUM["v",2005],UNIT["US survey foot",0.304800609601219]]]')
+    path = tmp_path / "wkt.las"
+    _write_las(path, COUNTS, [2, 40, 2, 1], point_format=6, minor=4, global_encoding=0x10,
+               vlrs=(("LASF_Projection", 2112, wkt.encode() + b"\0"),))
+    cloud = read_las(path)
+    assert cloud.header.version == (1, 4) and cloud.header.point_count == 4
+    assert cloud.classification.tolist() == [2, 40, 2, 1]  # a whole byte for the class in format 6
+    expected = COUNTS * np.array([0.01, 0.01, 0.001]) + np.array([1000.0, 2000.0, 100.0])
+    np.testing.assert_allclose(cloud.x_m, expected[:, 0], rtol=1e-15)  # metres
+    np.testing.assert_allclose(cloud.z_m, expected[:, 2] * 0.304800609601219, rtol=1e-15)  # US survey feet
+
+
+@pytest.mark.parametrize(
+    "options, words",
+    [
+        ({"signature": b"LASX"}, "LASF"),
+        ({"point_format": 0x80}, "LAZ"),
+        ({"point_count": 9}, "truncated"),
+        ({"scale": (0.0, 0.01, 0.01)}, "scale factors"),
+        ({"vlrs": ()}, "units_m"),
+        ({"vlrs": (("LASF_Projection", 34735, _geokeys((1024, 0, 1, 2), (2048, 0, 1, 4326))),)}, "geographic"),
+        ({"vlrs": (("LASF_Projection", 34735, _geokeys((1024, 0, 1, 1), (3076, 0, 1, 9036))),)}, "9036"),
+        ({"vlrs": (("LASF_Projection", 34735, _geokeys((1024, 0, 1, 1), (3072, 0, 1, 32642))),)}, "3076"),
+    ],
+)
+def test_bad_files_raise_one_line_naming_the_file(tmp_path: Path, options: dict, words: str) -> None:
+    path = tmp_path / "bad.las"
+    _write_las(path, COUNTS, [2, 2, 2, 2], **{"vlrs": FEET, **options})
+    with pytest.raises(InputError) as raised:
+        read_las(path)
+    message = str(raised.value)
+    assert message.startswith(f"{path}: ") and "\n" not in message and words in message
+
+
+def test_unsupported_version_and_format_and_missing_file(tmp_path: Path) -> None:
+    path = tmp_path / "v.las"
+    _write_las(path, COUNTS, [2, 2, 2, 2], vlrs=FEET)
+    raw = bytearray(path.read_bytes())
+    raw[25] = 7  # LAS 1.7 does not exist
+    path.write_bytes(bytes(raw))
+    with pytest.raises(InputError, match="version 1.7"):
+        read_las(path)
+    raw[25], raw[104] = 2, 4  # point format 4 (waveform)
+    path.write_bytes(bytes(raw))
+    with pytest.raises(InputError, match="format 4"):
+        read_las(path)
+    with pytest.raises(InputError, match="cannot read"):
+        read_las(tmp_path / "absent.las")
+
+
+def test_units_m_reads_a_file_without_crs(tmp_path: Path) -> None:
+    path = tmp_path / "nocrs.las"
+    _write_las(path, COUNTS, [2, 2, 2, 2])
+    cloud = read_las(path, units_m=(1.0, 0.3048))
+    expected = COUNTS * np.array([0.01, 0.01, 0.001]) + np.array([1000.0, 2000.0, 100.0])
+    np.testing.assert_allclose(cloud.z_m, expected[:, 2] * 0.3048, rtol=1e-15)
+    assert "units_m" in cloud.header.units_source
+    with pytest.raises(InputError, match="units_m"):
+        read_las(path, units_m=-1.0)
+    assert math.isclose(cloud.header.vertical_unit_m, 0.3048)
+
+
+def test_atv_clearance_is_the_h_used_here() -> None:
+    assert load_vehicle("atv").ground_clearance_m == H_M
