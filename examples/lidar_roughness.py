@@ -93,7 +93,7 @@ def main(argv: list[str] | None = None) -> int:
     # 4. Summary. What to expect: the slope here is steep (the fitted planes tilt 15-40
     #    degrees) and a 10 m plane leaves the curvature of ridges and gullies in the residual,
     #    plus the LiDAR's own vertical noise (centimetres to a decimetre). Against a 0.1 m
-    #    clearance that is a large RI (median ~1.9, i.e. a residual spread of ~0.19 m), and
+    #    clearance that is a large RI (median ~1.8, i.e. a residual spread of ~0.18 m), and
     #    SBEM:TF allows only walking to jogging speeds almost everywhere.
     pct = np.percentile(ri, [5, 25, 50, 75, 95])
     print(f"{args.las.name}: {len(cloud)} points, {len(ground)} ground (class {LAS_GROUND}), "
