@@ -10,7 +10,7 @@ from typing import IO, Iterator
 
 from .errors import InputError
 
-__all__ = ["atomic_write", "atomic_path", "check_output_path"]
+__all__ = ["atomic_write", "atomic_path", "check_output_path", "check_output_paths"]
 
 
 def _umask() -> int:
@@ -33,12 +33,20 @@ def check_output_path(path: str | os.PathLike) -> Path:
     target = Path(path)
     directory = target.parent if str(target.parent) else Path(".")
     if not directory.is_dir():
-        raise InputError(f"{target}: the folder {directory} does not exist; create it or choose another path")
+        what = "is a file, not a folder" if directory.exists() else "does not exist"
+        raise InputError(f"{target}: {directory} {what}; create the folder or choose another path")
     if target.is_dir():
         raise InputError(f"{target}: is a folder; give the path of a file to write")
     if not os.access(directory, os.W_OK | os.X_OK):
         raise InputError(f"{target}: cannot write in {directory} (permission denied); choose another path")
     return target
+
+
+def check_output_paths(*paths: str | os.PathLike | None) -> None:
+    """:func:`check_output_path` for every path given (``None``: that output is not wanted)."""
+    for path in paths:
+        if path:
+            check_output_path(path)
 
 
 @contextlib.contextmanager

@@ -570,26 +570,6 @@ def _build_nlp(n: int, with_jerk: bool) -> _Nlp:
 # Planning
 
 
-def _first_band_only(bands: SpeedBands) -> SpeedBands:
-    """Only the band that starts at rest, per segment (the "first" semantics)."""
-    starts_at_rest = (bands.count > 0) & (bands.lower_mps[:, 0] == 0.0)
-    return dataclasses.replace(
-        bands,
-        lower_mps=np.where(starts_at_rest, bands.lower_mps[:, 0], np.nan)[:, None],
-        upper_mps=np.where(starts_at_rest, bands.upper_mps[:, 0], np.nan)[:, None],
-        count=starts_at_rest.astype(bands.count.dtype),
-    )
-
-
-def _cap_bands(bands: SpeedBands, cap_mps: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Intersect every band with [0, cap]: clip upper edges, drop bands starting above cap."""
-    cap = cap_mps[:, None]
-    keep = bands.lower_mps <= cap  # NaN compares False: padding stays dropped
-    lower = np.where(keep, bands.lower_mps, np.nan)
-    upper = np.where(keep, np.minimum(bands.upper_mps, cap), np.nan)
-    return lower, upper, keep.sum(axis=1)
-
-
 def _validate_options(vehicle: "Vehicle", model: str, segment_length_m: float, smoothing: float,
                       max_jerk_mps3: float, v0_mps: float, vend_mps: float) -> None:
     try:
@@ -704,9 +684,9 @@ def plan(
 
     t = time.perf_counter()
     speed_sets = speed_bands(seg.ri, vehicle, model)
-    all_bands = _cap_bands(speed_sets, seg.speed_cap_mps)  # every band, for reports and messages
-    lower_mps, upper_mps, count = _cap_bands(_first_band_only(speed_sets), seg.speed_cap_mps) \
-        if bands == "first" else all_bands
+    all_bands = speed_sets.capped(seg.speed_cap_mps)  # every band, for reports and messages
+    usable = speed_sets.first_band_only().capped(seg.speed_cap_mps) if bands == "first" else all_bands
+    lower_mps, upper_mps, count = usable.lower_mps, usable.upper_mps, usable.count
     timings["bands"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -818,8 +798,7 @@ def _fallback(args: tuple, vehicle: "Vehicle", jerk: float, v0: float, vend: flo
 
 
 def _assemble(seg: Segments, b: np.ndarray, vehicle: "Vehicle", model: str, bands: SpeedBands,
-              all_bands: tuple[np.ndarray, np.ndarray, np.ndarray], lower_mps: np.ndarray,
-              upper_mps: np.ndarray, chosen: _Bounds) -> Profile:
+              all_bands: SpeedBands, lower_mps: np.ndarray, upper_mps: np.ndarray, chosen: _Bounds) -> Profile:
     """The Profile of squared speeds b: per-row arrays, the largest force per segment, and
     the allowable speeds under both semantics from ``all_bands`` (every band, capped)."""
     speed = np.sqrt(np.maximum(b, 0.0))
@@ -828,9 +807,7 @@ def _assemble(seg: Segments, b: np.ndarray, vehicle: "Vehicle", model: str, band
     time_s = np.concatenate([[0.0], np.cumsum(dt)])
     force = _max_force_over_segments(model, vehicle, seg.ri, speed, bands.peaks_mps)
     rows = np.arange(seg.count)
-    every_lower, every_upper, every_count = all_bands
-    first = np.where((every_count > 0) & (every_lower[:, 0] == 0), every_upper[:, 0], 0.0)
-    largest = np.where(every_count > 0, every_upper[rows, np.maximum(every_count - 1, 0)], 0.0)
+    first, largest = all_bands.first(), all_bands.largest()
 
     def per_row(x: np.ndarray) -> np.ndarray:
         return np.append(x, x[-1])

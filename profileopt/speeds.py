@@ -69,10 +69,35 @@ class SpeedBands:
     count: np.ndarray
     peaks_mps: np.ndarray
 
+    def starts_at_rest(self) -> np.ndarray:
+        """Whether the lowest band of each row starts at 0 m/s, shape (N,) of bool."""
+        return (self.count > 0) & (self.lower_mps[:, 0] == 0.0)
+
     def first(self) -> np.ndarray:
         """Largest V with every speed in [0, V] admissible (m/s), shape (N,); 0 if none."""
-        starts_at_rest = (self.count > 0) & (self.lower_mps[:, 0] == 0.0)
-        return np.where(starts_at_rest, self.upper_mps[:, 0], 0.0)
+        return np.where(self.starts_at_rest(), self.upper_mps[:, 0], 0.0)
+
+    def first_band_only(self) -> "SpeedBands":
+        """The same rows keeping only the band that starts at rest (the "first" semantics)."""
+        rest = self.starts_at_rest()
+        return dataclasses.replace(
+            self,
+            lower_mps=np.where(rest, self.lower_mps[:, 0], np.nan)[:, None],
+            upper_mps=np.where(rest, self.upper_mps[:, 0], np.nan)[:, None],
+            count=rest.astype(self.count.dtype),
+        )
+
+    def capped(self, cap_mps: np.ndarray) -> "SpeedBands":
+        """Every band intersected with [0, cap] (m/s, shape (N,)): upper edges clipped, bands
+        starting above the cap dropped."""
+        cap = np.asarray(cap_mps, dtype=float)[:, None]
+        keep = self.lower_mps <= cap  # NaN compares False: padding stays dropped
+        return dataclasses.replace(
+            self,
+            lower_mps=np.where(keep, self.lower_mps, np.nan),
+            upper_mps=np.where(keep, np.minimum(self.upper_mps, cap), np.nan),
+            count=keep.sum(axis=1),
+        )
 
     def largest(self) -> np.ndarray:
         """Largest admissible speed <= v_max (m/s), shape (N,); 0 if none."""

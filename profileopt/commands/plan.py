@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from .._io import check_output_path
+from .._io import check_output_paths
 from ..cli import command
 from ..forces import MODELS
 from ..planner import DEFAULT_SMOOTHING, plan, summarize
@@ -49,9 +49,7 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    for output in (args.output, args.plot):
-        if output:
-            check_output_path(output)  # before planning: a bad --plot must not leave an -o behind
+    check_output_paths(args.output, args.plot)  # first: a bad --plot must not leave an -o behind
     vehicle = load_vehicle(args.vehicle)
     route = read_route(args.route)
     for note in route.notes:

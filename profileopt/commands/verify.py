@@ -16,7 +16,7 @@ import argparse
 import json
 from pathlib import Path
 
-from .._io import check_output_path
+from .._io import check_output_paths
 from ..cli import command
 from ..errors import InputError
 from ..forces import MODELS, get_model
@@ -43,9 +43,7 @@ def _verify(args: argparse.Namespace) -> int:
     from ..route import read_route
     from ..verify import plot_verification, verify
 
-    for output in (args.output, args.plot):
-        if output:
-            check_output_path(output)  # before simulating: a bad --plot must not leave an -o behind
+    check_output_paths(args.output, args.plot)  # first: a bad --plot must not leave an -o behind
     route = read_route(args.route)
     profile = read_profile(args.profile)
     vehicle = load_vehicle(_vehicle_of(args, profile))
