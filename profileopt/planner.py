@@ -46,6 +46,7 @@ if TYPE_CHECKING:
     from .vehicle import Vehicle
 
 __all__ = [
+    "BandChoice",
     "Segments",
     "Profile",
     "PlanningError",
@@ -222,11 +223,24 @@ def greatest_profile(
 
 
 @dataclasses.dataclass(frozen=True)
-class _Bounds:
-    lower_b: np.ndarray  # (N+1,) m^2/s^2
-    upper_b: np.ndarray  # (N+1,)
-    band: np.ndarray  # (N,) chosen band index
-    greatest_b: np.ndarray  # (N+1,) exact min-time profile for these bands
+class BandChoice:
+    """The band of admissible speeds chosen for each segment, and what follows from it.
+
+    Attributes
+    ----------
+    lower_b, upper_b : numpy.ndarray, shape (N+1,)
+        Bounds on the squared speed b = v^2 at each boundary (m^2/s^2): the intersection
+        of the chosen bands of the segments on either side (and v0, vend at the ends).
+    band : numpy.ndarray of int, shape (N,)
+        Index of the chosen band of each segment (0 = lowest).
+    greatest_b : numpy.ndarray, shape (N+1,)
+        The exact minimum-time squared-speed profile for these bands (m^2/s^2).
+    """
+
+    lower_b: np.ndarray
+    upper_b: np.ndarray
+    band: np.ndarray
+    greatest_b: np.ndarray
 
 
 def _boundary_bounds(lo: np.ndarray, hi: np.ndarray, v0: float, vend: float) -> tuple[np.ndarray, np.ndarray]:
@@ -249,7 +263,7 @@ def choose_bands(
     v0_mps: float,
     vend_mps: float,
     where: np.ndarray,
-) -> _Bounds:
+) -> BandChoice:
     """Choose one admissible speed band per segment, for the whole route at once.
 
     Bands are ordered, so raising a segment's band raises both its lower and upper speed.
@@ -308,7 +322,7 @@ def choose_bands(
                     "0 m/s, so it can never be driven; use shorter segments (--segment-length) or "
                     "nonzero --v0/--vend"
                 )
-            return _Bounds(lower_b=lower, upper_b=upper, band=band.copy(), greatest_b=np.maximum(b, lower))
+            return BandChoice(lower_b=lower, upper_b=upper, band=band.copy(), greatest_b=np.maximum(b, lower))
         j = np.flatnonzero(short)
         # the segments on either side of boundary j whose own lower edge is out of reach
         left = j[j > 0] - 1
@@ -749,7 +763,7 @@ def _objective(b: np.ndarray, length_m: np.ndarray, smoothing: float) -> float:
     return travel + smoothing * float(np.sum(jerk_squared_time(v[1:-1], a[:-1], a[1:], length_m[:-1], length_m[1:])))
 
 
-def _solve_nlp(seg: Segments, chosen: _Bounds, vehicle: "Vehicle", smoothing: float,
+def _solve_nlp(seg: Segments, chosen: BandChoice, vehicle: "Vehicle", smoothing: float,
                jerk: float) -> tuple[np.ndarray, str, int, dict[str, float]]:
     n = seg.count
     t = time.perf_counter()
@@ -778,7 +792,7 @@ def _solve_nlp(seg: Segments, chosen: _Bounds, vehicle: "Vehicle", smoothing: fl
     return b, status, int(stats.get("iter_count", 0)), {"build": build, "solve": solve}
 
 
-def _fallback(args: tuple, vehicle: "Vehicle", jerk: float, v0: float, vend: float, seg: Segments) -> _Bounds:
+def _fallback(args: tuple, vehicle: "Vehicle", jerk: float, v0: float, vend: float, seg: Segments) -> BandChoice:
     """A profile that keeps every limit: forward-backward with acceleration bounds so low
     that the jerk bound holds at every boundary whatever the pattern of accelerations.
 
@@ -798,7 +812,7 @@ def _fallback(args: tuple, vehicle: "Vehicle", jerk: float, v0: float, vend: flo
 
 
 def _assemble(seg: Segments, b: np.ndarray, vehicle: "Vehicle", model: str, bands: SpeedBands,
-              all_bands: SpeedBands, lower_mps: np.ndarray, upper_mps: np.ndarray, chosen: _Bounds) -> Profile:
+              all_bands: SpeedBands, lower_mps: np.ndarray, upper_mps: np.ndarray, chosen: BandChoice) -> Profile:
     """The Profile of squared speeds b: per-row arrays, the largest force per segment, and
     the allowable speeds under both semantics from ``all_bands`` (every band, capped)."""
     speed = np.sqrt(np.maximum(b, 0.0))
