@@ -17,7 +17,6 @@ NOTES.md), so Fig. 1 shows the paper's new RI (Eq. 1) only and says so.
 from __future__ import annotations
 
 import dataclasses
-import math
 import os
 from pathlib import Path
 
@@ -27,6 +26,7 @@ from matplotlib.figure import Figure
 from ._io import atomic_path, atomic_write
 from .forces import MODELS
 from .speeds import allowable_speed
+from .synthetic import washboard
 from .terrain import roughness_index
 from .vehicle import Vehicle, load_vehicle
 
@@ -156,7 +156,7 @@ class SinusoidTerrain:
 
     def elevations_m(self, i: int) -> np.ndarray:
         """The sampled elevations of profile ``i`` (m), shape (K,)."""
-        return self.amplitude_m[i] * np.sin(2.0 * math.pi * self.frequency_cpm * self.positions_m)
+        return washboard(self.positions_m, float(self.amplitude_m[i]), 1.0 / self.frequency_cpm)
 
 
 def sinusoid_terrain(
@@ -196,7 +196,7 @@ def sinusoid_terrain(
     amplitudes = np.asarray(amplitudes_m, dtype=float)
     n_samples = periods * samples_per_period
     positions = np.arange(n_samples) / (samples_per_period * frequency_cpm)
-    shape = np.sin(2.0 * math.pi * frequency_cpm * positions)
+    shape = washboard(positions, 1.0, 1.0 / frequency_cpm)  # unit amplitude; each profile is A * shape
     ri = np.array([
         roughness_index(a * shape, clearance_m, positions=positions, detrend=False) for a in amplitudes
     ])

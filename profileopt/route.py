@@ -17,7 +17,6 @@ accepted as well. Other columns are ignored with a note. Every problem is report
 from __future__ import annotations
 
 import dataclasses
-import math
 from pathlib import Path
 
 import numpy as np
