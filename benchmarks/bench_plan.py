@@ -235,6 +235,7 @@ class Run:
     optimiser_s: float = math.nan
     build_s: float = math.nan
     iterations: int | None = None
+    pieces: int | None = None
     travel_time_s: float = math.nan
     status: str = ""
     output: Path | None = None
@@ -252,8 +253,8 @@ def run_plan(route_path: Path, out_path: Path, vehicle, **options) -> Run:
     optimiser = sum(t.get(k, 0.0) for k in ("choose", "build", "solve"))
     stages = {k: t.get(k, 0.0) for k in STAGES[1:]}
     stages[STAGES[0]] = wall - t.get("total", math.nan)
-    return Run(wall, optimiser, t.get("build", math.nan), profile.iterations, profile.travel_time_s,
-               profile.status, out_path, stages_s=stages)
+    return Run(wall, optimiser, t.get("build", math.nan), profile.iterations, profile.pieces or None,
+               profile.travel_time_s, profile.status, out_path, stages_s=stages)
 
 
 def run_cli(route_path: Path, out_path: Path) -> Run:
@@ -396,6 +397,7 @@ def _ratio(x: float | None) -> str:
 
 
 HEADER = ("segments", "problem", "method", "end to end (s)", "optimiser (s)", "NLP build (s)", "IPOPT iter",
+          "IPOPT pieces",
           "travel time (s)", "vs exact optimum", "worst violation", "ours/TOPP-RA e2e", "ours/TOPP-RA optimiser",
           "target", "met?")
 
@@ -404,9 +406,11 @@ def markdown_table(rows: list[Row]) -> str:
     lines = ["| " + " | ".join(HEADER) + " |", "|" + "|".join("---" for _ in HEADER) + "|"]
     for row in rows:
         iters = [r.iterations for r in row.runs if r.iterations]
+        pieces = [r.pieces for r in row.runs if r.pieces]
         cells = (
             f"{row.segments:,}", row.problem, row.method + (f" ({row.note})" if row.note else ""), _spread(row),
             _seconds(row.optimiser), _seconds(row.build), str(iters[-1]) if iters else "",
+            str(pieces[-1]) if pieces else "",
             f"{row.travel:.6g}" if math.isfinite(row.travel) else "–", _gap(row),
             f"{row.violation:.1e}" if math.isfinite(row.violation) else "–",
             _ratio(row.ratio_e2e), _ratio(row.ratio_opt), row.target, row.met,

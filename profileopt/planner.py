@@ -34,6 +34,7 @@ import numpy as np
 
 from ._io import atomic_write
 from ._nlp import build_nlp
+from ._pieces import choose_cuts, cut_multipliers, cut_scores, piece_bounds, replace_cut
 from .errors import InfeasibleError, InputError
 from .forces import MODELS, get_model
 from .kinematics import boundary_jerk_mps3, jerk_squared_time, segment_accel_mps2, segment_time_s
@@ -412,7 +413,10 @@ class Profile:
         Wall-clock seconds of the stages (``segment``, ``bands``, ``choose``, ``build``,
         ``solve``, ``total``).
     iterations : int
-        IPOPT iterations (0 if not run).
+        IPOPT iterations (0 if not run), of all its solves together.
+    pieces : int
+        How many IPOPT solves make up the profile: 1 for a route solved whole, more for a
+        long route solved in pieces (exactly; see :data:`PIECE_SEGMENTS`), 0 if none.
     notes : tuple of str
         Remarks for the user (merged segments, fallback, ignored columns).
     allowable_first_mps, allowable_largest_mps : numpy.ndarray, shape (N,) or None
@@ -443,6 +447,7 @@ class Profile:
     objective: float = float("nan")
     timings_s: dict = dataclasses.field(default_factory=dict)
     iterations: int = 0
+    pieces: int = 0
     notes: tuple[str, ...] = ()
     allowable_first_mps: np.ndarray | None = None
     allowable_largest_mps: np.ndarray | None = None
@@ -713,13 +718,14 @@ def plan(
     timings["choose"] = time.perf_counter() - t
 
     notes = list(seg.notes)
-    iterations = 0
+    iterations = pieces = 0
     exact = method == "auto" and smoothing == 0 and not math.isfinite(jerk)
     if exact:
         b, status, success = chosen.greatest_b, "exact", True
     else:
-        b, status, iterations, nlp_timings = _solve_nlp(seg, chosen, vehicle, smoothing, jerk)
-        timings.update(nlp_timings)
+        result = _solve_nlp(seg, chosen, vehicle, smoothing, jerk)
+        b, status, iterations, pieces = result.b, result.status, result.iterations, result.pieces
+        timings.update(result.timings)
         success = status == "optimal"
         if success:
             worst = _violations(b, chosen.lower_b, chosen.upper_b, seg.length_m, a_max, d_max, jerk)
@@ -749,7 +755,7 @@ def plan(
     timings["total"] = time.perf_counter() - t_start
     return dataclasses.replace(
         profile, status=status, success=success, objective=_objective(b, seg.length_m, smoothing),
-        timings_s=timings, iterations=iterations, notes=tuple(notes), settings=settings,
+        timings_s=timings, iterations=iterations, pieces=pieces, notes=tuple(notes), settings=settings,
     )
 
 
@@ -763,33 +769,172 @@ def _objective(b: np.ndarray, length_m: np.ndarray, smoothing: float) -> float:
     return travel + smoothing * float(np.sum(jerk_squared_time(v[1:-1], a[:-1], a[1:], length_m[:-1], length_m[1:])))
 
 
-def _solve_nlp(seg: Segments, chosen: BandChoice, vehicle: "Vehicle", smoothing: float,
-               jerk: float) -> tuple[np.ndarray, str, int, dict[str, float]]:
-    n = seg.count
-    t = time.perf_counter()
-    nlp = _build_nlp(n, math.isfinite(jerk))
-    build = time.perf_counter() - t
-    b_ref = max(float(chosen.upper_b.max()), 1e-6)
-    l_ref = float(seg.length_m.mean())
-    a_ref = vehicle.max_accel_mps2
-    t_ref = max(_objective(chosen.greatest_b, seg.length_m, 0.0), 1e-6)
-    inv_jerk = 1.0 / jerk if math.isfinite(jerk) else 0.0
-    p = np.concatenate([seg.length_m / l_ref, [b_ref, l_ref, a_ref, t_ref, smoothing, inv_jerk]])
-    lbg = [np.full(n, -vehicle.max_decel_mps2 / a_ref)]
-    ubg = [np.full(n, 1.0)]
-    if nlp.with_jerk and n >= 2:
+#: Most segments in one IPOPT solve. A longer route is solved in pieces of at most this many
+#: segments, cut at bottlenecks where the optimum is pinned and checked to be exact
+#: (:mod:`profileopt._pieces`): IPOPT's time per segment is flat up to about 10,000
+#: segments and grows beyond, as its working set leaves the cache. Every piece is solved
+#: with the one NLP of this size (built once, padded with fixed variables).
+PIECE_SEGMENTS = 4000
+
+
+@dataclasses.dataclass(frozen=True)
+class _NlpResult:
+    b: np.ndarray  # (N+1,) squared speeds, m^2/s^2
+    status: str
+    iterations: int  # IPOPT iterations, all solves together
+    pieces: int  # IPOPT solves whose solutions make up b
+    timings: dict[str, float]
+
+
+@dataclasses.dataclass(frozen=True)
+class _Scaling:
+    """The NLP's parameters after the segment lengths, shared by every solve of one plan."""
+
+    b_ref: float
+    l_ref: float
+    a_ref: float
+    weight: float
+    inv_jerk: float
+
+    def tail(self, t_ref: float) -> np.ndarray:
+        return np.array([self.b_ref, self.l_ref, self.a_ref, t_ref, self.weight, self.inv_jerk])
+
+
+def _ipopt(nlp: _Nlp, x0: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, length_scaled: np.ndarray,
+           lbg: np.ndarray, ubg: np.ndarray, p_tail: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool, str, int]:
+    """One IPOPT solve, all in scaled units: (y, lam_g, success, status, iterations)."""
+    result = nlp.solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=np.concatenate([length_scaled, p_tail]))
+    stats = nlp.solver.stats()
+    success = bool(stats.get("success", False))
+    status = "optimal" if success else str(stats.get("return_status", "failed"))
+    return (np.asarray(result["x"]).ravel(), np.asarray(result["lam_g"]).ravel(), success, status,
+            int(stats.get("iter_count", 0)))
+
+
+def _row_bounds(n: int, with_jerk: bool, vehicle: "Vehicle", a_ref: float) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds on the rows of the n-segment NLP: a_i / a_ref (n), then jerk_j / J (n-1)."""
+    lbg, ubg = [np.full(n, -vehicle.max_decel_mps2 / a_ref)], [np.full(n, 1.0)]
+    if with_jerk and n >= 2:
         lbg.append(np.full(n - 1, -1.0))
         ubg.append(np.full(n - 1, 1.0))
+    return np.concatenate(lbg), np.concatenate(ubg)
+
+
+def _solve_nlp(seg: Segments, chosen: BandChoice, vehicle: "Vehicle", smoothing: float,
+               jerk: float) -> _NlpResult:
+    """IPOPT's optimum over the chosen bands: in pieces on a long route (exact, checked), or
+    whole (a short route, or a long one whose cuts do not check out)."""
+    n = seg.count
+    with_jerk = math.isfinite(jerk)
+    scaling = _Scaling(b_ref=max(float(chosen.upper_b.max()), 1e-6), l_ref=float(seg.length_m.mean()),
+                       a_ref=vehicle.max_accel_mps2, weight=smoothing,
+                       inv_jerk=1.0 / jerk if with_jerk else 0.0)
+    timings = {"build": 0.0, "solve": 0.0}
+    iterations = 0
+    if n > PIECE_SEGMENTS:
+        score = cut_scores(chosen.upper_b, chosen.greatest_b, seg.length_m)
+        cuts = choose_cuts(score, PIECE_SEGMENTS)
+        if cuts.size:
+            b, iterations, pieces = _solve_pieces(seg, chosen, vehicle, scaling, with_jerk, score, cuts, timings)
+            if b is not None:
+                return _NlpResult(b, "optimal", iterations, pieces, timings)
+
     t = time.perf_counter()
-    result = nlp.solver(
-        x0=chosen.greatest_b / b_ref, lbx=chosen.lower_b / b_ref, ubx=chosen.upper_b / b_ref,
-        lbg=np.concatenate(lbg), ubg=np.concatenate(ubg), p=p,
-    )
-    stats = nlp.solver.stats()
-    solve = time.perf_counter() - t
-    status = "optimal" if stats.get("success", False) else str(stats.get("return_status", "failed"))
-    b = np.asarray(result["x"]).ravel() * b_ref
-    return b, status, int(stats.get("iter_count", 0)), {"build": build, "solve": solve}
+    nlp = _build_nlp(n, with_jerk)
+    timings["build"] += time.perf_counter() - t
+    t = time.perf_counter()
+    b_ref = scaling.b_ref
+    t_ref = max(_objective(chosen.greatest_b, seg.length_m, 0.0), 1e-6)
+    lbg, ubg = _row_bounds(n, nlp.with_jerk, vehicle, scaling.a_ref)
+    y, _, _, status, spent = _ipopt(nlp, chosen.greatest_b / b_ref, chosen.lower_b / b_ref, chosen.upper_b / b_ref,
+                                    seg.length_m / scaling.l_ref, lbg, ubg, scaling.tail(t_ref))
+    timings["solve"] += time.perf_counter() - t
+    return _NlpResult(y * b_ref, status, iterations + spent, 1, timings)
+
+
+#: How many times the cuts that did not check out are replaced before the route is solved whole.
+_CUT_ROUNDS = 5
+
+
+def _solve_pieces(seg: Segments, chosen: BandChoice, vehicle: "Vehicle", scaling: _Scaling, with_jerk: bool,
+                  score: np.ndarray, cuts: np.ndarray, timings: dict[str, float]) -> tuple[np.ndarray | None, int, int]:
+    """The NLP solved piece by piece between the fixed pairs at ``cuts`` (see
+    :mod:`profileopt._pieces`), each piece in the one NLP of :data:`PIECE_SEGMENTS`
+    segments: the piece's boundaries, then (behind it, or in front of the last piece)
+    padding boundaries fixed at the neighbouring fixed speed, whose rows are unbounded and
+    whose terms involve fixed variables only. A cut that is not a KKT point of the whole
+    problem is replaced by another between its neighbours (or, if there is none, the cuts
+    from there on are chosen again without it) and the changed pieces solved again.
+    Returns (b, iterations, pieces); b is None when a piece fails or no set of cuts checks
+    out within :data:`_CUT_ROUNDS` rounds.
+    """
+    n, w = seg.count, PIECE_SEGMENTS
+    t = time.perf_counter()
+    nlp = _build_nlp(w, with_jerk)
+    check = _build_nlp(5, with_jerk).solver
+    timings["build"] += time.perf_counter() - t
+    t = time.perf_counter()
+    b_ref, l_ref = scaling.b_ref, scaling.l_ref
+    lower, upper, start_b = chosen.lower_b / b_ref, chosen.upper_b / b_ref, chosen.greatest_b / b_ref
+    length = seg.length_m / l_ref
+    t_whole = max(_objective(chosen.greatest_b, seg.length_m, 0.0), 1e-6)
+    lbg_real, ubg_real = _row_bounds(w, nlp.with_jerk, vehicle, scaling.a_ref)
+    solved: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+    iterations, cuts, tried = 0, cuts.copy(), set()
+
+    def solve(first: int, last: int) -> bool:
+        nonlocal iterations
+        count, is_first, is_last = last - first, first == 0, last == n
+        offset = w - count if is_last else 0  # the last piece is padded in front, the others behind
+        real = slice(offset, offset + count + 1)
+        x0, lbx, ubx = (np.full(w + 1, upper[first] if is_last else upper[last]) for _ in range(3))
+        x0[real], lbx[real], ubx[real] = start_b[first:last + 1], lower[first:last + 1], upper[first:last + 1]
+        fixed = ([] if is_first else [first, first + 1]) + ([] if is_last else [last - 1, last])
+        for k in fixed:  # the cut pairs, at their caps
+            lbx[offset + k - first] = ubx[offset + k - first] = x0[offset + k - first] = upper[k]
+        p_length = np.ones(w)
+        p_length[offset:offset + count] = length[first:last]
+        lbg, ubg = np.full(lbg_real.size, -np.inf), np.full(ubg_real.size, np.inf)
+        accel_rows = slice(offset, offset + count)
+        jerk_rows = slice(w + offset, w + offset + count - 1)  # interior boundaries offset+1 .. offset+count-1
+        lbg[accel_rows], ubg[accel_rows] = lbg_real[accel_rows], ubg_real[accel_rows]
+        if nlp.with_jerk:
+            lbg[jerk_rows], ubg[jerk_rows] = lbg_real[jerk_rows], ubg_real[jerk_rows]
+        t_ref = max(_objective(chosen.greatest_b[first:last + 1], seg.length_m[first:last], 0.0), 1e-6)
+        y, lam_g, success, _, spent = _ipopt(nlp, x0, lbx, ubx, p_length, lbg, ubg, scaling.tail(t_ref))
+        iterations += spent
+        rescale = t_ref / t_whole  # multipliers of f / t_ref, expressed for f / t_whole
+        solved[first, last] = (y[real], lam_g[accel_rows] * rescale, lam_g[jerk_rows] * rescale)
+        return success
+
+    try:
+        for _ in range(_CUT_ROUNDS + 1):
+            pieces = piece_bounds(cuts, n)
+            if not all((first, last) in solved or solve(first, last) for first, last in pieces):
+                return None, iterations, 0
+            y, lam_accel = np.empty(n + 1), np.zeros(n)
+            lam_jerk = np.zeros(n + 1) if nlp.with_jerk else None
+            for first, last in pieces:
+                y[first:last + 1], lam_accel[first:last], lam_piece_jerk = solved[first, last]
+                if lam_jerk is not None:
+                    lam_jerk[first + 1:last] = lam_piece_jerk
+            lam_accel[cuts] = 0.0  # the rows between fixed pairs: a = 0, inside its bounds
+            lam_x, scale = cut_multipliers(check.get_function("nlp_grad_f"), check.get_function("nlp_jac_g"), y,
+                                           scaling.tail(t_whole), length, lam_accel, lam_jerk, cuts)
+            wrong = np.flatnonzero(np.any(lam_x < -1e-6 * scale - 1e-12, axis=1))
+            if wrong.size == 0:
+                return y * b_ref, iterations, len(pieces)
+            tried.update(int(k) for k in cuts[wrong])
+            for index in wrong:  # in order, so each replacement sees its new neighbours
+                cuts[index] = replace_cut(score, cuts, int(index), w, tried)
+                if cuts[index] < 0:  # none between its neighbours: choose the cuts again from here on
+                    cuts = choose_cuts(np.where(np.isin(np.arange(n), list(tried)), np.inf, score), w)
+                    if cuts.size == 0:
+                        return None, iterations, 0
+                    break
+        return None, iterations, 0
+    finally:
+        timings["solve"] += time.perf_counter() - t
 
 
 def _fallback(args: tuple, vehicle: "Vehicle", jerk: float, v0: float, vend: float, seg: Segments) -> BandChoice:
@@ -922,6 +1067,7 @@ def summarize(profile: Profile) -> dict:
         },
         "solver": {
             "status": profile.status, "success": profile.success, "iterations": profile.iterations,
+            "pieces": profile.pieces,
             "time_s": float(profile.timings_s.get("total", math.nan)),
         },
         "notes": list(profile.notes),

@@ -211,7 +211,7 @@ def test_fallback_keeps_every_limit_when_ipopt_fails(monkeypatch, atv):
     route = read_route(ROUTES / "trail.csv")
 
     def failing(seg, chosen, vehicle, smoothing, jerk):
-        return chosen.greatest_b * 0.5, "Maximum_Iterations_Exceeded", 300, {}
+        return planner._NlpResult(chosen.greatest_b * 0.5, "Maximum_Iterations_Exceeded", 300, 1, {})
 
     monkeypatch.setattr(planner, "_solve_nlp", failing)
     profile = plan(route, atv)

@@ -1,0 +1,218 @@
+"""Cutting a long route's NLP into pieces where its optimum is pinned, and checking the cuts.
+
+Why: IPOPT's time per iteration grows faster than the number of segments N once its
+vectors and MUMPS's factors no longer fit in the processor's cache (measured on a 2-core
+machine: 49 us per segment and iteration up to 10,000 segments, 59 at 20,000, 80 at
+100,000, in every part of IPOPT alike, function evaluations included). Pieces of a few
+thousand segments keep every solve in cache, so a long route costs N times a constant.
+
+Why this is exact: the planner's NLP (:func:`profileopt._nlp.build_nlp`) is a chain. Its
+terms and rows act on two consecutive squared speeds (a segment's travel time and
+acceleration) or three (a boundary's smoothing term and jerk). If two consecutive boundary
+speeds b_k, b_{k+1} are held fixed, every term or row that involves a free variable left of
+k lies wholly in boundaries 0..k+1, and every one that involves a free variable right of
+k+1 lies wholly in k..N: the problem splits into two independent NLPs that share only the
+fixed pair. Where the optimum drives segment k at its cap (b_k and b_{k+1} at their upper
+bounds), fixing them there and solving the two sides gives the optimum of the whole.
+
+Which segments the optimum pins is known only after solving, so cuts are *guessed* before
+(:func:`cut_scores`, :func:`choose_cuts`: bottlenecks, segments whose cap is the lowest of
+the caps around them, which the greatest profile reaches without a sharp corner) and
+*checked* after (:func:`cut_multipliers`): the joined solution is a KKT point of the whole NLP when each
+side is one of its own and, at every cut, the whole problem's Lagrangian gradient w.r.t. the
+two fixed variables has the sign of an active upper bound (bound multiplier lam_x =
+-(grad f + J^T lam_g) >= 0, CasADi's sign convention). A cut that fails means the guess was
+wrong; the planner then tries another cut there (:func:`replace_cut`), and solves the whole
+route at once if none checks out.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from .kinematics import boundary_jerk_mps3, segment_accel_mps2
+
+__all__ = ["CUT_REACH", "choose_cuts", "cut_multipliers", "cut_scores", "piece_bounds", "replace_cut"]
+
+#: A cut's segment must have the lowest cap of the CUT_REACH boundaries on either side, and
+#: cuts stay that many segments from the route's ends and from each other.
+CUT_REACH = 20
+
+
+def cut_scores(upper_b: np.ndarray, greatest_b: np.ndarray, length_m: np.ndarray) -> np.ndarray:
+    """How likely the optimum is pinned at each segment: lower is likelier, inf is never.
+
+    Parameters
+    ----------
+    upper_b : numpy.ndarray, shape (N+1,)
+        Upper bounds on the squared speed at the boundaries (m^2/s^2).
+    greatest_b : numpy.ndarray, shape (N+1,)
+        The greatest profile under these bounds and the acceleration limits (m^2/s^2); the
+        optimum lies below it, so a cut needs it at the cap.
+    length_m : numpy.ndarray, shape (N,)
+        Segment lengths (m).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+        For a candidate segment k, the largest jerk (m/s^3) of the greatest profile at the
+        boundaries k-1 .. k+2 around it; inf for the others. A candidate has b_k and
+        b_{k+1} bounded by the same cap (segment k is the slower of its neighbours at both
+        ends), that cap no higher than any other within :data:`CUT_REACH` boundaries, and the
+        greatest profile at it on both boundaries. The optimum smooths the greatest
+        profile's corners (jerk bound, smoothing term), so where they are sharp it may pass
+        below the cap; where the greatest profile is gentle it holds the cap (on the
+        100,000-segment benchmark route, every candidate scored up to the jerk bound was
+        pinned, and 99.6 % of those up to twice that).
+    """
+    n = upper_b.size - 1
+    r = CUT_REACH
+    hi = upper_b
+    tol = 1e-12 * np.maximum(hi, 1.0)
+    same = np.abs(hi[:-1] - hi[1:]) <= tol[1:]
+    reached = np.abs(greatest_b - hi) <= 1e-9 * np.maximum(hi, 1.0)
+    padded = np.concatenate([np.full(r, np.inf), hi, np.full(r, np.inf)])
+    lowest = np.lib.stride_tricks.sliding_window_view(padded, 2 * r + 2).min(axis=1)[:n]  # k-r .. k+1+r
+    k = np.arange(n)
+    candidate = same & reached[:-1] & reached[1:] & (hi[:-1] <= lowest + tol[:-1]) & (k >= r) & (k < n - r - 1)
+
+    a = segment_accel_mps2(greatest_b[:-1], greatest_b[1:], length_m)
+    jerk = np.zeros(n + 1)
+    if n >= 2:
+        v = np.sqrt(np.maximum(greatest_b[1:-1], 0.0))
+        jerk[1:-1] = np.abs(boundary_jerk_mps3(v, a[:-1], a[1:], length_m[:-1], length_m[1:]))
+    corner = np.lib.stride_tricks.sliding_window_view(np.concatenate([[0.0], jerk, [0.0, 0.0]]), 4).max(axis=1)[:n]
+    return np.where(candidate, corner, np.inf)
+
+
+def _best(score: np.ndarray, lo: int, end: int, excluded: set[int]) -> int:
+    """The lowest-scored candidate in lo <= k < end (the last of equals), not excluded; -1 if none."""
+    if lo >= end:
+        return -1
+    window = score[lo:end].copy()
+    for k in excluded:
+        if lo <= k < end:
+            window[k - lo] = np.inf
+    best = end - 1 - int(np.argmin(window[::-1]))
+    return best if np.isfinite(score[best]) and best not in excluded else -1
+
+
+def choose_cuts(score: np.ndarray, piece_segments: int) -> np.ndarray:
+    """Where to cut a route's NLP: segments k whose two boundary speeds are to be fixed.
+
+    Parameters
+    ----------
+    score : numpy.ndarray, shape (N,)
+        :func:`cut_scores` of the route.
+    piece_segments : int
+        Most segments in one piece (the size of the NLP the pieces are solved with).
+
+    Returns
+    -------
+    numpy.ndarray of int, shape (K,)
+        Increasing segment indices k: piece p spans boundaries cut[p-1] .. cut[p] + 1 (from
+        0, to N), every piece at most ``piece_segments`` segments long. Empty when the route
+        fits in one piece, or when some stretch of it holds no candidate (then it is solved
+        whole).
+
+    Notes
+    -----
+    Walking along the route, each cut is the best-scored candidate among those that make
+    the piece before it between 3/4 and all of ``piece_segments`` long (then, if there is
+    none, between 1/4 and all); of equals, the farthest.
+    """
+    n = score.size
+    cuts: list[int] = []
+    start = 0  # first boundary of the current piece
+    while n - start > piece_segments:
+        chosen = -1
+        for low in (3 * piece_segments // 4, piece_segments // 4):
+            # the piece is boundaries start .. k+1, so k <= start + piece_segments - 1
+            chosen = _best(score, start + max(low, CUT_REACH), start + piece_segments, set())
+            if chosen >= 0:
+                break
+        if chosen < 0:
+            return np.empty(0, dtype=int)
+        cuts.append(chosen)
+        start = chosen
+    return np.asarray(cuts, dtype=int)
+
+
+def replace_cut(score: np.ndarray, cuts: np.ndarray, index: int, piece_segments: int,
+                excluded: set[int]) -> int:
+    """Another cut for ``cuts[index]`` (which did not check out), keeping both pieces beside
+    it at most ``piece_segments`` long: the best-scored candidate not in ``excluded``, or -1.
+    """
+    n = score.size
+    first = int(cuts[index - 1]) if index > 0 else 0  # the piece before starts here
+    last = int(cuts[index + 1]) + 1 if index + 1 < cuts.size else n  # the piece after ends here
+    lo = max(last - piece_segments, first + CUT_REACH)  # the piece after is k .. last
+    end = min(first + piece_segments, last - CUT_REACH)  # the piece before is first .. k+1
+    return _best(score, lo, end, excluded)
+
+
+def piece_bounds(cuts: np.ndarray, n: int) -> list[tuple[int, int]]:
+    """The pieces (first boundary, last boundary) of a route of ``n`` segments cut at
+    ``cuts`` (see :func:`choose_cuts`): consecutive pieces share the fixed pair k, k+1."""
+    starts = [0] + [int(k) for k in cuts]
+    ends = [int(k) + 1 for k in cuts] + [n]
+    return list(zip(starts, ends))
+
+
+def cut_multipliers(grad_f: ca.Function, jac_g: ca.Function, y: np.ndarray, p_tail: np.ndarray,
+                    length_scaled: np.ndarray, lam_accel: np.ndarray, lam_jerk: np.ndarray | None,
+                    cuts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The whole NLP's bound multipliers on the fixed pairs of a joined piecewise solution.
+
+    Parameters
+    ----------
+    grad_f, jac_g : casadi.Function
+        ``nlp_grad_f`` (x, p) -> (f, grad f) and ``nlp_jac_g`` (x, p) -> (g, J) of the NLP
+        of :func:`profileopt._nlp.build_nlp` for 5 segments (with the route's jerk setting).
+    y : numpy.ndarray, shape (N+1,)
+        The joined solution, scaled (b / b_ref).
+    p_tail : numpy.ndarray, shape (6,)
+        The parameters after the segment lengths (:data:`profileopt._nlp.PARAMETERS`), with
+        the T_ref the multipliers are scaled for.
+    length_scaled : numpy.ndarray, shape (N,)
+        Segment lengths / L_ref.
+    lam_accel : numpy.ndarray, shape (N,)
+        Multipliers of the acceleration rows (segment i), for that T_ref.
+    lam_jerk : numpy.ndarray, shape (N+1,) or None
+        Multipliers of the jerk rows by boundary j (entries 0 and N unused); None without
+        jerk rows.
+    cuts : numpy.ndarray of int, shape (K,)
+
+    Returns
+    -------
+    lam_x : numpy.ndarray, shape (K, 2)
+        -(grad f + J^T lam_g) of the whole NLP w.r.t. y_k and y_{k+1} at each cut; >= 0 is
+        the sign of an active upper bound (the cut is right).
+    scale : numpy.ndarray, shape (K, 2)
+        The sum of the magnitudes of the terms that make up each entry, to judge how close
+        to zero a small value is.
+
+    Notes
+    -----
+    Every term and row that involves b_k or b_{k+1} lies within boundaries k-2 .. k+3, so
+    the 5-segment NLP over that window gives their derivatives exactly; the rows of the
+    window that do not touch the pair have zero derivative w.r.t. it.
+    """
+    lam_x = np.empty((cuts.size, 2))
+    scale = np.empty((cuts.size, 2))
+    for row, k in enumerate(cuts):
+        window = slice(k - 2, k + 4)
+        x = y[window]
+        p = np.concatenate([length_scaled[k - 2:k + 3], p_tail])
+        lam = [lam_accel[k - 2:k + 3]]
+        if lam_jerk is not None:
+            lam.append(lam_jerk[k - 1:k + 3])
+        lam_g = np.concatenate(lam)
+        grad = np.asarray(grad_f(x, p)[1]).ravel()[2:4]
+        jac = np.asarray(ca.DM(jac_g(x, p)[1]).full())[:, 2:4]
+        if jac.shape[0] != lam_g.size:
+            raise ValueError(f"the 5-segment NLP has {jac.shape[0]} rows, {lam_g.size} multipliers given")
+        lam_x[row] = -(grad + jac.T @ lam_g)
+        scale[row] = np.abs(grad) + np.abs(jac.T) @ np.abs(lam_g)
+    return lam_x, scale
