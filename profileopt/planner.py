@@ -416,7 +416,7 @@ class Profile:
         IPOPT iterations (0 if not run), of all its solves together.
     pieces : int
         How many IPOPT solves make up the profile: 1 for a route solved whole, more for a
-        long route solved in pieces (exactly; see :data:`PIECE_SEGMENTS`), 0 if none.
+        long route solved in pieces (exactly; see :data:`SPLIT_ABOVE_SEGMENTS`), 0 if none.
     notes : tuple of str
         Remarks for the user (merged segments, fallback, ignored columns).
     allowable_first_mps, allowable_largest_mps : numpy.ndarray, shape (N,) or None
@@ -769,11 +769,17 @@ def _objective(b: np.ndarray, length_m: np.ndarray, smoothing: float) -> float:
     return travel + smoothing * float(np.sum(jerk_squared_time(v[1:-1], a[:-1], a[1:], length_m[:-1], length_m[1:])))
 
 
-#: Most segments in one IPOPT solve. A longer route is solved in pieces of at most this many
-#: segments, cut at bottlenecks where the optimum is pinned and checked to be exact
-#: (:mod:`profileopt._pieces`): IPOPT's time per segment is flat up to about 10,000
-#: segments and grows beyond, as its working set leaves the cache. Every piece is solved
-#: with the one NLP of this size (built once, padded with fixed variables).
+#: A route of more segments than this is solved in pieces (:data:`PIECE_SEGMENTS`). IPOPT's
+#: time per segment and iteration is flat up to about 10,000 segments and grows beyond, as
+#: its working set leaves the cache; pieces cost more iterations in all (each converges on
+#: its own). Measured on the benchmark routes (2-core machine): whole and pieces equal at
+#: 10,000 segments (within noise), pieces 5 % faster at 15,000, 15 % at 20,000, 30 % at 100,000.
+SPLIT_ABOVE_SEGMENTS = 10_000
+
+#: Most segments in one piece of a long route: pieces are cut at bottlenecks where the
+#: optimum is pinned and checked to be exact (:mod:`profileopt._pieces`), and every piece
+#: is solved with the one NLP of this size (built once, padded with fixed variables).
+#: IPOPT's time per segment was lowest with pieces of 4,000-5,000 segments.
 PIECE_SEGMENTS = 4000
 
 
@@ -831,7 +837,7 @@ def _solve_nlp(seg: Segments, chosen: BandChoice, vehicle: "Vehicle", smoothing:
                        inv_jerk=1.0 / jerk if with_jerk else 0.0)
     timings = {"build": 0.0, "solve": 0.0}
     iterations = 0
-    if n > PIECE_SEGMENTS:
+    if n > max(SPLIT_ABOVE_SEGMENTS, PIECE_SEGMENTS):
         score = cut_scores(chosen.upper_b, chosen.greatest_b, seg.length_m)
         cuts = choose_cuts(score, PIECE_SEGMENTS)
         if cuts.size:

@@ -32,7 +32,9 @@ def iso_route() -> Route:
 
 
 def solve(monkeypatch, route, vehicle, piece_segments, **options):
+    """plan() with routes of more than ``piece_segments`` segments cut into pieces that long."""
     monkeypatch.setattr(planner, "PIECE_SEGMENTS", piece_segments)
+    monkeypatch.setattr(planner, "SPLIT_ABOVE_SEGMENTS", piece_segments)
     return plan(route, vehicle, **options)
 
 
@@ -159,3 +161,13 @@ def test_choose_cuts_keeps_pieces_within_size():
     assert _pieces.choose_cuts(score[:w], w).size == 0
     score[1000:1000 + w] = np.inf
     assert _pieces.choose_cuts(score, w).size == 0
+
+
+def test_summary_and_command_report_the_pieces(monkeypatch, capsys):
+    from profileopt import cli
+
+    profile = solve(monkeypatch, read_route(ROUTES / "trail.csv"), load_vehicle("atv"), 200)
+    assert profile.pieces == 3  # 400 segments, cut at segments 118 and 256
+    assert planner.summarize(profile)["solver"]["pieces"] == 3
+    assert cli.main(["plan", str(ROUTES / "trail.csv"), "--vehicle", "atv"]) == 0
+    assert "IPOPT iterations over 3 pieces" in capsys.readouterr().out

@@ -93,8 +93,9 @@ def _human(summary: dict, args: argparse.Namespace) -> str:
         f"  acceleration {_ratio(margins['accel'])}",
         f"  deceleration {_ratio(margins['decel'])}",
         f"  jerk         {_ratio(margins['jerk'])}",
-        f"  solver       {solver['status']} ({solver['iterations']} IPOPT iterations), "
-        f"planned in {solver['time_s']:.3f} s",
+        f"  solver       {solver['status']} ({solver['iterations']} IPOPT iterations"
+        + (f" over {solver['pieces']} pieces" if solver["pieces"] > 1 else "")
+        + f"), planned in {solver['time_s']:.3f} s",
     ]
     if args.output:
         lines.append(f"wrote {args.output}")
