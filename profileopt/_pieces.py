@@ -1,10 +1,11 @@
 """Cutting a long route's NLP into pieces where its optimum is pinned, and checking the cuts.
 
-Why: IPOPT's time per iteration grows faster than the number of segments N once its
-vectors and MUMPS's factors no longer fit in the processor's cache (measured on a 2-core
-machine: 49 us per segment and iteration up to 10,000 segments, 59 at 20,000, 80 at
-100,000, in every part of IPOPT alike, function evaluations included). Pieces of a few
-thousand segments keep every solve in cache, so a long route costs N times a constant.
+Why: IPOPT's time per segment grows with the number of segments N once its vectors and
+MUMPS's factors no longer fit in the processor's cache. Measured on a 2-core machine, a
+whole solve took 49 us per segment up to 10,000 segments, 59 at 20,000 and 80 at 100,000
+(with about the same number of iterations; every part of IPOPT slowed alike, function
+evaluations included). Pieces of a few thousand segments keep every solve in cache, so a
+long route costs N times a constant.
 
 Why this is exact: the planner's NLP (:func:`profileopt._nlp.build_nlp`) is a chain. Its
 terms and rows act on two consecutive squared speeds (a segment's travel time and
@@ -12,18 +13,20 @@ acceleration) or three (a boundary's smoothing term and jerk). If two consecutiv
 speeds b_k, b_{k+1} are held fixed, every term or row that involves a free variable left of
 k lies wholly in boundaries 0..k+1, and every one that involves a free variable right of
 k+1 lies wholly in k..N: the problem splits into two independent NLPs that share only the
-fixed pair. Where the optimum drives segment k at its cap (b_k and b_{k+1} at their upper
-bounds), fixing them there and solving the two sides gives the optimum of the whole.
+fixed pair (and segment k's own row and time, which are then constants).
 
-Which segments the optimum pins is known only after solving, so cuts are *guessed* before
-(:func:`cut_scores`, :func:`choose_cuts`: bottlenecks, segments whose cap is the lowest of
-the caps around them, which the greatest profile reaches without a sharp corner) and
-*checked* after (:func:`cut_multipliers`): the joined solution is a KKT point of the whole NLP when each
-side is one of its own and, at every cut, the whole problem's Lagrangian gradient w.r.t. the
-two fixed variables has the sign of an active upper bound (bound multiplier lam_x =
--(grad f + J^T lam_g) >= 0, CasADi's sign convention). A cut that fails means the guess was
-wrong; the planner then tries another cut there (:func:`replace_cut`), and solves the whole
-route at once if none checks out.
+Which pairs the optimum holds at their caps is known only after solving, so cuts are
+*guessed* before (:func:`cut_scores`, :func:`choose_cuts`: bottlenecks, segments whose cap
+is the lowest of the caps around them, which the greatest profile reaches without a sharp
+corner) and *checked* after (:func:`cut_multipliers`). The joined solution is a KKT point
+of the whole NLP when each piece's solution is a KKT point of the piece, segment k's
+acceleration row is inactive (a_k = 0 between equal caps), and at every cut the whole
+problem's Lagrangian gradient w.r.t. the two fixed variables has the sign of an active
+upper bound: bound multiplier lam_x = -(grad f + J^T lam_g) >= 0, CasADi's sign
+convention. That is the same optimality IPOPT certifies for the whole problem solved at
+once. A cut that fails the check was a wrong guess: the planner replaces it
+(:func:`replace_cut`, or :func:`choose_cuts` again without it) and solves the whole route
+at once if no set of cuts checks out.
 """
 
 from __future__ import annotations
@@ -41,7 +44,7 @@ CUT_REACH = 20
 
 
 def cut_scores(upper_b: np.ndarray, greatest_b: np.ndarray, length_m: np.ndarray) -> np.ndarray:
-    """How likely the optimum is pinned at each segment: lower is likelier, inf is never.
+    """How likely the optimum holds each segment at its cap: lower is likelier, inf not a candidate.
 
     Parameters
     ----------

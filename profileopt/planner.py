@@ -927,7 +927,9 @@ def _solve_pieces(seg: Segments, chosen: BandChoice, vehicle: "Vehicle", scaling
             lam_accel[cuts] = 0.0  # the rows between fixed pairs: a = 0, inside its bounds
             lam_x, scale = cut_multipliers(check.get_function("nlp_grad_f"), check.get_function("nlp_jac_g"), y,
                                            scaling.tail(t_whole), length, lam_accel, lam_jerk, cuts)
-            wrong = np.flatnonzero(np.any(lam_x < -1e-6 * scale - 1e-12, axis=1))
+            pair = np.stack([cuts, cuts + 1], axis=1)
+            free = lower[pair] < upper[pair]  # a speed its band fixes anyway takes either sign
+            wrong = np.flatnonzero(np.any((lam_x < -1e-6 * scale - 1e-12) & free, axis=1))
             if wrong.size == 0:
                 return y * b_ref, iterations, len(pieces)
             tried.update(int(k) for k in cuts[wrong])
