@@ -24,9 +24,9 @@ acceleration row is inactive (a_k = 0 between equal caps), and at every cut the 
 problem's Lagrangian gradient w.r.t. the two fixed variables has the sign of an active
 upper bound: bound multiplier lam_x = -(grad f + J^T lam_g) >= 0, CasADi's sign
 convention. That is the same optimality IPOPT certifies for the whole problem solved at
-once. A cut that fails the check was a wrong guess: the planner replaces it
-(:func:`replace_cut`, or :func:`choose_cuts` again without it) and solves the whole route
-at once if no set of cuts checks out.
+once. A cut that fails the check (:func:`wrong_cuts`), or beside a piece IPOPT cannot
+solve, was a wrong guess: the planner replaces it (:func:`replace_cuts`) and solves the
+whole route at once if no set of cuts checks out.
 """
 
 from __future__ import annotations
@@ -36,7 +36,8 @@ import numpy as np
 
 from .kinematics import boundary_jerk_mps3, segment_accel_mps2
 
-__all__ = ["CUT_REACH", "choose_cuts", "cut_multipliers", "cut_scores", "piece_bounds", "replace_cut"]
+__all__ = ["CUT_REACH", "choose_cuts", "cut_multipliers", "cut_scores", "piece_bounds", "replace_cuts",
+           "wrong_cuts"]
 
 #: A cut's segment must have the lowest cap of the CUT_REACH boundaries on either side, and
 #: cuts stay that many segments from the route's ends and from each other.
@@ -90,7 +91,9 @@ def cut_scores(upper_b: np.ndarray, greatest_b: np.ndarray, length_m: np.ndarray
 
 
 def _best(score: np.ndarray, lo: int, end: int, excluded: set[int]) -> int:
-    """The lowest-scored candidate in lo <= k < end (the last of equals), not excluded; -1 if none."""
+    """The lowest-scored candidate in lo <= k < end (the last of equals), not excluded, and
+    at least :data:`CUT_REACH` from the route's ends; -1 if none."""
+    lo, end = max(lo, CUT_REACH), min(end, score.size - CUT_REACH - 1)
     if lo >= end:
         return -1
     window = score[lo:end].copy()
@@ -98,7 +101,26 @@ def _best(score: np.ndarray, lo: int, end: int, excluded: set[int]) -> int:
         if lo <= k < end:
             window[k - lo] = np.inf
     best = end - 1 - int(np.argmin(window[::-1]))
-    return best if np.isfinite(score[best]) and best not in excluded else -1
+    return best if np.isfinite(window[best - lo]) else -1
+
+
+def _greedy(score: np.ndarray, piece_segments: int, start: int, excluded: set[int]) -> list[int] | None:
+    """The cuts after boundary ``start`` (see :func:`choose_cuts`); None if some stretch
+    holds no candidate."""
+    n = score.size
+    cuts: list[int] = []
+    while n - start > piece_segments:  # start: first boundary of the current piece
+        chosen = -1
+        for low in (3 * piece_segments // 4, piece_segments // 4):
+            # the piece is boundaries start .. k+1, so k <= start + piece_segments - 1
+            chosen = _best(score, start + max(low, CUT_REACH), start + piece_segments, excluded)
+            if chosen >= 0:
+                break
+        if chosen < 0:
+            return None
+        cuts.append(chosen)
+        start = chosen
+    return cuts
 
 
 def choose_cuts(score: np.ndarray, piece_segments: int) -> np.ndarray:
@@ -115,9 +137,9 @@ def choose_cuts(score: np.ndarray, piece_segments: int) -> np.ndarray:
     -------
     numpy.ndarray of int, shape (K,)
         Increasing segment indices k: piece p spans boundaries cut[p-1] .. cut[p] + 1 (from
-        0, to N), every piece at most ``piece_segments`` segments long. Empty when the route
-        fits in one piece, or when some stretch of it holds no candidate (then it is solved
-        whole).
+        0, to N), every piece at most ``piece_segments`` segments long, cuts at least
+        :data:`CUT_REACH` apart and from the ends. Empty when the route fits in one piece,
+        or when some stretch of it holds no candidate (then it is solved whole).
 
     Notes
     -----
@@ -125,34 +147,64 @@ def choose_cuts(score: np.ndarray, piece_segments: int) -> np.ndarray:
     the piece before it between 3/4 and all of ``piece_segments`` long (then, if there is
     none, between 1/4 and all); of equals, the farthest.
     """
-    n = score.size
-    cuts: list[int] = []
-    start = 0  # first boundary of the current piece
-    while n - start > piece_segments:
-        chosen = -1
-        for low in (3 * piece_segments // 4, piece_segments // 4):
-            # the piece is boundaries start .. k+1, so k <= start + piece_segments - 1
-            chosen = _best(score, start + max(low, CUT_REACH), start + piece_segments, set())
-            if chosen >= 0:
-                break
-        if chosen < 0:
-            return np.empty(0, dtype=int)
-        cuts.append(chosen)
-        start = chosen
-    return np.asarray(cuts, dtype=int)
+    cuts = _greedy(score, piece_segments, 0, set())
+    return np.asarray(cuts or [], dtype=int)
 
 
-def replace_cut(score: np.ndarray, cuts: np.ndarray, index: int, piece_segments: int,
-                excluded: set[int]) -> int:
-    """Another cut for ``cuts[index]`` (which did not check out), keeping both pieces beside
-    it at most ``piece_segments`` long: the best-scored candidate not in ``excluded``, or -1.
+def replace_cuts(score: np.ndarray, cuts: np.ndarray, wrong: np.ndarray, piece_segments: int,
+                 excluded: set[int]) -> np.ndarray:
+    """New cuts in place of ``cuts[wrong]``, which did not check out (and are in ``excluded``).
+
+    Each wrong cut, in order, is replaced by the best-scored candidate that is not excluded
+    and keeps both pieces beside it at most ``piece_segments`` long. Where there is none,
+    the cuts after the one before it are chosen again as :func:`choose_cuts` does, and if
+    that finds none either, all the cuts (without the excluded ones).
+
+    Returns
+    -------
+    numpy.ndarray of int
+        The new cuts; empty if no set of cuts is left.
     """
     n = score.size
-    first = int(cuts[index - 1]) if index > 0 else 0  # the piece before starts here
-    last = int(cuts[index + 1]) + 1 if index + 1 < cuts.size else n  # the piece after ends here
-    lo = max(last - piece_segments, first + CUT_REACH)  # the piece after is k .. last
-    end = min(first + piece_segments, last - CUT_REACH)  # the piece before is first .. k+1
-    return _best(score, lo, end, excluded)
+    cuts = cuts.copy()
+    for index in (int(i) for i in wrong):
+        first = int(cuts[index - 1]) if index > 0 else 0  # the piece before starts here
+        last = int(cuts[index + 1]) + 1 if index + 1 < cuts.size else n  # the piece after ends here
+        # the piece after is k .. last, the piece before first .. k+1
+        k = _best(score, max(last - piece_segments, first + CUT_REACH),
+                  min(first + piece_segments, last - CUT_REACH), excluded)
+        if k < 0:
+            rest = _greedy(score, piece_segments, first, excluded)
+            if rest is not None:
+                return np.asarray(list(cuts[:index]) + rest, dtype=int)
+            whole = _greedy(score, piece_segments, 0, excluded)  # the earlier cuts must move too
+            return np.asarray(whole or [], dtype=int)
+        cuts[index] = k
+    return cuts
+
+
+def wrong_cuts(lam_x: np.ndarray, scale: np.ndarray, free: np.ndarray, row_inactive: np.ndarray) -> np.ndarray:
+    """Which cuts are not a KKT point of the whole NLP.
+
+    Parameters
+    ----------
+    lam_x, scale : numpy.ndarray, shape (K, 2)
+        From :func:`cut_multipliers`.
+    free : numpy.ndarray of bool, shape (K, 2)
+        Whether each fixed speed's lower bound is below its upper bound (a speed its band
+        fixes anyway may take a multiplier of either sign).
+    row_inactive : numpy.ndarray of bool, shape (K,)
+        Whether the acceleration of the segment between each fixed pair is strictly inside
+        its bounds (its multiplier is then 0, as :func:`cut_multipliers` takes it).
+
+    Returns
+    -------
+    numpy.ndarray of int
+        Indices into the cuts, increasing. A multiplier counts as negative below -1e-6 of
+        the size of the terms that make it (IPOPT's tolerance is far tighter).
+    """
+    negative = (lam_x < -1e-6 * scale - 1e-12) & free
+    return np.flatnonzero(np.any(negative, axis=1) | ~row_inactive)
 
 
 def piece_bounds(cuts: np.ndarray, n: int) -> list[tuple[int, int]]:

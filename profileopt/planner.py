@@ -34,7 +34,7 @@ import numpy as np
 
 from ._io import atomic_write
 from ._nlp import build_nlp
-from ._pieces import choose_cuts, cut_multipliers, cut_scores, piece_bounds, replace_cut
+from ._pieces import choose_cuts, cut_multipliers, cut_scores, piece_bounds, replace_cuts, wrong_cuts
 from .errors import InfeasibleError, InputError
 from .forces import MODELS, get_model
 from .kinematics import boundary_jerk_mps3, jerk_squared_time, segment_accel_mps2, segment_time_s
@@ -869,10 +869,10 @@ def _solve_pieces(seg: Segments, chosen: BandChoice, vehicle: "Vehicle", scaling
     segments: the piece's boundaries, then (behind it, or in front of the last piece)
     padding boundaries fixed at the neighbouring fixed speed, whose rows are unbounded and
     whose terms involve fixed variables only. A cut that is not a KKT point of the whole
-    problem is replaced by another between its neighbours (or, if there is none, the cuts
-    from there on are chosen again without it) and the changed pieces solved again.
-    Returns (b, iterations, pieces); b is None when a piece fails or no set of cuts checks
-    out within :data:`_CUT_ROUNDS` rounds.
+    problem, or beside a piece IPOPT cannot solve, is replaced by another between its
+    neighbours (or, if there is none, the cuts from the one before it onwards are chosen
+    again without it) and the changed pieces are solved again. Returns (b, iterations,
+    pieces); b is None when no set of cuts checks out within :data:`_CUT_ROUNDS` rounds.
     """
     n, w = seg.count, PIECE_SEGMENTS
     t = time.perf_counter()
@@ -909,37 +909,39 @@ def _solve_pieces(seg: Segments, chosen: BandChoice, vehicle: "Vehicle", scaling
         t_ref = max(_objective(chosen.greatest_b[first:last + 1], seg.length_m[first:last], 0.0), 1e-6)
         y, lam_g, success, _, spent = _ipopt(nlp, x0, lbx, ubx, p_length, lbg, ubg, scaling.tail(t_ref))
         iterations += spent
-        rescale = t_ref / t_whole  # multipliers of f / t_ref, expressed for f / t_whole
-        solved[first, last] = (y[real], lam_g[accel_rows] * rescale, lam_g[jerk_rows] * rescale)
+        if success:
+            rescale = t_ref / t_whole  # multipliers of f / t_ref, expressed for f / t_whole
+            solved[first, last] = (y[real], lam_g[accel_rows] * rescale, lam_g[jerk_rows] * rescale)
         return success
 
+    a_cut = segment_accel_mps2(chosen.upper_b[:-1], chosen.upper_b[1:], seg.length_m)  # between fixed pairs
+    row_inside = (a_cut < vehicle.max_accel_mps2 * (1 - 1e-9)) & (-a_cut < vehicle.max_decel_mps2 * (1 - 1e-9))
     try:
-        for _ in range(_CUT_ROUNDS + 1):
+        for round_ in range(_CUT_ROUNDS + 1):
             pieces = piece_bounds(cuts, n)
-            if not all((first, last) in solved or solve(first, last) for first, last in pieces):
-                return None, iterations, 0
-            y, lam_accel = np.empty(n + 1), np.zeros(n)
-            lam_jerk = np.zeros(n + 1) if nlp.with_jerk else None
-            for first, last in pieces:
-                y[first:last + 1], lam_accel[first:last], lam_piece_jerk = solved[first, last]
-                if lam_jerk is not None:
-                    lam_jerk[first + 1:last] = lam_piece_jerk
-            lam_accel[cuts] = 0.0  # the rows between fixed pairs: a = 0, inside its bounds
-            lam_x, scale = cut_multipliers(check.get_function("nlp_grad_f"), check.get_function("nlp_jac_g"), y,
-                                           scaling.tail(t_whole), length, lam_accel, lam_jerk, cuts)
-            pair = np.stack([cuts, cuts + 1], axis=1)
-            free = lower[pair] < upper[pair]  # a speed its band fixes anyway takes either sign
-            wrong = np.flatnonzero(np.any((lam_x < -1e-6 * scale - 1e-12) & free, axis=1))
-            if wrong.size == 0:
-                return y * b_ref, iterations, len(pieces)
+            failed = [i for i, (first, last) in enumerate(pieces) if not ((first, last) in solved or solve(first, last))]
+            if failed:  # a piece IPOPT cannot solve: the cuts beside it are suspect
+                wrong = np.array(sorted({c for i in failed for c in (i - 1, i) if 0 <= c < cuts.size}), dtype=int)
+            else:
+                y, lam_accel = np.empty(n + 1), np.zeros(n)
+                lam_jerk = np.zeros(n + 1) if nlp.with_jerk else None
+                for first, last in pieces:
+                    y[first:last + 1], lam_accel[first:last], lam_piece_jerk = solved[first, last]
+                    if lam_jerk is not None:
+                        lam_jerk[first + 1:last] = lam_piece_jerk
+                lam_accel[cuts] = 0.0  # the rows between fixed pairs (checked inactive below)
+                lam_x, scale = cut_multipliers(check.get_function("nlp_grad_f"), check.get_function("nlp_jac_g"), y,
+                                               scaling.tail(t_whole), length, lam_accel, lam_jerk, cuts)
+                pair = np.stack([cuts, cuts + 1], axis=1)
+                wrong = wrong_cuts(lam_x, scale, lower[pair] < upper[pair], row_inside[cuts])
+                if wrong.size == 0:
+                    return y * b_ref, iterations, len(pieces)
+            if round_ == _CUT_ROUNDS:
+                break
             tried.update(int(k) for k in cuts[wrong])
-            for index in wrong:  # in order, so each replacement sees its new neighbours
-                cuts[index] = replace_cut(score, cuts, int(index), w, tried)
-                if cuts[index] < 0:  # none between its neighbours: choose the cuts again from here on
-                    cuts = choose_cuts(np.where(np.isin(np.arange(n), list(tried)), np.inf, score), w)
-                    if cuts.size == 0:
-                        return None, iterations, 0
-                    break
+            cuts = replace_cuts(score, cuts, wrong, w, tried)
+            if cuts.size == 0:
+                break
         return None, iterations, 0
     finally:
         timings["solve"] += time.perf_counter() - t

@@ -65,9 +65,9 @@ def test_pieces_give_the_optimum_of_the_whole_route(monkeypatch, iso_route, name
     check_profile(split, route, vehicle, jerk=options.get("max_jerk_mps3"))
 
 
-def test_cut_check_reproduces_ipopts_bound_multipliers(monkeypatch, iso_route, atv):
-    """At pinned pairs of the whole solve, cut_multipliers on the whole solve's multipliers
-    gives IPOPT's own multipliers of those bounds (lam_x = -(grad f + J^T lam_g))."""
+def whole_solve_with_multipliers(monkeypatch, route, vehicle, **options):
+    """The whole route's NLP solved as plan() does, with IPOPT's x, lam_x, lam_g (scaled)
+    and the parameters after the segment lengths."""
     calls = []
     original = planner._ipopt
 
@@ -76,10 +76,19 @@ def test_cut_check_reproduces_ipopts_bound_multipliers(monkeypatch, iso_route, a
         return original(nlp, *args)
 
     monkeypatch.setattr(planner, "_ipopt", spy)
-    solve(monkeypatch, iso_route, atv, 10**9)
+    solve(monkeypatch, route, vehicle, 10**9, **options)
+    monkeypatch.setattr(planner, "_ipopt", original)
     (nlp, (x0, lbx, ubx, length, lbg, ubg, p_tail)), = calls
     result = nlp.solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=np.concatenate([length, p_tail]))
     y, lam_x, lam_g = (np.asarray(result[k]).ravel() for k in ("x", "lam_x", "lam_g"))
+    return y, lam_x, lam_g, ubx, length, p_tail
+
+
+@pytest.mark.parametrize("options", [{}, {"smoothing": 0.0, "method": "ipopt"}])
+def test_cut_check_reproduces_ipopts_bound_multipliers(monkeypatch, iso_route, atv, options):
+    """At pinned pairs of the whole solve, cut_multipliers on the whole solve's multipliers
+    gives IPOPT's own multipliers of those bounds (lam_x = -(grad f + J^T lam_g))."""
+    y, lam_x, lam_g, ubx, length, p_tail = whole_solve_with_multipliers(monkeypatch, iso_route, atv, **options)
     n = length.size
     # upper bounds IPOPT holds active (interior point: y within ~1e-8 of them, lam_x > 0)
     at_cap = (ubx - y <= 1e-6) & (lam_x > 1e-8)
@@ -92,13 +101,42 @@ def test_cut_check_reproduces_ipopts_bound_multipliers(monkeypatch, iso_route, a
                                          p_tail, length, lam_g[:n], lam_jerk, pinned)
     expected = np.stack([lam_x[pinned], lam_x[pinned + 1]], axis=1)
     np.testing.assert_allclose(got, expected, rtol=0, atol=1e-7 * scale.max())
+    if options:  # without smoothing, the rows around the pairs carry the multipliers
+        window = [np.abs(lam_g[k - 2:k + 3]).max() for k in pinned]  # acceleration rows
+        assert max(window) > 1e-3 * np.abs(expected).max()
+        window = [np.abs(lam_jerk[k - 1:k + 3]).max() for k in pinned]
+        assert max(window) > 1e-3 * np.abs(expected).max()
+
+
+def test_joined_multipliers_of_the_pieces_match_the_whole_solve(monkeypatch, iso_route, atv):
+    """The cut check of a split solve (the pieces' multipliers, each rescaled from its own
+    T_ref) gives the bound multipliers IPOPT finds at those pairs solving the route whole.
+    Without smoothing the jerk rows carry them, so a wrong rescaling shows."""
+    options = {"smoothing": 0.0, "method": "ipopt"}
+    y, lam_x, *_ = whole_solve_with_multipliers(monkeypatch, iso_route, atv, **options)
+    checks = []
+    original = planner.cut_multipliers
+
+    def spy(*args):
+        out = original(*args)
+        checks.append((args[-1].copy(), out))
+        return out
+
+    monkeypatch.setattr(planner, "cut_multipliers", spy)
+    split = solve(monkeypatch, iso_route, atv, 150, **options)
+    assert split.pieces >= 2
+    cuts, (got, scale) = checks[-1]  # the check that passed
+    expected = np.stack([lam_x[cuts], lam_x[cuts + 1]], axis=1)
+    assert np.abs(expected).max() > 0
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-4 * np.abs(expected).max())
 
 
 # Unforced, the cuts at 150 segments a piece fall at 124, 268, 379 and 528. A wrong first
-# cut (in 112..149) is replaced between its neighbours (and the second, chosen after it and
-# also wrong, likewise, until none is left there and the cuts are chosen again); a wrong
-# third one (in 380..417) has no other candidate between its neighbours, so the cuts from
-# there on are chosen again at once.
+# cut (114, in 112..149) drags a wrong second one (154) after it: both are replaced between
+# their neighbours (by 100 and 205); 205 is wrong too and has no other candidate between its
+# neighbours, nor after 100, so all the cuts are chosen again (124, 268, 379, 528). A wrong
+# third cut (396, in 380..417) has no other candidate between its neighbours, so the cuts
+# after the one before it (268) are chosen again.
 @pytest.mark.parametrize("first, end", [(112, 150), (380, 418)])
 def test_a_wrong_cut_is_found_and_replaced(monkeypatch, iso_route, atv, first, end):
     """Force a cut onto a segment the optimum does not drive at its cap: the check must
@@ -115,16 +153,16 @@ def test_a_wrong_cut_is_found_and_replaced(monkeypatch, iso_route, atv, first, e
         return score
 
     replaced = []
-    original_replace = planner.replace_cut
+    original_replace = planner.replace_cuts
 
-    def replace(score, cuts, index, piece_segments, excluded):
-        replaced.append(int(cuts[index]))
-        return original_replace(score, cuts, index, piece_segments, excluded)
+    def replace(score, cuts, wrong_index, piece_segments, excluded):
+        replaced.append([int(k) for k in cuts[wrong_index]])
+        return original_replace(score, cuts, wrong_index, piece_segments, excluded)
 
     monkeypatch.setattr(planner, "cut_scores", scores)
-    monkeypatch.setattr(planner, "replace_cut", replace)
+    monkeypatch.setattr(planner, "replace_cuts", replace)
     split = solve(monkeypatch, iso_route, atv, 150)
-    assert replaced[0] == wrong  # (its replacement may be rejected in turn)
+    assert wrong in replaced[0]  # (its replacement may be rejected in turn)
     assert split.pieces >= 2
     assert_same_optimum(split, whole)
     check_profile(split, iso_route, atv)
@@ -139,8 +177,17 @@ def test_when_no_cut_checks_out_the_route_is_solved_whole(monkeypatch, iso_route
         return np.where(below & (np.arange(below.size) >= _pieces.CUT_REACH)
                         & (np.arange(below.size) < below.size - _pieces.CUT_REACH - 1), 1.0, np.inf)
 
+    rounds = []
+    original_replace = planner.replace_cuts
+
+    def replace(*args):
+        rounds.append(args[2].size)
+        return original_replace(*args)
+
     monkeypatch.setattr(planner, "cut_scores", scores)
+    monkeypatch.setattr(planner, "replace_cuts", replace)
     split = solve(monkeypatch, iso_route, atv, 150)
+    assert rounds  # other cuts were tried first
     assert split.pieces == 1
     assert split.objective == whole.objective  # the same whole solve
     assert split.iterations > whole.iterations  # after the pieces that did not check out
@@ -167,7 +214,37 @@ def test_summary_and_command_report_the_pieces(monkeypatch, capsys):
     from profileopt import cli
 
     profile = solve(monkeypatch, read_route(ROUTES / "trail.csv"), load_vehicle("atv"), 200)
-    assert profile.pieces == 3  # 400 segments, cut at segments 118 and 256
+    assert profile.pieces == 3  # 400 segments, cut at 156 and 315, then 156 and 256 (315 fails the check)
     assert planner.summarize(profile)["solver"]["pieces"] == 3
     assert cli.main(["plan", str(ROUTES / "trail.csv"), "--vehicle", "atv"]) == 0
     assert "IPOPT iterations over 3 pieces" in capsys.readouterr().out
+
+
+def test_replace_cuts_between_neighbours_then_after_the_one_before_then_all():
+    n, w, reach = 1000, 200, _pieces.CUT_REACH
+    score = np.full(n, np.inf)
+    score[[150, 160, 300, 330, 480, 650, 800]] = 0.0
+    cuts = _pieces.choose_cuts(score, w)
+    assert cuts.tolist() == [160, 330, 480, 650, 800]  # the farthest within each reach
+    # 330 wrong: 300 lies between its neighbours (160, 480) and keeps both pieces short
+    assert _pieces.replace_cuts(score, cuts, np.array([1]), w, {330}).tolist() == [160, 300, 480, 650, 800]
+    # 480 wrong, nothing else between 330 and 650: the cuts after 330 are chosen again,
+    # which finds none (650 is too far from 330): all are chosen again, and none is left
+    assert _pieces.replace_cuts(score, cuts, np.array([2]), w, {480}).size == 0
+    # 160 wrong and 150 excluded: 190 (a new candidate) lies between 0 and 330
+    score[[190]] = 0.0
+    assert _pieces.replace_cuts(score, cuts, np.array([0]), w, {160, 150}).tolist() == [190, 330, 480, 650, 800]
+    # never within CUT_REACH of the ends, whatever the scores
+    edge = np.full(n, np.inf)
+    edge[[n - 2, 1]] = 0.0
+    assert _pieces.choose_cuts(edge, w).size == 0 and reach > 2
+
+
+def test_wrong_cuts():
+    lam_x = np.array([[1.0, 2.0], [-1.0, 2.0], [1.0, -1e-9], [-1.0, 1.0], [1.0, 1.0]])
+    scale = np.ones((5, 2))
+    free = np.array([[True, True], [True, True], [True, True], [False, True], [True, True]])
+    inactive = np.array([True, True, True, True, False])
+    # 1: a negative multiplier; 2: within tolerance; 3: a speed its band fixes anyway;
+    # 4: the acceleration between the pair is at a bound
+    assert _pieces.wrong_cuts(lam_x, scale, free, inactive).tolist() == [1, 4]
