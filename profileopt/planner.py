@@ -736,7 +736,7 @@ def plan(
                          "every limit")
             chosen = _fallback(args, vehicle, jerk, v0_mps, vend_mps, seg)
             b = chosen.greatest_b
-            status = f"fallback: {status}"
+            status, pieces = f"fallback: {status}", 0
     b = np.clip(b, chosen.lower_b, chosen.upper_b) if success else b
     profile = _assemble(seg, b, vehicle, model, speed_sets, all_bands, lower_mps, upper_mps, chosen)
     worst_force = float(np.max(profile.force_n / profile.force_limit_n))
