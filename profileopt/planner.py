@@ -802,6 +802,7 @@ class _Scaling:
     a_ref: float
     weight: float
     inv_jerk: float
+    t_whole: float  # T_ref of the whole route: the greatest profile's travel time (s)
 
     def tail(self, t_ref: float) -> np.ndarray:
         return np.array([self.b_ref, self.l_ref, self.a_ref, t_ref, self.weight, self.inv_jerk])
@@ -835,7 +836,8 @@ def _solve_nlp(seg: Segments, chosen: BandChoice, vehicle: "Vehicle", smoothing:
     with_jerk = math.isfinite(jerk)
     scaling = _Scaling(b_ref=max(float(chosen.upper_b.max()), 1e-6), l_ref=float(seg.length_m.mean()),
                        a_ref=vehicle.max_accel_mps2, weight=smoothing,
-                       inv_jerk=1.0 / jerk if with_jerk else 0.0)
+                       inv_jerk=1.0 / jerk if with_jerk else 0.0,
+                       t_whole=max(_objective(chosen.greatest_b, seg.length_m, 0.0), 1e-6))
     timings = {"build": 0.0, "solve": 0.0}
     iterations = 0
     if n > max(SPLIT_ABOVE_SEGMENTS, PIECE_SEGMENTS):
@@ -851,10 +853,9 @@ def _solve_nlp(seg: Segments, chosen: BandChoice, vehicle: "Vehicle", smoothing:
     timings["build"] += time.perf_counter() - t
     t = time.perf_counter()
     b_ref = scaling.b_ref
-    t_ref = max(_objective(chosen.greatest_b, seg.length_m, 0.0), 1e-6)
     lbg, ubg = _row_bounds(n, nlp.with_jerk, vehicle, scaling.a_ref)
     y, _, _, status, spent = _ipopt(nlp, chosen.greatest_b / b_ref, chosen.lower_b / b_ref, chosen.upper_b / b_ref,
-                                    seg.length_m / scaling.l_ref, lbg, ubg, scaling.tail(t_ref))
+                                    seg.length_m / scaling.l_ref, lbg, ubg, scaling.tail(scaling.t_whole))
     timings["solve"] += time.perf_counter() - t
     return _NlpResult(y * b_ref, status, iterations + spent, 1, timings)
 
@@ -879,12 +880,13 @@ def _solve_pieces(seg: Segments, chosen: BandChoice, vehicle: "Vehicle", scaling
     t = time.perf_counter()
     nlp = _build_nlp(w, with_jerk)
     check = _build_nlp(5, with_jerk).solver
+    grad_f, jac_g = check.get_function("nlp_grad_f"), check.get_function("nlp_jac_g")
     timings["build"] += time.perf_counter() - t
     t = time.perf_counter()
     b_ref, l_ref = scaling.b_ref, scaling.l_ref
     lower, upper, start_b = chosen.lower_b / b_ref, chosen.upper_b / b_ref, chosen.greatest_b / b_ref
     length = seg.length_m / l_ref
-    t_whole = max(_objective(chosen.greatest_b, seg.length_m, 0.0), 1e-6)
+    t_whole = scaling.t_whole
     lbg_real, ubg_real = _row_bounds(w, nlp.with_jerk, vehicle, scaling.a_ref)
     solved: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
     iterations, cuts, tried = 0, cuts.copy(), set()
@@ -931,8 +933,8 @@ def _solve_pieces(seg: Segments, chosen: BandChoice, vehicle: "Vehicle", scaling
                     if lam_jerk is not None:
                         lam_jerk[first + 1:last] = lam_piece_jerk
                 lam_accel[cuts] = 0.0  # the rows between fixed pairs (checked inactive below)
-                lam_x, scale = cut_multipliers(check.get_function("nlp_grad_f"), check.get_function("nlp_jac_g"), y,
-                                               scaling.tail(t_whole), length, lam_accel, lam_jerk, cuts)
+                lam_x, scale = cut_multipliers(grad_f, jac_g, y, scaling.tail(t_whole), length, lam_accel,
+                                               lam_jerk, cuts)
                 pair = np.stack([cuts, cuts + 1], axis=1)
                 wrong = wrong_cuts(lam_x, scale, lower[pair] < upper[pair], row_inside[cuts])
                 if wrong.size == 0:
