@@ -1,0 +1,108 @@
+"""The command line's results, byte for byte, against committed expected files.
+
+A change of layout or vocabulary must change no result: every bundled route planned with
+each bundled vehicle (``profileopt plan``), the paper's figure tables
+(``profileopt figures``) and the model comparisons (``profileopt compare``) must write
+exactly the bytes in ``tests/expected/``. The expected files were written by the code
+before the package was reorganised (commit "tests: hold every bundled route's profile...").
+
+When a change is *meant* to change results (a new definition, a better solver), rewrite
+them deliberately and say why in the commit::
+
+    PROFILEOPT_UPDATE_EXPECTED=1 python -m pytest tests/test_expected_outputs.py
+
+The commands run as a user runs them (a subprocess of the installed entry point), so the
+comparison includes the CLI's own settings (one OpenBLAS thread) and its formatting.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+EXPECTED = Path(__file__).resolve().parent / "expected"
+ROUTES = ROOT / "examples" / "routes"
+UPDATE = os.environ.get("PROFILEOPT_UPDATE_EXPECTED") == "1"
+
+BUNDLED_ROUTES = ("trail", "washboard", "curb", "krc_rms_1in", "krc_rms_2in", "krc_rms_4in", "iri_road")
+VEHICLES = ("atv", "atv-resonant")
+#: Non-default planner options, each on one route: every path through the planner
+#: (exact forward-backward pass, IPOPT without jerk bound, other models, first band only,
+#: nonzero boundary speeds, another segment length).
+OPTION_CASES = {
+    "trail-atv-exact": ("trail", "atv", ["--smoothing", "0", "--max-jerk", "inf"]),
+    "trail-atv-ipopt-nojerk": ("trail", "atv", ["--method", "ipopt", "--max-jerk", "inf"]),
+    "krc_rms_1in-atv-iecm": ("krc_rms_1in", "atv", ["--model", "iecm"]),
+    "krc_rms_1in-atv-prev_bem-seg2": ("krc_rms_1in", "atv", ["--model", "prev_bem", "--segment-length", "2"]),
+    "curb-atv-sbem_ef-v0": ("curb", "atv", ["--model", "sbem_ef", "--v0", "3", "--vend", "2"]),
+    "washboard-atv-resonant-first": ("washboard", "atv-resonant", ["--bands", "first"]),
+}
+COMPARE_CASES = (("curb", "atv"), ("washboard", "atv-resonant"), ("krc_rms_1in", "atv"), ("iri_road", "atv-resonant"))
+
+
+def run_cli(*args: str, cwd: Path = ROOT) -> subprocess.CompletedProcess:
+    """``profileopt ARGS`` in a fresh interpreter (the same entry point as the console script)."""
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    env.pop("OPENBLAS_NUM_THREADS", None)  # the CLI chooses, as for a user
+    return subprocess.run(
+        [sys.executable, "-c", "import sys; from profileopt.cli import main; sys.exit(main())", *args],
+        capture_output=True, text=True, timeout=600, cwd=cwd, env=env,
+    )
+
+
+def check_bytes(actual: bytes, name: str) -> None:
+    """Compare with ``tests/expected/NAME`` (or write it when updating)."""
+    path = EXPECTED / name
+    if UPDATE:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_bytes(actual)
+        return
+    assert path.exists(), f"{path} is missing; write it with PROFILEOPT_UPDATE_EXPECTED=1"
+    expected = path.read_bytes()
+    if actual != expected:
+        a, e = actual.decode().splitlines(), expected.decode().splitlines()
+        first = next((i for i, (x, y) in enumerate(zip(a, e)) if x != y), min(len(a), len(e)))
+        pytest.fail(f"{name} differs from the expected file at line {first + 1}:\n"
+                    f"  expected: {e[first] if first < len(e) else '<end of file>'}\n"
+                    f"  actual:   {a[first] if first < len(a) else '<end of file>'}")
+
+
+def plan_bytes(tmp_path: Path, route: str, vehicle: str, options: list[str]) -> bytes:
+    out = tmp_path / "profile.csv"
+    result = run_cli("plan", f"examples/routes/{route}.csv", "--vehicle", vehicle, "-o", str(out), *options)
+    assert result.returncode == 0, result.stderr
+    return out.read_bytes()
+
+
+@pytest.mark.parametrize("vehicle", VEHICLES)
+@pytest.mark.parametrize("route", BUNDLED_ROUTES)
+def test_bundled_route_profile_is_unchanged(tmp_path, route, vehicle):
+    check_bytes(plan_bytes(tmp_path, route, vehicle, []), f"profiles/{route}-{vehicle}.csv")
+
+
+@pytest.mark.parametrize("case", sorted(OPTION_CASES))
+def test_profile_with_options_is_unchanged(tmp_path, case):
+    route, vehicle, options = OPTION_CASES[case]
+    check_bytes(plan_bytes(tmp_path, route, vehicle, options), f"profiles/{case}.csv")
+
+
+def test_paper_figure_tables_are_unchanged(tmp_path):
+    result = run_cli("figures", "--out", str(tmp_path))
+    assert result.returncode == 0, result.stderr
+    tables = sorted(tmp_path.glob("*.csv"))
+    assert [p.stem for p in tables] == ["fig1_ri_vs_amplitude", "fig5_allowable_speed", "fig6_resonance"]
+    for table in tables:
+        check_bytes(table.read_bytes(), f"figures/{table.name}")
+
+
+@pytest.mark.parametrize("route, vehicle", COMPARE_CASES)
+def test_compare_tables_are_unchanged(route, vehicle):
+    for fmt, options in (("md", []), ("json", ["--json"])):
+        result = run_cli("compare", f"examples/routes/{route}.csv", "--vehicle", vehicle, *options)
+        assert result.returncode == 0, result.stderr
+        check_bytes(result.stdout.encode(), f"compare/{route}-{vehicle}.{fmt}")
