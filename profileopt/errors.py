@@ -8,7 +8,7 @@ that line and exits with status 2; nothing else is ever shown as a user error.
 
 from __future__ import annotations
 
-__all__ = ["InputError", "InfeasibleError"]
+__all__ = ["InputError", "InfeasibleError", "PlanningError"]
 
 
 class InputError(ValueError):
@@ -20,4 +20,12 @@ class InfeasibleError(InputError):
 
     This is an input problem (the user asked for the impossible), so it is an
     :class:`InputError`; the message says which segment or option makes it so.
+    """
+
+
+class PlanningError(RuntimeError):
+    """The solver failed and no profile keeping every limit could be built.
+
+    Not the user's mistake (that is an :class:`InputError`): please report it with the
+    route and the vehicle.
     """

@@ -35,7 +35,7 @@ import numpy as np
 from ._io import atomic_write
 from ._nlp import build_nlp
 from ._pieces import choose_cuts, cut_multipliers, cut_scores, piece_bounds, replace_cuts, wrong_cuts
-from .errors import InfeasibleError, InputError
+from .errors import InfeasibleError, InputError, PlanningError
 from .forces import MODELS, get_model
 from .kinematics import boundary_jerk_mps3, jerk_squared_time, segment_accel_mps2, segment_time_s
 from .speeds import SpeedBands, speed_bands
@@ -69,10 +69,6 @@ DEFAULT_SMOOTHING = 0.01
 PROFILE_COLUMNS = ("s_m", "speed_mps", "accel_mps2", "time_s", "ri", "e_max_m", "force_n", "force_limit_n")
 #: Relative tolerance of the independent constraint check of every returned profile.
 _CHECK_RTOL = 1e-6
-
-
-class PlanningError(RuntimeError):
-    """The solver failed and no profile keeping every limit could be built."""
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
