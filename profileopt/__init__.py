@@ -9,18 +9,17 @@ planner solved with IPOPT, and a quarter-car simulation that checks every plan.
     >>> profile = profileopt.plan(route, profileopt.load_vehicle("atv"))  # doctest: +SKIP
 """
 
-from .errors import InfeasibleError, InputError
+from .errors import InfeasibleError, InputError, PlanningError
 from .forces import MODELS, force_n, get_model
 from .speeds import SpeedBands, allowable_speed, speed_bands
 from .terrain import roughness_index, step_width, worst_case_elevation
 from .vehicle import Vehicle, bundled_vehicles, load_vehicle
-from .route import Route, read_route
-from .planner import PlanningError, Profile, plan, read_profile, summarize
+from .route import Route
+from .io import read_profile, read_route
+from .planning import Profile, SolverOptions, plan, summarize
 from .simulate import QuarterCarRun, simulate_quarter_car, wheel_envelope_m
-# Note: this makes the name profileopt.verify the function, as the issue asks for
-# (profileopt.verify(route, profile, vehicle)); the module stays importable with
-# "from profileopt.verify import ...".
-from .verify import Verification, plot_verification, verify
+from .verification import Verification, verify
+from .plots import plot_verification
 from .study import ModelRun, SafetyStudy, compare_models, safety_study
 
 __all__ = [
@@ -42,6 +41,7 @@ __all__ = [
     "read_route",
     "PlanningError",
     "Profile",
+    "SolverOptions",
     "plan",
     "read_profile",
     "summarize",

@@ -10,18 +10,45 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import sys
 import traceback
 from typing import Callable, NoReturn, Sequence
 
 from .errors import InputError
 
-__all__ = ["main", "build_parser"]
+__all__ = ["main", "build_parser", "command", "flags_for_parameters"]
 
 # Each sub-command registers itself here: name -> (help, runner). A runner takes the parsed
 # arguments and returns the exit status; its ``arguments(parser)`` attribute, if any, adds
 # its options (looked up when the parser is built, so it may be set before or after).
 _COMMANDS: dict[str, tuple[str, Callable[[argparse.Namespace], int]]] = {}
+
+#: The library names its parameters in messages (``segment_length_m = 0 m: must be > 0``);
+#: the command line says its flags instead. Names that are also plain words (model, band)
+#: are replaced only where a message assigns them (``model = 'x'``).
+API_FLAGS = {
+    "segment_length_m": "--segment-length", "v0_mps": "--v0", "vend_mps": "--vend", "max_jerk_mps3": "--max-jerk",
+}
+API_FLAGS_ASSIGNED = {"model": "--model", "smoothing": "--smoothing", "method": "--method", "band": "--band"}
+_FLAG_PATTERN = re.compile(r"\b(" + "|".join(API_FLAGS) + r")\b")
+_ASSIGNED_PATTERN = re.compile(r"(?<![\w.-])(" + "|".join(API_FLAGS_ASSIGNED) + r")(?= = )")
+
+
+def flags_for_parameters(message: str) -> str:
+    """A library message with API parameter names replaced by the command's flags.
+
+    Parameters
+    ----------
+    message : str
+        An :class:`~profileopt.errors.InputError` message.
+
+    Returns
+    -------
+    str
+    """
+    message = _FLAG_PATTERN.sub(lambda m: API_FLAGS[m.group(1)], message)
+    return _ASSIGNED_PATTERN.sub(lambda m: API_FLAGS_ASSIGNED[m.group(1)], message)
 
 
 def command(name: str, help_text: str,
@@ -78,7 +105,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except InputError as exc:
         if args.debug:
             traceback.print_exc()
-        print(f"profileopt {args.command}: error: {exc}", file=sys.stderr)
+        print(f"profileopt {args.command}: error: {flags_for_parameters(str(exc))}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # output piped into a reader that stopped early (e.g. head)
         devnull = os.open(os.devnull, os.O_WRONLY)

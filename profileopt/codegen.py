@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, Sequence
 
 import casadi as ca
 
-from ._io import atomic_write
+from .io.atomic import atomic_write
 from .constraints import _OF_E_MAX, constraint_function, force_function, force_limit_n
 from .errors import InputError
 from .forces import MODELS, get_model

@@ -109,7 +109,7 @@ import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._casadi import is_symbolic
+from .symbolic import is_symbolic
 from .errors import InputError
 from .forces import get_model, iecm_force_n, prev_bem_force_n, sbem_ef_force_n, sbem_tf_force_n
 from .speeds import SpeedBands, allowable_speed, speed_bands

@@ -21,10 +21,10 @@ import os
 from pathlib import Path
 
 import numpy as np
-from matplotlib.figure import Figure
 
-from ._io import atomic_path, atomic_write
 from .forces import MODELS
+from .io.atomic import atomic_path, atomic_write
+from .plots import plot_figure
 from .speeds import allowable_speed
 from .synthetic import washboard
 from .terrain import roughness_index
@@ -354,54 +354,10 @@ def paper_figures(vehicle: Vehicle | None = None, resonant_vehicle: Vehicle | No
 
 # Line styles that stay apart in grey-scale print too; the "first"/"largest" pair of Fig. 6
 # share SBEM:TF's colour and differ in line style and marker.
-_STYLES: dict[str, dict] = {
-    "ri": dict(color="tab:blue", linestyle="-"),
-    "prev_bem_mps": dict(color="tab:gray", linestyle="-."),
-    "iecm_mps": dict(color="tab:orange", linestyle="--"),
-    "sbem_ef_mps": dict(color="tab:blue", linestyle="-", linewidth=2.5),
-    "sbem_tf_mps": dict(color="tab:red", linestyle=":", linewidth=2.5),
-    "sbem_tf_largest_mps": dict(color="tab:red", linestyle="--", marker="o", markersize=3),
-    "sbem_tf_first_mps": dict(color="tab:purple", linestyle=":", marker="x", markersize=4),
-}
-
-
-def _plot(data: FigureData, path: Path) -> None:
-    # A bare matplotlib Figure (object API, no pyplot): it draws with the Agg renderer
-    # whatever backend the caller has chosen, opens no window, changes no global state and
-    # is freed with the object, so this is safe in scripts, tests, servers and notebooks.
-    if data.log_panel:
-        fig = Figure(figsize=(8.0, 8.0), layout="constrained")
-        ax, ax_log = fig.subplots(2, 1, sharex=True, height_ratios=(3, 2))
-    else:
-        fig = Figure(figsize=(8.0, 5.6), layout="constrained")
-        ax, ax_log = fig.subplots(), None
-    for axes in (ax, ax_log):
-        if axes is None:
-            continue
-        for curve in data.curves:
-            axes.plot(data.x.values, curve.values, label=curve.label, **_STYLES.get(curve.column, {}))
-        axes.set_ylabel(data.y_label)
-        axes.set_xlim(left=0.0)
-        axes.grid(True, which="both", alpha=0.3)
-    ax.set_ylim(bottom=0.0)
-    ax.set_title(data.title, fontsize=11)
-    ax.legend(loc="best", fontsize=9)
-    if ax_log is not None:
-        ax_log.set_yscale("log")
-        ax_log.set_ylabel(data.y_label + ", log scale")
-        ax_log.set_ylim(bottom=0.1)
-        ax_log.set_xlabel(data.x_label)
-    else:
-        ax.set_xlabel(data.x_label)
-    fig.get_layout_engine().set(h_pad=0.15)
-    fig.supxlabel(data.caption, fontsize=8, wrap=True, x=0.02, ha="left")
-    fig.savefig(path, format="png", dpi=120)
-
-
 def write_figure(data: FigureData, out_dir: str | os.PathLike) -> list[Path]:
     """Write ``data`` as ``<stem>.png`` and ``<stem>.csv`` in ``out_dir`` (which must exist).
 
-    Both files go through :func:`profileopt._io.atomic_path` / ``atomic_write``: a failure
+    Both files go through :func:`profileopt.io.atomic_path` / ``atomic_write``: a failure
     leaves no half-written file. The CSV has one header line (the column names, with
     units) and one row per point, numbers with 17 significant digits (exact round trip).
 
@@ -413,7 +369,7 @@ def write_figure(data: FigureData, out_dir: str | os.PathLike) -> list[Path]:
     out = Path(out_dir)
     png, csv = out / f"{data.stem}.png", out / f"{data.stem}.csv"
     with atomic_path(png) as tmp:
-        _plot(data, tmp)
+        plot_figure(data, tmp)
     with atomic_write(csv) as handle:
         handle.write(",".join(data.columns) + "\n")
         for row in data.table():

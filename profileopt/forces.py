@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING, Any, Callable
 
 import casadi as ca
 
-from ._casadi import elementwise, is_symbolic
+from .symbolic import elementwise, is_symbolic
 from .terrain import _check_ri, step_width, worst_case_elevation
 
 if TYPE_CHECKING:
@@ -237,3 +237,5 @@ def force_n(model: str, speed_mps: Any, ri: Any, vehicle: "Vehicle") -> Any:
     Same kind as the inputs: force (N).
     """
     return get_model(model).force_n(speed_mps, ri, vehicle)
+
+DEFAULT_MODEL = "sbem_tf"  # TEMPORARY until the vocabulary branch is merged

@@ -1,4 +1,10 @@
-"""Pictures of planned profiles (matplotlib's object API; no global backend is touched)."""
+"""Every picture the project draws: planned profiles, verifications and the paper's figures.
+
+Each function draws on a bare matplotlib ``Figure`` (the object API, no pyplot): it renders
+with Agg whatever backend the caller chose, opens no window, changes no global state and is
+freed with the object, so it is safe in scripts, tests, servers and notebooks. matplotlib is
+imported only when a picture is drawn.
+"""
 
 from __future__ import annotations
 
@@ -7,13 +13,16 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ._io import atomic_path
 from .forces import get_model
+from .io.atomic import atomic_path
+from .stations import segment_index
 
 if TYPE_CHECKING:
-    from .planner import Profile
+    from .figures import FigureData
+    from .planning.result import Profile
+    from .verification import Verification
 
-__all__ = ["plot_profile"]
+__all__ = ["plot_profile", "plot_verification", "plot_figure"]
 
 
 def plot_profile(profile: "Profile", path: str | Path, title: str | None = None) -> None:
@@ -64,3 +73,133 @@ def plot_profile(profile: "Profile", path: str | Path, title: str | None = None)
     ax_ri.set_xlim(s[0], s[-1])
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=110, format="png")
+
+
+def _envelope_trace(x: np.ndarray, values: np.ndarray, bins: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-bin min and max of ``values`` along ``x`` (for plotting millions of points)."""
+    edges = np.linspace(x[0], x[-1], bins + 1)
+    which = segment_index(x, edges)
+    starts = np.searchsorted(which, np.arange(bins), side="left")
+    filled = np.diff(np.append(starts, which.size)) > 0
+    starts = starts[filled]
+    centres = 0.5 * (edges[:-1] + edges[1:])[filled]
+    return centres, np.minimum.reduceat(values, starts), np.maximum.reduceat(values, starts)
+
+
+def _step(boundaries: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return np.repeat(boundaries, 2)[1:-1], np.repeat(values, 2)
+
+
+def plot_verification(verification: "Verification", path: str | Path) -> None:
+    """Write a PNG: forces and limit along s, and simulated versus predicted per segment.
+
+    Top: the simulated force of the model's kind along s (band between its smallest and
+    largest value in each of 3000 bins), the per-segment simulated peak, the model's
+    prediction and the limit; the speed on the right axis. Bottom: per segment, the
+    simulated peak against the prediction (points above the diagonal: the model was not
+    conservative there; above the dashed line: over the limit).
+
+    The file is written through :func:`profileopt.io.atomic_path`.
+
+    Parameters
+    ----------
+    verification : Verification
+        The result of :func:`profileopt.verify` (it holds the simulated run).
+    path : str or pathlib.Path
+        Output PNG file.
+    """
+    from matplotlib.figure import Figure
+
+    v = verification
+    run = v.run
+    series = run.transmitted_n if v.quantity == "transmitted" else run.excitation_n
+    label = "transmitted force F_T" if v.quantity == "transmitted" else "excitation force k y + c y'"
+    fig = Figure(figsize=(10, 8), layout="constrained")
+    top, bottom = fig.subplots(2, 1, height_ratios=[3, 2])
+    xs, lo, hi = _envelope_trace(run.s_m, series, 3000)
+    top.fill_between(xs, lo, hi, color="0.6", lw=0, label=f"simulated {label}")
+    top.plot(*_step(v.s_m, v.simulated_n), color="C0", lw=1.2, label="simulated peak |F| per segment")
+    top.plot(*_step(v.s_m, v.predicted_n), color="C2", lw=1.2, label=f"predicted ({get_model(v.model).label})")
+    top.plot(*_step(v.s_m, v.limit_n), color="C3", ls="--", lw=1.2, label="limit")
+    top.axhline(-v.weight_n, color="C4", ls=":", lw=1, label="-m g (wheel lifts off below)")
+    top.set_xlabel("s (m)")
+    top.set_ylabel("force (N)")
+    top.set_xlim(v.s_m[0], v.s_m[-1])
+    top.legend(loc="upper left", fontsize=8)
+    speed_axis = top.twinx()
+    speed_axis.plot(v.s_m, v.speed_mps, color="C1", lw=1, alpha=0.8)
+    speed_axis.set_ylabel("planned speed (m/s)", color="C1")
+    top.set_title(f"{Path(v.route).name}: {get_model(v.model).label} plan, {Path(v.vehicle).stem}; "
+                  f"{v.over_count}/{v.ratio.size} segments over the limit, worst {v.worst_ratio:.2f} x limit")
+
+    over = v.over
+    bottom.scatter(v.predicted_n[~over], v.simulated_n[~over], s=12, color="C0", label="within the limit")
+    bottom.scatter(v.predicted_n[over], v.simulated_n[over], s=16, color="C3", label="over the limit")
+    top_value = max(float(np.max(v.simulated_n)), float(np.max(v.predicted_n)), float(v.limit_n.max())) * 1.05
+    bottom.plot([0, top_value], [0, top_value], color="0.3", lw=1, label="simulated = predicted")
+    bottom.axhline(float(v.limit_n.max()), color="C3", ls="--", lw=1, label="limit")
+    bottom.set_xlim(0, top_value)
+    bottom.set_ylim(0, top_value)
+    bottom.set_xlabel("predicted peak force per segment (N)")
+    bottom.set_ylabel("simulated peak force (N)")
+    bottom.legend(loc="lower right", fontsize=8)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=110)
+
+
+_STYLES: dict[str, dict] = {
+    "ri": dict(color="tab:blue", linestyle="-"),
+    "prev_bem_mps": dict(color="tab:gray", linestyle="-."),
+    "iecm_mps": dict(color="tab:orange", linestyle="--"),
+    "sbem_ef_mps": dict(color="tab:blue", linestyle="-", linewidth=2.5),
+    "sbem_tf_mps": dict(color="tab:red", linestyle=":", linewidth=2.5),
+    "sbem_tf_largest_mps": dict(color="tab:red", linestyle="--", marker="o", markersize=3),
+    "sbem_tf_first_mps": dict(color="tab:purple", linestyle=":", marker="x", markersize=4),
+}
+
+
+def plot_figure(data: "FigureData", path: str | Path) -> None:
+    """Draw one of the paper's figures (:mod:`profileopt.figures`) as a PNG at ``path``.
+
+    The caller makes ``path`` atomic (:func:`profileopt.figures.write_figure` passes a
+    temporary file that it renames into place).
+
+    Parameters
+    ----------
+    data : FigureData
+        The curves, labels and caption of the figure.
+    path : str or pathlib.Path
+        Output PNG file.
+    """
+    from matplotlib.figure import Figure
+
+    # A bare matplotlib Figure (object API, no pyplot): it draws with the Agg renderer
+    # whatever backend the caller has chosen, opens no window, changes no global state and
+    # is freed with the object, so this is safe in scripts, tests, servers and notebooks.
+    if data.log_panel:
+        fig = Figure(figsize=(8.0, 8.0), layout="constrained")
+        ax, ax_log = fig.subplots(2, 1, sharex=True, height_ratios=(3, 2))
+    else:
+        fig = Figure(figsize=(8.0, 5.6), layout="constrained")
+        ax, ax_log = fig.subplots(), None
+    for axes in (ax, ax_log):
+        if axes is None:
+            continue
+        for curve in data.curves:
+            axes.plot(data.x.values, curve.values, label=curve.label, **_STYLES.get(curve.column, {}))
+        axes.set_ylabel(data.y_label)
+        axes.set_xlim(left=0.0)
+        axes.grid(True, which="both", alpha=0.3)
+    ax.set_ylim(bottom=0.0)
+    ax.set_title(data.title, fontsize=11)
+    ax.legend(loc="best", fontsize=9)
+    if ax_log is not None:
+        ax_log.set_yscale("log")
+        ax_log.set_ylabel(data.y_label + ", log scale")
+        ax_log.set_ylim(bottom=0.1)
+        ax_log.set_xlabel(data.x_label)
+    else:
+        ax.set_xlabel(data.x_label)
+    fig.get_layout_engine().set(h_pad=0.15)
+    fig.supxlabel(data.caption, fontsize=8, wrap=True, x=0.02, ha="left")
+    fig.savefig(path, format="png", dpi=120)

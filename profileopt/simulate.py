@@ -77,6 +77,7 @@ import numpy as np
 
 from .errors import InputError
 from .kinematics import segment_accel_mps2, segment_time_s
+from .stations import segment_index, segment_samples
 from .terrain import segment_line_fit
 
 if TYPE_CHECKING:
@@ -374,7 +375,7 @@ def position_at_time(
     b = np.asarray(boundaries_m, dtype=float)
     v = np.asarray(speed_mps, dtype=float)
     t = np.asarray(time_s, dtype=float)
-    seg = np.clip(np.searchsorted(times_s, t, side="right") - 1, 0, b.size - 2)
+    seg = segment_index(t, times_s)
     length = np.diff(b)
     accel = segment_accel_mps2(v[:-1] ** 2, v[1:] ** 2, length)
     tau = t - times_s[seg]
@@ -432,13 +433,12 @@ def _segment_trend(s: np.ndarray, y: np.ndarray, boundaries: np.ndarray, detrend
     """Reference line y_ref = level + slope (s - s0) of each segment (datum of F = k y + c y').
 
     The segment's samples are those with s_i <= s < s_{i+1} (the last segment closed), as in
-    :func:`profileopt.planner.segment_route`; the line is their least-squares fit
+    :mod:`profileopt.stations`; the line is their least-squares fit
     (:func:`profileopt.terrain.segment_line_fit`, the fit the RI removes), or their mean
     without detrending. A segment without samples gets the interpolated height at its
     middle, flat. Returns (s0, level, slope), each shape (N,).
     """
-    starts = np.searchsorted(s, boundaries[:-1], side="left")
-    stops = np.append(starts[1:], np.searchsorted(s, boundaries[-1], side="right"))
+    starts, stops = segment_samples(s, boundaries)
     fit = segment_line_fit(s, y, starts, stops, detrend=detrend)
     s0, level, slope = fit.s0_m.copy(), fit.level_m.copy(), fit.slope.copy()
     empty = np.flatnonzero(fit.count == 0)
@@ -561,7 +561,7 @@ def simulate_quarter_car(
     # Excitation F = k y~ + c y~' with y~ = y - (level + trend slope * (s - s0)).
     s0, level, trend = _segment_trend(s, y_samples, b, detrend)
     n_seg = b.size - 1
-    seg = np.clip(np.searchsorted(b, grid_s, side="right") - 1, 0, n_seg - 1)
+    seg = segment_index(grid_s, b)
     y_tilde = y - (level[seg] + trend[seg] * (grid_s - s0[seg]))
     chord_speed = np.diff(grid_s) / dt  # consistent with the held y
     dy_central = np.empty(steps + 1)

@@ -28,7 +28,7 @@ import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._casadi import numpy_evaluator
+from .symbolic import numpy_evaluator
 from .forces import get_model
 from .terrain import _check_ri
 

@@ -7,7 +7,7 @@ causes in the quarter-car simulation. This module runs that check for several mo
 :func:`run_model`
     plan one route with one model and verify the plan: one :class:`ModelRun`. An
     infeasible route (:class:`~profileopt.errors.InfeasibleError`) or a solver failure
-    (:class:`~profileopt.planner.PlanningError`) is recorded as the run's status, not
+    (:class:`~profileopt.errors.PlanningError`) is recorded as the run's status, not
     raised.
 :func:`compare_models`
     :func:`run_model` for each model on one route (what ``profileopt compare`` prints).
@@ -36,7 +36,7 @@ from .forces import MODELS, get_model
 if TYPE_CHECKING:
     from .route import Route
     from .vehicle import Vehicle
-    from .verify import Verification
+    from .verification import Verification
 
 __all__ = [
     "Exceedance",
@@ -238,15 +238,16 @@ def run_model(route: "Route", vehicle: "Vehicle", model: str, *, segment_length_
     ModelRun
         ``outcome`` ``"infeasible"`` if the planner raises
         :class:`~profileopt.errors.InfeasibleError`, ``"solver failed"`` if it raises
-        :class:`~profileopt.planner.PlanningError`; otherwise the verification's numbers.
+        :class:`~profileopt.errors.PlanningError`; otherwise the verification's numbers.
 
     Raises
     ------
     InputError
         Bad options or route (other than infeasibility), an unknown model.
     """
-    from .planner import PlanningError, plan
-    from .verify import verify
+    from .errors import PlanningError
+    from .planning import plan
+    from .verification import verify
 
     force_model = get_model(model)
     common = {"route": str(route.source), "vehicle": _vehicle_label(vehicle), "model": force_model.key,

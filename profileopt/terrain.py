@@ -16,7 +16,7 @@ import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ._casadi import elementwise, is_symbolic
+from .symbolic import elementwise, is_symbolic
 
 if TYPE_CHECKING:
     from .vehicle import Vehicle

@@ -6,12 +6,21 @@ import argparse
 import json
 import sys
 
-from .._io import check_output_paths
 from ..cli import command
 from ..forces import MODELS
-from ..planner import DEFAULT_SMOOTHING, plan, summarize
-from ..route import read_route
+from ..io.atomic import check_output_paths
+from ..io.routes import read_route
+from ..planning import DEFAULT_SMOOTHING, PLAN_BANDS, plan
 from ..vehicle import load_vehicle
+
+
+class _DeprecatedAlias(argparse.Action):
+    """An old option name that still works for one release, with a note naming the new one."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: object,
+                 option_string: str | None = None) -> None:
+        print(f"profileopt plan: note: {option_string} is deprecated; use --{self.dest}", file=sys.stderr)
+        setattr(namespace, self.dest, values)
 
 
 def _float(text: str) -> float:
@@ -40,10 +49,12 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--method", default="auto", choices=["auto", "ipopt"],
                         help="'auto': exact forward-backward profile when it is optimal, else IPOPT; "
                              "'ipopt': always IPOPT")
-    parser.add_argument("--bands", default="all", choices=["all", "first"],
+    parser.add_argument("--band", default="all", choices=list(PLAN_BANDS),
                         help="'all': any admissible speed band, chosen over the whole route (may cross "
                              "washboard above resonance); 'first': only speeds reachable from rest "
-                             "without crossing a force peak (default: all)")
+                             "without crossing a force peak; 'largest': only the highest band (default: all)")
+    parser.add_argument("--bands", dest="band", choices=list(PLAN_BANDS), action=_DeprecatedAlias,
+                        help=argparse.SUPPRESS)
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument("--plot", metavar="PNG", help="draw speed, allowable speeds and RI along the route")
 
@@ -57,7 +68,7 @@ def _run(args: argparse.Namespace) -> int:
     profile = plan(
         route, vehicle, segment_length_m=args.segment_length, model=args.model, smoothing=args.smoothing,
         max_jerk_mps3=args.max_jerk, v0_mps=args.v0, vend_mps=args.vend, method=args.method,
-        bands=args.bands,
+        band=args.band,
     )
     if args.output:
         profile.to_csv(args.output)
@@ -67,7 +78,7 @@ def _run(args: argparse.Namespace) -> int:
         plot_profile(profile, args.plot)
     for note in profile.notes:
         print(f"profileopt plan: note: {note}", file=sys.stderr)
-    summary = summarize(profile)
+    summary = profile.summary()
     if args.json:
         print(json.dumps(summary, indent=2))
     else:

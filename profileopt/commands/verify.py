@@ -16,7 +16,7 @@ import argparse
 import json
 from pathlib import Path
 
-from .._io import check_output_paths
+from ..io.atomic import check_output_paths
 from ..cli import command
 from ..errors import InputError
 from ..forces import MODELS, get_model
@@ -39,9 +39,9 @@ def _vehicle_of(args: argparse.Namespace, profile) -> str:
 
 def _verify(args: argparse.Namespace) -> int:
     """Run ``profileopt verify``; returns 0 (also when segments are over the limit)."""
-    from ..planner import read_profile
-    from ..route import read_route
-    from ..verify import plot_verification, verify
+    from ..io import read_profile, read_route
+    from ..plots import plot_verification
+    from ..verification import verify
 
     check_output_paths(args.output, args.plot)  # first: a bad --plot must not leave an -o behind
     route = read_route(args.route)
@@ -99,7 +99,7 @@ command("verify", "simulate the vehicle driving a planned profile and check the 
 
 def _compare(args: argparse.Namespace) -> int:
     """Run ``profileopt compare``: plan and verify with each model, print one table."""
-    from ..route import read_route
+    from ..io.routes import read_route
     from ..study import compare_models
 
     vehicle = load_vehicle(args.vehicle)

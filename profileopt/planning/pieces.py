@@ -7,7 +7,7 @@ whole solve took 49 us per segment up to 10,000 segments, 59 at 20,000 and 80 at
 evaluations included). Pieces of a few thousand segments keep every solve in cache, so a
 long route costs N times a constant.
 
-Why this is exact: the planner's NLP (:func:`profileopt._nlp.build_nlp`) is a chain. Its
+Why this is exact: the planner's NLP (:func:`profileopt.planning.nlp.build_nlp`) is a chain. Its
 terms and rows act on two consecutive squared speeds (a segment's travel time and
 acceleration) or three (a boundary's smoothing term and jerk). If two consecutive boundary
 speeds b_k, b_{k+1} are held fixed, every term or row that involves a free variable left of
@@ -31,13 +31,22 @@ whole route at once if no set of cuts checks out.
 
 from __future__ import annotations
 
+import time
+from typing import TYPE_CHECKING
+
 import casadi as ca
 import numpy as np
 
-from .kinematics import boundary_jerk_mps3, segment_accel_mps2
+from ..kinematics import boundary_jerk_mps3, segment_accel_mps2
+from .nlp import cached_nlp, objective_s, solve_ipopt
+
+if TYPE_CHECKING:
+    from .bands import BandChoice
+    from .nlp import Scaling
+    from .options import SolverOptions
 
 __all__ = ["CUT_REACH", "choose_cuts", "cut_multipliers", "cut_scores", "piece_bounds", "replace_cuts",
-           "wrong_cuts"]
+           "wrong_cuts", "solve_pieces"]
 
 #: A cut's segment must have the lowest cap of the CUT_REACH boundaries on either side, and
 #: cuts stay that many segments from the route's ends and from each other.
@@ -224,11 +233,11 @@ def cut_multipliers(grad_f: ca.Function, jac_g: ca.Function, y: np.ndarray, p_ta
     ----------
     grad_f, jac_g : casadi.Function
         ``nlp_grad_f`` (x, p) -> (f, grad f) and ``nlp_jac_g`` (x, p) -> (g, J) of the NLP
-        of :func:`profileopt._nlp.build_nlp` for 5 segments (with the route's jerk setting).
+        of :func:`profileopt.planning.nlp.build_nlp` for 5 segments (with the route's jerk setting).
     y : numpy.ndarray, shape (N+1,)
         The joined solution, scaled (b / b_ref).
     p_tail : numpy.ndarray, shape (6,)
-        The parameters after the segment lengths (:data:`profileopt._nlp.PARAMETERS`), with
+        The parameters after the segment lengths (:data:`profileopt.planning.nlp.PARAMETERS`), with
         the T_ref the multipliers are scaled for.
     length_scaled : numpy.ndarray, shape (N,)
         Segment lengths / L_ref.
@@ -271,3 +280,118 @@ def cut_multipliers(grad_f: ca.Function, jac_g: ca.Function, y: np.ndarray, p_ta
         lam_x[row] = -(grad + jac.T @ lam_g)
         scale[row] = np.abs(grad) + np.abs(jac.T) @ np.abs(lam_g)
     return lam_x, scale
+
+
+def solve_pieces(length_m: np.ndarray, chosen: "BandChoice", decel_mps2: np.ndarray, accel_mps2: np.ndarray,
+                 scaling: "Scaling", with_jerk: bool, score: np.ndarray, cuts: np.ndarray,
+                 options: "SolverOptions", timings: dict[str, float]) -> tuple[np.ndarray | None, int, int]:
+    """The NLP solved piece by piece between the fixed pairs at ``cuts``, each piece in the
+    one NLP of ``options.piece_segments`` segments: the piece's boundaries, then (behind it, or in front of the last piece)
+    padding boundaries fixed at the neighbouring fixed speed, whose rows are unbounded and
+    whose terms involve fixed variables only. A cut that is not a KKT point of the whole
+    problem, or beside a piece IPOPT cannot solve, is replaced by another between its
+    neighbours (or, if there is none, the cuts from the one before it onwards are chosen
+    again without it) and the changed pieces are solved again. Returns (b, iterations,
+    pieces); b is None when no set of cuts checks out within ``options.cut_rounds`` rounds.
+
+    Parameters
+    ----------
+    length_m : numpy.ndarray, shape (N,)
+        Segment lengths (m).
+    chosen : BandChoice
+        Bounds on b and the greatest profile (the start point).
+    decel_mps2, accel_mps2 : numpy.ndarray, shape (N,)
+        Acceleration bounds of each segment (m/s^2).
+    scaling : Scaling
+        The NLP's scales for the whole route.
+    with_jerk : bool
+        Whether the jerk rows are on.
+    score : numpy.ndarray, shape (N,)
+        :func:`cut_scores` of the route.
+    cuts : numpy.ndarray of int
+        The first guess of cut segments (:func:`choose_cuts`).
+    options : SolverOptions
+        Piece size, rounds and IPOPT options.
+    timings : dict
+        ``build`` and ``solve`` seconds are added here.
+
+    Returns
+    -------
+    (b, iterations, pieces) : tuple
+        b (m^2/s^2), shape (N+1,), or None.
+    """
+    n, w = length_m.size, options.piece_segments
+    t = time.perf_counter()
+    solver = cached_nlp(w, with_jerk, options.ipopt_key())
+    nlp_with_jerk = with_jerk and w >= 2
+    check = cached_nlp(5, with_jerk, options.ipopt_key())
+    grad_f, jac_g = check.get_function("nlp_grad_f"), check.get_function("nlp_jac_g")
+    timings["build"] += time.perf_counter() - t
+    t = time.perf_counter()
+    b_ref, l_ref = scaling.b_ref, scaling.l_ref
+    lower, upper, start_b = chosen.lower_b / b_ref, chosen.upper_b / b_ref, chosen.greatest_b / b_ref
+    length = length_m / l_ref
+    t_whole = scaling.t_whole
+    lbg_route, ubg_route = -decel_mps2 / scaling.a_ref, accel_mps2 / scaling.a_ref  # the route's accel rows
+    rows = w + (w - 1 if nlp_with_jerk else 0)
+    solved: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+    iterations, cuts, tried = 0, cuts.copy(), set()
+
+    def solve(first: int, last: int) -> bool:
+        nonlocal iterations
+        count, is_first, is_last = last - first, first == 0, last == n
+        offset = w - count if is_last else 0  # the last piece is padded in front, the others behind
+        real = slice(offset, offset + count + 1)
+        x0, lbx, ubx = (np.full(w + 1, upper[first] if is_last else upper[last]) for _ in range(3))
+        x0[real], lbx[real], ubx[real] = start_b[first:last + 1], lower[first:last + 1], upper[first:last + 1]
+        fixed = ([] if is_first else [first, first + 1]) + ([] if is_last else [last - 1, last])
+        for k in fixed:  # the cut pairs, at their caps
+            lbx[offset + k - first] = ubx[offset + k - first] = x0[offset + k - first] = upper[k]
+        p_length = np.ones(w)
+        p_length[offset:offset + count] = length[first:last]
+        lbg, ubg = np.full(rows, -np.inf), np.full(rows, np.inf)  # padding rows: unbounded
+        accel_rows = slice(offset, offset + count)
+        jerk_rows = slice(w + offset, w + offset + count - 1)  # interior boundaries offset+1 .. offset+count-1
+        lbg[accel_rows], ubg[accel_rows] = lbg_route[first:last], ubg_route[first:last]
+        if nlp_with_jerk:
+            lbg[jerk_rows], ubg[jerk_rows] = -1.0, 1.0
+        t_ref = max(objective_s(chosen.greatest_b[first:last + 1], length_m[first:last], 0.0), 1e-6)
+        result = solve_ipopt(solver, x0, lbx, ubx, p_length, lbg, ubg, scaling.tail(t_ref))
+        iterations += result.iterations
+        if result.success:
+            rescale = t_ref / t_whole  # multipliers of f / t_ref, expressed for f / t_whole
+            solved[first, last] = (result.y[real], result.lam_g[accel_rows] * rescale,
+                                   result.lam_g[jerk_rows] * rescale)
+        return result.success
+
+    a_cut = segment_accel_mps2(chosen.upper_b[:-1], chosen.upper_b[1:], length_m)  # between fixed pairs
+    row_inside = (a_cut < accel_mps2 * (1 - 1e-9)) & (-a_cut < decel_mps2 * (1 - 1e-9))
+    try:
+        for round_ in range(options.cut_rounds + 1):
+            pieces = piece_bounds(cuts, n)
+            failed = [i for i, (first, last) in enumerate(pieces) if not ((first, last) in solved or solve(first, last))]
+            if failed:  # a piece IPOPT cannot solve: the cuts beside it are suspect
+                wrong = np.array(sorted({c for i in failed for c in (i - 1, i) if 0 <= c < cuts.size}), dtype=int)
+            else:
+                y, lam_accel = np.empty(n + 1), np.zeros(n)
+                lam_jerk = np.zeros(n + 1) if nlp_with_jerk else None
+                for first, last in pieces:
+                    y[first:last + 1], lam_accel[first:last], lam_piece_jerk = solved[first, last]
+                    if lam_jerk is not None:
+                        lam_jerk[first + 1:last] = lam_piece_jerk
+                lam_accel[cuts] = 0.0  # the rows between fixed pairs (checked inactive below)
+                lam_x, scale = cut_multipliers(grad_f, jac_g, y, scaling.tail(t_whole), length, lam_accel,
+                                               lam_jerk, cuts)
+                pair = np.stack([cuts, cuts + 1], axis=1)
+                wrong = wrong_cuts(lam_x, scale, lower[pair] < upper[pair], row_inside[cuts])
+                if wrong.size == 0:
+                    return y * b_ref, iterations, len(pieces)
+            if round_ == options.cut_rounds:
+                break
+            tried.update(int(k) for k in cuts[wrong])
+            cuts = replace_cuts(score, cuts, wrong, w, tried)
+            if cuts.size == 0:
+                break
+        return None, iterations, 0
+    finally:
+        timings["solve"] += time.perf_counter() - t

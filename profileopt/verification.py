@@ -22,18 +22,19 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ._io import atomic_path, atomic_write
+from .io.atomic import atomic_write
 from .errors import InputError
 from .forces import get_model
 from .simulate import QuarterCarRun, simulate_quarter_car
+from .stations import segment_index, segment_samples
 from .terrain import segment_roughness_index
 
 if TYPE_CHECKING:
-    from .planner import Profile
+    from .planning.result import Profile
     from .route import Route
     from .vehicle import Vehicle
 
-__all__ = ["Verification", "verify", "plot_verification", "VERIFICATION_COLUMNS", "STANDARD_GRAVITY_MPS2"]
+__all__ = ["Verification", "verify", "VERIFICATION_COLUMNS", "STANDARD_GRAVITY_MPS2"]
 
 #: Standard gravity (m/s^2), for the static wheel load m g.
 STANDARD_GRAVITY_MPS2 = 9.80665
@@ -279,7 +280,7 @@ def verify(
             f"{route.source}: the profile covers s = {s[0]:g} to {s[-1]:g} m but the route {route.s_m[0]:g} to "
             f"{route.s_m[-1]:g} m; verify a profile planned on this route"
         )
-    starts = np.searchsorted(route.s_m, s[:-1], side="left")
+    starts, _ = segment_samples(route.s_m, s)
     ri_here = segment_roughness_index(route.s_m, route.z_m, starts, vehicle.ground_clearance_m)
     mismatch = np.flatnonzero(~np.isclose(np.asarray(profile.ri, dtype=float)[:-1], ri_here, rtol=1e-6, atol=1e-9))
     if mismatch.size:
@@ -301,7 +302,7 @@ def verify(
     run = simulate_quarter_car(route.s_m, route.z_m, s, profile.speed_mps, vehicle, detrend=detrend)
     t_sim = time.perf_counter()
 
-    seg = np.clip(np.searchsorted(s, run.s_m, side="right") - 1, 0, s.size - 2)
+    seg = segment_index(run.s_m, s)
     starts = np.searchsorted(seg, np.arange(s.size - 1), side="left")
     up = np.maximum.reduceat(run.transmitted_n, starts)
     down = np.minimum.reduceat(run.transmitted_n, starts)
@@ -335,69 +336,3 @@ def verify(
         },
         notes=tuple(notes),
     )
-
-
-def _envelope_trace(x: np.ndarray, values: np.ndarray, bins: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per-bin min and max of ``values`` along ``x`` (for plotting millions of points)."""
-    edges = np.linspace(x[0], x[-1], bins + 1)
-    which = np.clip(np.searchsorted(edges, x, side="right") - 1, 0, bins - 1)
-    starts = np.searchsorted(which, np.arange(bins), side="left")
-    filled = np.diff(np.append(starts, which.size)) > 0
-    starts = starts[filled]
-    centres = 0.5 * (edges[:-1] + edges[1:])[filled]
-    return centres, np.minimum.reduceat(values, starts), np.maximum.reduceat(values, starts)
-
-
-def _step(boundaries: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    return np.repeat(boundaries, 2)[1:-1], np.repeat(values, 2)
-
-
-def plot_verification(verification: Verification, path: str | Path) -> None:
-    """Write a PNG: forces and limit along s, and simulated versus predicted per segment.
-
-    Top: the simulated force of the model's kind along s (band between its smallest and
-    largest value in each of 3000 bins), the per-segment simulated peak, the model's
-    prediction and the limit; the speed on the right axis. Bottom: per segment, the
-    simulated peak against the prediction (points above the diagonal: the model was not
-    conservative there; above the dashed line: over the limit).
-
-    The file is written through :func:`profileopt._io.atomic_path`.
-    """
-    from matplotlib.figure import Figure
-
-    v = verification
-    run = v.run
-    series = run.transmitted_n if v.quantity == "transmitted" else run.excitation_n
-    label = "transmitted force F_T" if v.quantity == "transmitted" else "excitation force k y + c y'"
-    fig = Figure(figsize=(10, 8), layout="constrained")
-    top, bottom = fig.subplots(2, 1, height_ratios=[3, 2])
-    xs, lo, hi = _envelope_trace(run.s_m, series, 3000)
-    top.fill_between(xs, lo, hi, color="0.6", lw=0, label=f"simulated {label}")
-    top.plot(*_step(v.s_m, v.simulated_n), color="C0", lw=1.2, label="simulated peak |F| per segment")
-    top.plot(*_step(v.s_m, v.predicted_n), color="C2", lw=1.2, label=f"predicted ({get_model(v.model).label})")
-    top.plot(*_step(v.s_m, v.limit_n), color="C3", ls="--", lw=1.2, label="limit")
-    top.axhline(-v.weight_n, color="C4", ls=":", lw=1, label="-m g (wheel lifts off below)")
-    top.set_xlabel("s (m)")
-    top.set_ylabel("force (N)")
-    top.set_xlim(v.s_m[0], v.s_m[-1])
-    top.legend(loc="upper left", fontsize=8)
-    speed_axis = top.twinx()
-    speed_axis.plot(v.s_m, v.speed_mps, color="C1", lw=1, alpha=0.8)
-    speed_axis.set_ylabel("planned speed (m/s)", color="C1")
-    top.set_title(f"{Path(v.route).name}: {get_model(v.model).label} plan, {Path(v.vehicle).stem}; "
-                  f"{v.over_count}/{v.ratio.size} segments over the limit, worst {v.worst_ratio:.2f} x limit")
-
-    over = v.over
-    bottom.scatter(v.predicted_n[~over], v.simulated_n[~over], s=12, color="C0", label="within the limit")
-    bottom.scatter(v.predicted_n[over], v.simulated_n[over], s=16, color="C3", label="over the limit")
-    top_value = max(float(np.max(v.simulated_n)), float(np.max(v.predicted_n)), float(v.limit_n.max())) * 1.05
-    bottom.plot([0, top_value], [0, top_value], color="0.3", lw=1, label="simulated = predicted")
-    bottom.axhline(float(v.limit_n.max()), color="C3", ls="--", lw=1, label="limit")
-    bottom.set_xlim(0, top_value)
-    bottom.set_ylim(0, top_value)
-    bottom.set_xlabel("predicted peak force per segment (N)")
-    bottom.set_ylabel("simulated peak force (N)")
-    bottom.legend(loc="lower right", fontsize=8)
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=110)
-

@@ -8,7 +8,7 @@ import tempfile
 from pathlib import Path
 from typing import IO, Iterator
 
-from .errors import InputError
+from ..errors import InputError
 
 __all__ = ["atomic_write", "atomic_path", "check_output_path", "check_output_paths"]
 

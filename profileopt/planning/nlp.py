@@ -1,6 +1,6 @@
 """The planner's nonlinear program, built in a time that hardly grows with its size.
 
-The NLP of :func:`profileopt.planner.plan` (variables, parameters, objective, constraints
+The NLP of :func:`profileopt.plan` (variables, parameters, objective, constraints
 and bounds are documented in :func:`build_nlp`) is a sum of small *stages*: one per
 segment (travel time and acceleration, on the two squared speeds at its ends) and one per
 interior boundary (the smoothing term and the jerk, on the three squared speeds around it).
@@ -8,7 +8,7 @@ Each stage is written once, here, as a tiny CasADi SX expression, and differenti
 exactly by CasADi (``casadi.gradient``/``casadi.hessian`` of the stage alone). The problem
 handed to IPOPT is an MX graph that runs each stage Function's instruction list once on
 whole vectors, one elementwise MX operation per instruction
-(:func:`profileopt._casadi.mx_replay`), so the graph does not grow with N and every
+(:func:`profileopt.symbolic.mx_replay`), so the graph does not grow with N and every
 evaluation is a few tight loops. Its derivatives are supplied as Functions too (the
 ``grad_f``, ``jac_g`` and ``hess_lag`` options of ``casadi.nlpsol``): the stage
 derivatives placed on the diagonals of the known banded sparsity (stage k acts on the
@@ -23,45 +23,25 @@ them against ``casadi.jacobian``/``casadi.hessian`` of an independently written 
 
 from __future__ import annotations
 
-from typing import Any
+import dataclasses
+import functools
+from typing import Any, Mapping
 
 import casadi as ca
+import numpy as np
 
-from ._casadi import mx_replay
-from .kinematics import boundary_jerk_mps3, jerk_squared_time, segment_accel_mps2, segment_time_s
+from ..kinematics import boundary_jerk_mps3, jerk_squared_time, segment_accel_mps2, segment_time_s
+from ..symbolic import mx_replay
+from .options import DEFAULT_IPOPT_OPTIONS
 
-__all__ = ["SPEED_EPS_MPS", "IPOPT_OPTIONS", "PARAMETERS", "build_nlp"]
+__all__ = ["SPEED_EPS_MPS", "PARAMETERS", "build_nlp", "cached_nlp", "Scaling", "IpoptResult", "solve_ipopt",
+           "row_bounds", "objective_s"]
 
 #: Speed (m/s) that keeps sqrt(b) differentiable at rest in the NLP's time and jerk terms.
 SPEED_EPS_MPS = 1e-3
 
 #: The global parameters after the N scaled segment lengths, in order (see build_nlp).
 PARAMETERS = ("b_ref", "l_ref", "a_ref", "t_ref", "weight", "inv_jerk")
-
-#: IPOPT settings of the planner's NLP. ``mumps_mem_percent`` (IPOPT's default 1000) is the
-#: extra working space MUMPS allocates, and clears, at every factorisation: 100 % is ample
-#: for this banded KKT system (IPOPT doubles it and refactorises if it ever is not) and makes
-#: a 10,000-segment solve 10 % faster, with the same iterates and solution. ``mu_oracle``
-#: "loqo" (LOQO's centrality rule) instead of the default quality-function search, whose
-#: extra linear solves took 60 % of a 10,000-segment solve: 20 % faster at 10,000 and
-#: 100,000 segments, objective the same to 1e-10 on the bundled and benchmark routes.
-#: ``min_refinement_steps`` 0: iterative refinement of the KKT solves only when IPOPT's
-#: residual test asks for it (it still may, up to ``max_refinement_steps``), not always once:
-#: 15-20 % faster at 10,000 and 100,000 segments, same objective to 1e-16.
-IPOPT_OPTIONS: dict[str, Any] = {
-    "ipopt.print_level": 0,
-    "ipopt.sb": "yes",
-    "print_time": False,
-    "ipopt.tol": 1e-10,
-    "ipopt.acceptable_tol": 1e-7,
-    "ipopt.max_iter": 300,
-    "ipopt.mu_strategy": "adaptive",
-    "ipopt.bound_relax_factor": 0.0,
-    "ipopt.mumps_mem_percent": 100,
-    "ipopt.mu_oracle": "loqo",
-    "ipopt.min_refinement_steps": 0,
-}
-
 
 # ---------------------------------------------------------------------------------------
 # The formulas, each written once (symbolic; SX or MX arguments).
@@ -156,7 +136,7 @@ def _diagonal(v: ca.MX, rows: int, cols: int, offset: int) -> ca.MX:
     return ca.vertcat(ca.horzcat(ca.MX(k, offset), block, ca.MX(k, cols - offset - k)), ca.MX(rows - k, cols))
 
 
-def build_nlp(n: int, with_jerk: bool) -> ca.Function:
+def build_nlp(n: int, with_jerk: bool, ipopt_options: Mapping[str, Any] = DEFAULT_IPOPT_OPTIONS) -> ca.Function:
     """The IPOPT solver of the planner's NLP for N = n segments, in y = b / b_ref (b = v^2).
 
     Parameters
@@ -166,11 +146,13 @@ def build_nlp(n: int, with_jerk: bool) -> ca.Function:
         boundaries over b_ref).
     with_jerk : bool
         Whether g holds the jerk constraints (only when N >= 2).
+    ipopt_options : Mapping[str, Any], default :data:`~profileopt.planning.options.DEFAULT_IPOPT_OPTIONS`
+        Options of ``casadi.nlpsol`` for IPOPT.
 
     Returns
     -------
     casadi.Function
-        ``casadi.nlpsol`` (IPOPT, :data:`IPOPT_OPTIONS`, exact Hessian) with x = y, shape
+        ``casadi.nlpsol`` (IPOPT with ``ipopt_options``, exact Hessian) with x = y, shape
         (N+1,), and parameters p, shape (N+6,): segment lengths / L_ref (N), then b_ref
         (m^2/s^2), L_ref (m), a_ref (m/s^2), T_ref (s), the smoothing weight (-) and 1/J
         (s^3/m). Constraints g: the accelerations a_i / a_ref (N), then, with jerk and
@@ -253,7 +235,7 @@ def build_nlp(n: int, with_jerk: bool) -> ca.Function:
     hess = sum(_diagonal(sum(vs), nx, nx, offset) for offset, vs in sorted(by_offset.items()))
 
     name = f"profileopt_n{n}_{'jerk' if with_jerk else 'nojerk'}"
-    options = dict(IPOPT_OPTIONS)
+    options = dict(ipopt_options)
     options["grad_f"] = ca.Function(f"{name}_grad_f", [x, p], [f_d, grad], ["x", "p"], ["f", "grad_f_x"])
     options["jac_g"] = ca.Function(f"{name}_jac_g", [x, p], [ca.vertcat(*g_d), jac], ["x", "p"], ["g", "jac_g_x"])
     options["hess_lag"] = ca.Function(f"{name}_hess_lag", [x, p, lam_f, lam_g], [hess],
@@ -267,3 +249,179 @@ def _column(v: ca.MX | None, count: int) -> ca.MX:
     if v is None:
         return ca.MX.zeros(count, 1)
     return v if v.size1() == count else ca.repmat(v, count, 1)
+
+
+# ---------------------------------------------------------------------------------------
+# Solving: the NLP built once per (size, jerk on/off, IPOPT options), re-solved with parameters.
+
+
+@functools.lru_cache(maxsize=8)
+def cached_nlp(n: int, with_jerk: bool, ipopt_key: tuple = tuple(sorted(DEFAULT_IPOPT_OPTIONS.items()))
+               ) -> ca.Function:
+    """:func:`build_nlp` for N = n segments, built once per size and options and cached.
+
+    Variables y = b / b_ref (b = v^2) at the N+1 boundaries; parameters: segment lengths /
+    L_ref (n), then b_ref, L_ref, a_ref, T_ref, the smoothing weight and 1/J; constraints
+    a_i / a_ref and, with jerk, jerk_j / J; objective (travel time + weight * integral
+    jerk^2 dt) / T_ref.
+
+    Parameters
+    ----------
+    n : int
+        Number of segments.
+    with_jerk : bool
+        Whether the jerk rows are in g (only when n >= 2).
+    ipopt_key : tuple
+        The IPOPT options as :meth:`SolverOptions.ipopt_key` gives them.
+
+    Returns
+    -------
+    casadi.Function
+        The IPOPT solver.
+    """
+    return build_nlp(n, with_jerk and n >= 2, dict(ipopt_key))
+
+
+@dataclasses.dataclass(frozen=True)
+class Scaling:
+    """The NLP's parameters after the segment lengths, shared by every solve of one plan.
+
+    Attributes
+    ----------
+    b_ref : float
+        Squared-speed scale (m^2/s^2): the highest upper bound on b.
+    l_ref : float
+        Length scale (m): the mean segment length.
+    a_ref : float
+        Acceleration scale (m/s^2): the largest acceleration bound.
+    weight : float
+        Smoothing weight (-).
+    inv_jerk : float
+        1 / jerk bound (s^3/m), 0 without one.
+    t_whole : float
+        T_ref of the whole route: the greatest profile's travel time (s).
+    """
+
+    b_ref: float
+    l_ref: float
+    a_ref: float
+    weight: float
+    inv_jerk: float
+    t_whole: float
+
+    def tail(self, t_ref: float) -> np.ndarray:
+        """The parameters after the segment lengths, with time scale ``t_ref`` (s).
+
+        Parameters
+        ----------
+        t_ref : float
+            Time scale of the objective (s).
+
+        Returns
+        -------
+        numpy.ndarray, shape (6,)
+        """
+        return np.array([self.b_ref, self.l_ref, self.a_ref, t_ref, self.weight, self.inv_jerk])
+
+
+@dataclasses.dataclass(frozen=True)
+class IpoptResult:
+    """One IPOPT solve, in scaled units.
+
+    Attributes
+    ----------
+    y : numpy.ndarray, shape (N+1,)
+        b / b_ref at the boundaries.
+    lam_g : numpy.ndarray
+        Multipliers of the rows (CasADi's sign convention).
+    success : bool
+        Whether IPOPT converged.
+    status : str
+        ``"optimal"`` or IPOPT's return status.
+    iterations : int
+        IPOPT iterations.
+    """
+
+    y: np.ndarray
+    lam_g: np.ndarray
+    success: bool
+    status: str
+    iterations: int
+
+
+def solve_ipopt(solver: ca.Function, x0: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, length_scaled: np.ndarray,
+                lbg: np.ndarray, ubg: np.ndarray, p_tail: np.ndarray) -> IpoptResult:
+    """One IPOPT solve of a cached NLP, all in scaled units.
+
+    Parameters
+    ----------
+    solver : casadi.Function
+        From :func:`cached_nlp`.
+    x0, lbx, ubx : numpy.ndarray, shape (N+1,)
+        Start point and bounds of y = b / b_ref.
+    length_scaled : numpy.ndarray, shape (N,)
+        Segment lengths / L_ref.
+    lbg, ubg : numpy.ndarray
+        Bounds of the rows (:func:`row_bounds`).
+    p_tail : numpy.ndarray, shape (6,)
+        :meth:`Scaling.tail`.
+
+    Returns
+    -------
+    IpoptResult
+    """
+    result = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=np.concatenate([length_scaled, p_tail]))
+    stats = solver.stats()
+    success = bool(stats.get("success", False))
+    status = "optimal" if success else str(stats.get("return_status", "failed"))
+    return IpoptResult(np.asarray(result["x"]).ravel(), np.asarray(result["lam_g"]).ravel(), success, status,
+                       int(stats.get("iter_count", 0)))
+
+
+def row_bounds(with_jerk: bool, decel_mps2: np.ndarray, accel_mps2: np.ndarray, a_ref: float
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds on the rows of the NLP: a_i / a_ref (N), then jerk_j / J (N-1) when ``with_jerk``.
+
+    Parameters
+    ----------
+    with_jerk : bool
+        Whether the NLP has jerk rows (N >= 2 and a finite bound).
+    decel_mps2, accel_mps2 : numpy.ndarray, shape (N,)
+        Deceleration (positive) and acceleration bounds of each segment (m/s^2).
+    a_ref : float
+        Acceleration scale (m/s^2).
+
+    Returns
+    -------
+    lbg, ubg : numpy.ndarray, shape (N,) or (2N-1,)
+    """
+    n = decel_mps2.size
+    lbg, ubg = [-decel_mps2 / a_ref], [accel_mps2 / a_ref]
+    if with_jerk and n >= 2:
+        lbg.append(np.full(n - 1, -1.0))
+        ubg.append(np.full(n - 1, 1.0))
+    return np.concatenate(lbg), np.concatenate(ubg)
+
+
+def objective_s(b: np.ndarray, length_m: np.ndarray, smoothing: float) -> float:
+    """Travel time plus the smoothing term (s) of a squared-speed profile, exactly.
+
+    Parameters
+    ----------
+    b : numpy.ndarray, shape (N+1,)
+        Squared speeds at the boundaries (m^2/s^2).
+    length_m : numpy.ndarray, shape (N,)
+        Segment lengths (m).
+    smoothing : float
+        Weight of the jerk term (-).
+
+    Returns
+    -------
+    float
+    """
+    v = np.sqrt(np.maximum(b, 0.0))
+    travel = float(np.sum(segment_time_s(v[:-1], v[1:], length_m)))
+    if length_m.size < 2 or smoothing == 0:
+        return travel
+    a = segment_accel_mps2(b[:-1], b[1:], length_m)
+    return travel + smoothing * float(np.sum(jerk_squared_time(v[1:-1], a[:-1], a[1:], length_m[:-1], length_m[1:])))

@@ -1,0 +1,197 @@
+"""Readers of measured longitudinal elevation profiles: OpenCRG road files and two-column
+text profiles.
+
+Both return an :class:`~profileopt.synthetic.ElevationProfile` (distance s and elevation z
+in metres), the form that ``examples/routes/make_routes.py`` writes as a route CSV. A file
+that cannot be read raises :class:`~profileopt.errors.InputError` whose one-line message
+names the file (and the line), what is wrong and what would fix it.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from ..synthetic import ElevationProfile
+from .table import split_lines
+
+__all__ = ["read_opencrg", "read_xy_profile"]
+
+#: OpenCRG binary data formats this reader understands: numpy dtype of one value.
+#: KRBI: 4-byte IEEE float, big-endian; KDBI: 8-byte IEEE float, big-endian.
+_CRG_FORMATS = {"KRBI": ">f4", "KDBI": ">f8"}
+
+#: OpenCRG binary data are padded with NaN to whole 80-byte records.
+_CRG_RECORD_BYTES = 80
+
+_HEADER_END = re.compile(rb"^\$\$\$\$+[ \t\r]*$", re.MULTILINE)
+
+
+def read_opencrg(path: str | os.PathLike, track: int | None = None) -> ElevationProfile:
+    """Read one longitudinal track of an OpenCRG road file (binary data formats).
+
+    An OpenCRG file is a text header that ends in a line of ``$`` characters, followed by
+    the data: one row per step along the reference line, one value per ``D:`` line of the
+    ``$KD_DEFINITION`` block (a lateral track, "long section i"), as big-endian IEEE
+    floats (format ``#:KRBI``, 4 bytes; ``#:KDBI``, 8 bytes), padded with NaN to whole
+    80-byte records. Distance along the reference line is
+    ``reference_line_start_u + i * reference_line_increment`` (``$ROAD_CRG`` block), up
+    to ``reference_line_end_u``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.crg`` file.
+    track : int, optional
+        Index (0-based) of the ``D:`` column to return; default the middle one (nearest
+        the reference line for a symmetric grid).
+
+    Returns
+    -------
+    ElevationProfile
+        ``s_m`` shape (M,) distance along the reference line (m), ``z_m`` shape (M,)
+        elevation of that track (m).
+
+    Raises
+    ------
+    InputError
+        No header end line, a missing or non-numeric ``reference_line_*`` key, an
+        unsupported data format, too few data bytes, a track index out of range, or NaN
+        (no data) on the chosen track.
+    """
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read the OpenCRG file ({exc.strerror}); check the path") from None
+    end = _HEADER_END.search(raw)
+    if end is None:
+        raise InputError(f"{path}: no line of '$' characters ends the header; is this an OpenCRG file?")
+    header = split_lines(raw[: end.start()].decode("latin-1"))
+    data_start = end.end() + 1  # the newline after the '$$$$' line
+
+    keys: dict[str, str] = {}
+    columns: list[str] = []
+    data_format = None
+    block = ""
+    for line in header:
+        text = line.split("!", 1)[0].strip()  # '!' starts a comment in OpenCRG headers
+        if text.startswith("$"):
+            block = text[1:].strip().upper()  # "$ROAD_CRG", "$KD_DEFINITION", "$" ends one
+        elif block == "ROAD_CRG" and "=" in text:
+            key, _, value = text.partition("=")
+            keys[key.strip().lower()] = value.strip()
+        elif block == "KD_DEFINITION" and text.startswith("D:"):
+            columns.append(text[2:].split(",", 1)[0].strip())
+        elif block == "KD_DEFINITION" and text.startswith("#:"):
+            data_format = text[2:].strip().upper()
+
+    def number(key: str) -> float:
+        if key not in keys:
+            raise InputError(f"{path}: header key {key!r} is missing; the reader needs it to place the samples")
+        try:
+            value = float(keys[key])
+        except ValueError:
+            raise InputError(f"{path}: header key {key!r} = {keys[key]!r} is not a number") from None
+        if not math.isfinite(value):
+            raise InputError(f"{path}: header key {key!r} = {keys[key]!r} is not finite")
+        return value
+
+    start_u = number("reference_line_start_u")
+    end_u = number("reference_line_end_u")
+    step_u = number("reference_line_increment")
+    if not step_u > 0 or not end_u > start_u:
+        raise InputError(
+            f"{path}: reference_line_increment = {step_u:g} must be > 0 and reference_line_end_u = {end_u:g} "
+            f"greater than reference_line_start_u = {start_u:g}"
+        )
+    if data_format not in _CRG_FORMATS:
+        raise InputError(
+            f"{path}: data format {data_format!r} (the '#:' line) is not supported; "
+            f"only binary {', '.join(_CRG_FORMATS)} can be read, convert the file with OpenCRG's tools"
+        )
+    if not columns:
+        raise InputError(f"{path}: the $KD_DEFINITION block names no data columns ('D:' lines)")
+    index = len(columns) // 2 if track is None else int(track)
+    if not 0 <= index < len(columns):
+        raise InputError(f"{path}: track {track} does not exist; the file has tracks 0..{len(columns) - 1}")
+
+    rows = int(math.floor((end_u - start_u) / step_u + 0.5)) + 1
+    dtype = np.dtype(_CRG_FORMATS[data_format])
+    needed = rows * len(columns) * dtype.itemsize
+    if len(raw) - data_start < needed:
+        raise InputError(
+            f"{path}: {len(raw) - data_start} data bytes, but {rows} rows of {len(columns)} "
+            f"{data_format} values need {needed}; the file is truncated"
+        )
+    values = np.frombuffer(raw, dtype=dtype, count=rows * len(columns), offset=data_start)
+    z = values.reshape(rows, len(columns))[:, index].astype(float)
+    if not np.all(np.isfinite(z)):
+        bad = int(np.flatnonzero(~np.isfinite(z))[0])
+        raise InputError(
+            f"{path}: track {index} ({columns[index]!r}) has no data (NaN) at row {bad} "
+            f"(u = {start_u + bad * step_u:g} m); choose another track"
+        )
+    return ElevationProfile(start_u + np.arange(rows) * step_u, z)
+
+
+def read_xy_profile(path: str | os.PathLike) -> ElevationProfile:
+    """Read a two-column text profile: distance (m) and elevation (m) per line.
+
+    Columns are separated by whitespace or a comma; blank lines and lines starting with
+    ``#`` are skipped; there is no header. Distances must increase strictly. Values are
+    returned as they are in the file (a distance need not start at 0).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The text file.
+
+    Returns
+    -------
+    ElevationProfile
+        ``s_m`` shape (M,) distance (m), ``z_m`` shape (M,) elevation (m).
+
+    Raises
+    ------
+    InputError
+        A line without exactly two numbers, a non-finite value, fewer than 2 samples or a
+        distance that does not increase (each names the line).
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read the profile ({exc.strerror}); check the path") from None
+    s: list[float] = []
+    z: list[float] = []
+    for number, line in enumerate(split_lines(text), start=1):
+        stripped = line.strip()
+        if not stripped or stripped.startswith("#"):
+            continue
+        fields = stripped.replace(",", " ").split()
+        try:
+            if len(fields) != 2:
+                raise ValueError
+            distance, elevation = float(fields[0]), float(fields[1])
+        except ValueError:
+            raise InputError(
+                f"{path}, line {number}: expected two numbers 'distance elevation' (m), got {stripped[:60]!r}"
+            ) from None
+        if not (math.isfinite(distance) and math.isfinite(elevation)):
+            raise InputError(f"{path}, line {number}: {stripped[:60]!r} is not finite; remove or fill that sample")
+        if s and distance <= s[-1]:
+            raise InputError(
+                f"{path}, line {number}: distance {distance:g} m does not increase "
+                f"(previous {s[-1]:g} m); sort the file or remove the duplicate"
+            )
+        s.append(distance)
+        z.append(elevation)
+    if len(s) < 2:
+        raise InputError(f"{path}: {len(s)} sample(s); a profile needs at least 2 lines 'distance elevation'")
+    return ElevationProfile(np.array(s), np.array(z))

@@ -1,0 +1,98 @@
+"""Route files: the CSV a user writes to describe the path a vehicle will drive.
+
+A route file is a CSV with a header row; lines starting with ``#`` are comments. Columns:
+
+``s,z``
+    distance along the path and elevation (m), or
+``x,y,z``
+    a 3-D polyline (m); s is then the cumulative horizontal distance.
+``speed_limit`` (optional)
+    a legal or operational speed cap at that sample (m/s), > 0.
+
+The unit-suffixed names ``s_m``, ``x_m``, ``y_m``, ``z_m`` and ``speed_limit_mps`` are
+accepted as well. Other columns are ignored with a note. Every problem is reported as one
+:class:`~profileopt.errors.InputError` line naming the file, the line and what to fix.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from ..errors import InputError
+from ..route import Route, validate_route_arrays
+from .table import read_table
+
+__all__ = ["read_route", "ROUTE_COLUMN_ALIASES"]
+
+#: Accepted column names (lower case) and the quantity each one gives.
+ROUTE_COLUMN_ALIASES = {
+    "s": "s", "s_m": "s",
+    "x": "x", "x_m": "x",
+    "y": "y", "y_m": "y",
+    "z": "z", "z_m": "z",
+    "speed_limit": "speed_limit", "speed_limit_mps": "speed_limit",
+}
+
+
+def read_route(path: str | os.PathLike) -> Route:
+    """Read and validate a route CSV.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        CSV file with columns ``s,z`` or ``x,y,z`` (m) and optional ``speed_limit`` (m/s).
+
+    Returns
+    -------
+    Route
+
+    Raises
+    ------
+    InputError
+        Empty file, no header, missing or unusable columns, a non-numeric, NaN or infinite
+        cell, s not strictly increasing, a single row, absurd magnitudes or a speed limit
+        <= 0. The message names the file and line.
+    """
+    table = read_table(path, "route file", header_example="'s,z' or 'x,y,z'",
+                       empty_fix="a route CSV starts with a header line such as 's,z'")
+    name = table.source
+    header = [c.lower() for c in table.header]
+    header_line = table.header_line
+    columns: dict[str, int] = {}
+    ignored = []
+    for i, col in enumerate(header):
+        key = ROUTE_COLUMN_ALIASES.get(col)
+        if key is None:
+            ignored.append(col or f"(empty name, column {i + 1})")
+        elif key in columns:
+            raise InputError(f"{name}: line {header_line}: column '{col}' appears twice; keep one")
+        else:
+            columns[key] = i
+    if "z" not in columns or not ("s" in columns or ("x" in columns and "y" in columns)):
+        raise InputError(f"{name}: line {header_line}: header {','.join(header)!r} lacks the columns "
+                         "'s,z' (distance, elevation in m) or 'x,y,z' (a polyline in m); rename the columns")
+    if "s" in columns and ("x" in columns or "y" in columns):
+        raise InputError(f"{name}: line {header_line}: give either 's' or 'x,y', not both")
+    notes = tuple(f"{name}: ignoring column '{c}'" for c in ignored)
+    if len(table.rows) < 2:
+        raise InputError(f"{name}: {len(table.rows)} data row(s); a route needs at least 2 (better: many, "
+                         "dense enough to measure roughness)")
+
+    values = table.numbers(sorted(columns.values()))
+    where = table.line_numbers
+    z = values[:, columns["z"]]
+    limit = values[:, columns["speed_limit"]] if "speed_limit" in columns else None
+    if "s" in columns:
+        s = values[:, columns["s"]]
+    else:
+        x, y = values[:, columns["x"]], values[:, columns["y"]]
+        step = np.hypot(np.diff(x), np.diff(y))
+        bad = np.flatnonzero(step == 0)
+        if bad.size:
+            raise InputError(f"{name}: line {where[bad[0] + 1]}: the point repeats the previous x,y; "
+                             "remove duplicate points")
+        s = np.concatenate([[0.0], np.cumsum(step)])
+    validate_route_arrays(name, s, z, limit, where, "line")
+    return Route(s_m=s, z_m=z, speed_limit_mps=limit, source=name, notes=notes)

@@ -1,0 +1,248 @@
+"""Speed bands chosen for a whole route, and the exact minimum-time profile within them.
+
+Each segment's admissible speeds are one or more *bands* (the force model's, capped by the
+speed limits). Inside a segment the vehicle passes through every speed between its entry
+and exit speeds, so a limit that holds for every speed of a band holds over the whole
+segment when both boundary speeds lie in one band of that segment (docs/paper-notes.md,
+"Which root"). :func:`choose_bands` picks one band per segment for the whole route at once
+(the greatest feasible assignment, which is also the fastest) and :func:`greatest_profile`
+is the exact minimum-time profile for those bands and the acceleration bounds: with
+smoothing and jerk off it is the optimum.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from ..errors import InfeasibleError
+
+__all__ = ["BandChoice", "boundary_bounds", "choose_bands", "greatest_profile"]
+
+
+def greatest_profile(
+    lower_b: np.ndarray, upper_b: np.ndarray, length_m: np.ndarray, accel_mps2: float, decel_mps2: float
+) -> np.ndarray:
+    """The pointwise-greatest squared-speed profile within bounds and acceleration limits.
+
+    Solves b_j <= upper_b[j], b_{j+1} - b_j <= 2 a ds_j, b_j - b_{j+1} <= 2 d ds_j exactly
+    (a forward and a backward pass, each a min-plus prefix scan done with
+    ``numpy.minimum.accumulate``; O(N)). Among all profiles meeting these constraints it is
+    greatest at every boundary, hence of least travel time; it is feasible for the lower
+    bounds too iff any profile is (check ``result >= lower_b``).
+
+    Parameters
+    ----------
+    lower_b, upper_b : numpy.ndarray, shape (N+1,)
+        Bounds on b = v^2 at the boundaries (m^2/s^2); ``lower_b`` is not used here.
+    length_m : numpy.ndarray, shape (N,)
+        Segment lengths (m).
+    accel_mps2, decel_mps2 : float or numpy.ndarray, shape (N,)
+        Acceleration and deceleration bounds (m/s^2, both > 0), for all segments or each.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N+1,)
+        b (m^2/s^2).
+    """
+    del lower_b  # the greatest solution does not depend on the lower bounds
+    up = np.concatenate([[0.0], np.cumsum(2.0 * accel_mps2 * length_m)])
+    forward = up + np.minimum.accumulate(upper_b - up)
+    down = np.concatenate([[0.0], np.cumsum(2.0 * decel_mps2 * length_m)])
+    backward = np.minimum.accumulate((forward + down)[::-1])[::-1] - down
+    return np.minimum(forward, backward)
+
+
+@dataclasses.dataclass(frozen=True)
+class BandChoice:
+    """The band of admissible speeds chosen for each segment, and what follows from it.
+
+    Attributes
+    ----------
+    lower_b, upper_b : numpy.ndarray, shape (N+1,)
+        Bounds on the squared speed b = v^2 at each boundary (m^2/s^2): the intersection
+        of the chosen bands of the segments on either side (and v0, vend at the ends).
+    band : numpy.ndarray of int, shape (N,)
+        Index of the chosen band of each segment (0 = lowest).
+    greatest_b : numpy.ndarray, shape (N+1,)
+        The exact minimum-time squared-speed profile for these bands (m^2/s^2).
+    """
+
+    lower_b: np.ndarray
+    upper_b: np.ndarray
+    band: np.ndarray
+    greatest_b: np.ndarray
+
+    def violation(self, b: np.ndarray) -> float:
+        """Largest violation of the chosen bands by squared speeds ``b``, relative to the
+        highest upper bound (0 if none).
+
+        Parameters
+        ----------
+        b : numpy.ndarray, shape (N+1,)
+            Squared speeds at the boundaries (m^2/s^2).
+
+        Returns
+        -------
+        float
+        """
+        scale_b = max(float(self.upper_b.max()), 1.0)
+        return float(max(np.max(self.lower_b - b), np.max(b - self.upper_b), 0.0)) / scale_b
+
+
+def boundary_bounds(lo: np.ndarray, hi: np.ndarray, v0: float, vend: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per-boundary bounds on b = v^2 from the chosen bands of the segments on either side.
+
+    Parameters
+    ----------
+    lo, hi : numpy.ndarray, shape (N,)
+        Lower and upper edge of each segment's chosen band (m/s).
+    v0, vend : float
+        Speeds at the start and at the end of the route (m/s).
+
+    Returns
+    -------
+    lower, upper : numpy.ndarray, shape (N+1,)
+        Bounds on b at the boundaries (m^2/s^2).
+    """
+    lo2, hi2 = lo**2, hi**2
+    lower = np.concatenate([[v0**2], np.maximum(lo2[:-1], lo2[1:]), [vend**2]])
+    upper = np.concatenate([[v0**2], np.minimum(hi2[:-1], hi2[1:]), [vend**2]])
+    lower[0], lower[-1] = max(lower[0], lo2[0]), max(lower[-1], lo2[-1])
+    upper[0], upper[-1] = min(upper[0], hi2[0]), min(upper[-1], hi2[-1])
+    return lower, upper
+
+
+def choose_bands(
+    bands_lower_mps: np.ndarray,
+    bands_upper_mps: np.ndarray,
+    count: np.ndarray,
+    length_m: np.ndarray,
+    accel_mps2: float,
+    decel_mps2: float,
+    v0_mps: float,
+    vend_mps: float,
+    where: np.ndarray,
+) -> BandChoice:
+    """Choose one admissible speed band per segment, for the whole route at once.
+
+    Bands are ordered, so raising a segment's band raises both its lower and upper speed.
+    Raising upper bounds only raises the greatest profile, so if two band assignments are
+    feasible their componentwise maximum is feasible too, and it is at least as fast. There
+    is thus one greatest feasible assignment, and it is the fastest. It is found by starting
+    every segment in its highest band and lowering, round after round, each segment whose
+    lower bound the greatest profile cannot reach: a segment lowered that way is above its
+    band in every feasible assignment, so no feasible choice is ever lost.
+
+    This is what an experienced driver does on washboard: accelerate on smooth ground to
+    above resonance, hold the upper band over the corrugations, and slow down below
+    resonance only where something ahead (a stop, rougher ground) forces it.
+
+    Parameters
+    ----------
+    bands_lower_mps, bands_upper_mps : numpy.ndarray, shape (N, B)
+        Band edges (m/s) per segment, NaN-padded, already capped by the speed limits.
+    count : numpy.ndarray of int, shape (N,)
+        Number of bands per segment.
+    length_m : numpy.ndarray, shape (N,)
+        Segment lengths (m).
+    accel_mps2, decel_mps2 : float or numpy.ndarray, shape (N,)
+        Acceleration and deceleration bounds (m/s^2, both > 0).
+    v0_mps, vend_mps : float
+        Boundary speeds (m/s).
+    where : numpy.ndarray, shape (N+1,)
+        Boundary positions (m), for messages.
+
+    Returns
+    -------
+    BandChoice
+
+    Raises
+    ------
+    InfeasibleError
+        No assignment keeps every limit; the message says where and why.
+    """
+    n = count.size
+    rows = np.arange(n)
+    empty = np.flatnonzero(count == 0)
+    if empty.size:
+        i = empty[0]
+        raise InfeasibleError(
+            f"segment {i} ({where[i]:g} to {where[i + 1]:g} m): the predicted force exceeds the limit "
+            "at every speed, so the route cannot be driven; choose another route or a vehicle with a "
+            "higher force limit"
+        )
+    band = count - 1
+    tol = 1e-9 * max(float(np.nanmax(bands_upper_mps)) ** 2, 1.0)
+    while True:
+        lo, hi = bands_lower_mps[rows, band], bands_upper_mps[rows, band]
+        lower, upper = boundary_bounds(lo, hi, v0_mps, vend_mps)
+        b = greatest_profile(lower, upper, length_m, accel_mps2, decel_mps2)
+        short = b < lower - tol
+        if not short.any():
+            standstill = np.flatnonzero((b[:-1] <= tol) & (b[1:] <= tol))
+            if standstill.size:  # v = 0 at both ends: constant acceleration never moves
+                i = standstill[0]
+                raise InfeasibleError(
+                    f"segment {i} ({where[i]:g} to {where[i + 1]:g} m) would have to start and end at "
+                    "0 m/s, so it can never be driven; use shorter segments (segment_length_m) or "
+                    "nonzero v0_mps/vend_mps"
+                )
+            return BandChoice(lower_b=lower, upper_b=upper, band=band.copy(), greatest_b=np.maximum(b, lower))
+        j = np.flatnonzero(short)
+        # the segments on either side of boundary j whose own lower edge is out of reach
+        left = j[j > 0] - 1
+        right = j[j < n]
+        culprits = np.unique(np.concatenate([left[lo[left] ** 2 > b[left + 1] + tol],
+                                             right[lo[right] ** 2 > b[right] + tol]]))
+        lowerable = culprits[band[culprits] > 0]
+        if lowerable.size == 0:
+            raise InfeasibleError(_infeasible_message(int(j[0]), b, lower, where, v0_mps, vend_mps,
+                                                      (bands_lower_mps, bands_upper_mps, count)))
+        band[lowerable] -= 1
+
+
+def _bands_text(lower_mps: np.ndarray, upper_mps: np.ndarray, count: int) -> str:
+    """The admissible speed bands of one segment, e.g. "[0, 0.32] and [0.53, 3.39] m/s"."""
+    parts = [f"[{lower_mps[k]:.3g}, {upper_mps[k]:.3g}]" for k in range(count)]
+    return " and ".join(parts) + " m/s"
+
+
+def _infeasible_message(j: int, b: np.ndarray, lower: np.ndarray, where: np.ndarray, v0: float, vend: float,
+                        bands: tuple[np.ndarray, np.ndarray, np.ndarray]) -> str:
+    """Why boundary j cannot be reached, named from the segments' full band lists ``bands``
+    (lower edges (N, B), upper edges (N, B), counts (N,)), not from the lowered assignment."""
+    n = where.size - 1
+    reach = math.sqrt(max(b[j], 0.0))
+    if j in (0, n):
+        i, flag, speed = (0, "v0_mps", v0) if j == 0 else (n - 1, "vend_mps", vend)
+        lo_row, hi_row, cnt = bands[0][i], bands[1][i], int(bands[2][i])
+        where_text = "first" if j == 0 else "last"
+        inside = [k for k in range(cnt) if lo_row[k] - 1e-12 <= speed <= hi_row[k] + 1e-12]
+        if cnt == 1:  # one band from rest: the plain story of speed limits and braking
+            if speed > hi_row[0]:
+                return (f"{flag} = {speed:g} m/s is above the allowable speed {hi_row[0]:.3g} m/s of the "
+                        f"{where_text} segment; {'start' if j == 0 else 'end'} slower")
+            if j == 0:
+                return (f"starting at v0_mps = {speed:g} m/s the vehicle cannot brake in time for the limits "
+                        f"ahead (it can only be at {reach:.3g} m/s); start slower or raise max_decel_mps2")
+            return (f"the route cannot end at vend_mps = {speed:g} m/s: the vehicle can reach only {reach:.3g} "
+                    "m/s there; lower vend_mps or raise max_accel_mps2")
+        if not inside:
+            return (f"{flag} = {speed:g} m/s is not an admissible speed of the {where_text} segment, whose "
+                    f"admissible speeds are {_bands_text(lo_row, hi_row, cnt)}; choose {flag} in one of them")
+        if j == 0:
+            return (f"starting at v0_mps = {speed:g} m/s (in the band [{lo_row[inside[0]]:.3g}, "
+                    f"{hi_row[inside[0]]:.3g}] m/s of the first segment) the vehicle cannot meet the limits "
+                    f"ahead: it can only be at {reach:.3g} m/s there (braking in time, or leaving the band "
+                    "would pass through speeds the force limit forbids); start at another speed or raise "
+                    "max_decel_mps2")
+        return (f"the route cannot end at vend_mps = {speed:g} m/s (in the band [{lo_row[inside[0]]:.3g}, "
+                f"{hi_row[inside[0]]:.3g}] m/s of the last segment): the vehicle can only be at {reach:.3g} "
+                "m/s there (reaching that band would pass through speeds the force limit forbids, or "
+                "needs more acceleration); choose another vend_mps or raise max_accel_mps2")
+    return (f"at s = {where[j]:g} m the speed must be at least {math.sqrt(lower[j]):.3g} m/s but the "
+            f"acceleration bounds allow only {reach:.3g} m/s; relax v0_mps/vend_mps or the vehicle's "
+            "acceleration limits")

@@ -1,0 +1,231 @@
+"""The one small protocol every kind of limit on a speed profile follows.
+
+A limit contributes to a plan in up to four ways, each a method of :class:`Limit` that
+returns ``None`` (or the neutral value) when the limit has nothing to say:
+
+- admissible speeds of each segment, as *bands* (:meth:`Limit.speed_bands`; at most one
+  limit of a plan, the force model's) or as a *cap* (:meth:`Limit.speed_cap_mps`). They
+  hold for every speed driven inside the segment, so they become bounds on the squared
+  speed b = v^2 at the segment's two boundaries;
+- acceleration bounds of each segment (:meth:`Limit.accel_bounds_mps2`), rows of the NLP
+  and slopes of the exact forward-backward pass;
+- a jerk bound (:meth:`Limit.jerk_bound_mps3`), rows of the NLP at interior boundaries;
+- the independent checks: of IPOPT's solution before it is used
+  (:meth:`Limit.violation`) and of the finished profile (:meth:`Limit.check`), and its
+  margins for the summary (:meth:`Limit.margins`).
+
+Adding a kind of limit is one new module with a subclass, plus its registration in
+:func:`profileopt.planning.limits.default_limits` (or, for a limit of your own, passing it
+to :func:`profileopt.plan` as ``extra_limits=``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from ...route import Route
+    from ...speeds import SpeedBands
+    from ...vehicle import Vehicle
+    from ..result import Profile
+    from ..segments import Segments
+
+__all__ = ["PlanContext", "Limit", "worst_ratio"]
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class PlanContext:
+    """What the limits of one plan see.
+
+    Attributes
+    ----------
+    route : Route
+        The terrain samples (and speed limits) of the route.
+    vehicle : Vehicle
+        The vehicle planned for.
+    segments : Segments
+        The route cut into segments (N of them), with each segment's samples and roughness.
+    """
+
+    route: "Route"
+    vehicle: "Vehicle"
+    segments: "Segments"
+
+
+class Limit:
+    """One kind of limit on a speed profile; the base class contributes nothing.
+
+    Subclasses override the methods for what they limit. Every array is per segment, shape
+    (N,), or per boundary, shape (N+1,), of ``context.segments``.
+    """
+
+    #: Short name, used in summaries and messages.
+    name: str = "limit"
+
+    def speed_bands(self, context: PlanContext) -> "SpeedBands | None":
+        """The admissible speed bands of each segment (m/s), or None.
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+
+        Returns
+        -------
+        SpeedBands or None
+        """
+        return None
+
+    def speed_cap_mps(self, context: PlanContext) -> np.ndarray | None:
+        """A cap on every speed driven inside each segment (m/s), shape (N,), or None.
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+
+        Returns
+        -------
+        numpy.ndarray or None
+        """
+        return None
+
+    def accel_bounds_mps2(self, context: PlanContext) -> tuple[np.ndarray, np.ndarray] | None:
+        """Deceleration (a positive number) and acceleration bounds of each segment (m/s^2).
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+
+        Returns
+        -------
+        (decel_mps2, accel_mps2) : tuple of numpy.ndarray, shape (N,), or None
+        """
+        return None
+
+    def jerk_bound_mps3(self, context: PlanContext) -> float:
+        """Bound on |jerk| = |v da/ds| at the interior boundaries (m/s^3); inf for none.
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+
+        Returns
+        -------
+        float
+        """
+        return math.inf
+
+    def violation(self, context: PlanContext, b: np.ndarray) -> float:
+        """Largest relative violation of this limit's NLP rows by squared speeds ``b``.
+
+        Checked on IPOPT's solution before it is used: above the plan's ``check_rtol`` the
+        solution is replaced by the fallback profile.
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+        b : numpy.ndarray, shape (N+1,)
+            Squared speeds at the boundaries (m^2/s^2).
+
+        Returns
+        -------
+        float
+            0 when the limit holds.
+        """
+        return 0.0
+
+    def check(self, profile: "Profile") -> float:
+        """Largest relative violation of this limit by a finished profile (0 if none).
+
+        The planner never returns a profile for which this exceeds its ``check_rtol``.
+
+        Parameters
+        ----------
+        profile : Profile
+            The profile about to be returned.
+
+        Returns
+        -------
+        float
+        """
+        return 0.0
+
+    def margins(self, profile: "Profile") -> dict[str, dict]:
+        """The tightest ratio of each constrained quantity to its limit, and where.
+
+        Parameters
+        ----------
+        profile : Profile
+            A planned profile.
+
+        Returns
+        -------
+        dict
+            ``{quantity: {"ratio": float or None, "s_m": float or None}}``; None where the
+            limit is off or never used.
+        """
+        return {}
+
+    def cap_reason(self, profile: "Profile", segment: int) -> str:
+        """Why segment ``segment``'s speed is held at this limit's cap, for the summary.
+
+        Parameters
+        ----------
+        profile : Profile
+            A planned profile.
+        segment : int
+            Index of the segment.
+
+        Returns
+        -------
+        str
+        """
+        return f"the {self.name} limit ({profile.speed_cap_mps[segment]:.3g} m/s)"
+
+    def band_reason(self, profile: "Profile", segment: int) -> str:
+        """Why segment ``segment``'s speed is held at the top of its band, for the summary.
+
+        Parameters
+        ----------
+        profile : Profile
+            A planned profile.
+        segment : int
+            Index of the segment.
+
+        Returns
+        -------
+        str
+        """
+        return f"the {self.name} limit"
+
+
+def worst_ratio(values: np.ndarray, limit: float, where: np.ndarray) -> dict:
+    """The largest ``values / limit`` and its position, or None where the limit is off or
+    never used (no positive value).
+
+    Parameters
+    ----------
+    values : numpy.ndarray, shape (K,)
+        The constrained quantity.
+    limit : float
+        Its limit (inf: off).
+    where : numpy.ndarray, shape (K,)
+        Position of each value (m).
+
+    Returns
+    -------
+    dict
+        ``{"ratio": float or None, "s_m": float or None}``.
+    """
+    if values.size == 0 or not math.isfinite(limit) or values.max() <= 0:
+        return {"ratio": None, "s_m": None}
+    k = int(np.argmax(values))
+    return {"ratio": float(values[k] / limit), "s_m": float(where[k])}

@@ -1,0 +1,145 @@
+"""The terrain force limit: the chosen model's admissible speed bands of each segment.
+
+Each segment's worst-case elevation (Eq. 8) gives, through the force model, the bands of
+speeds whose predicted force is within the vehicle's limit (:func:`profileopt.speed_bands`).
+A resonant vehicle may have several bands; the planner keeps both boundary speeds of a
+segment in one of them, so the limit holds for every speed driven in between.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ...forces import DEFAULT_MODEL, get_model
+from ...speeds import SpeedBands, speed_bands
+from .base import Limit, PlanContext
+
+if TYPE_CHECKING:
+    from ...vehicle import Vehicle
+    from ..result import Profile
+
+__all__ = ["ForceLimit", "max_force_over_segments"]
+
+
+@dataclasses.dataclass(frozen=True)
+class ForceLimit(Limit):
+    """The predicted terrain force of ``model`` within the vehicle's limit, at every speed.
+
+    Attributes
+    ----------
+    model : str
+        Force model key (``"sbem_tf"``, ``"sbem_ef"``, ``"iecm"``, ``"prev_bem"``).
+    """
+
+    model: str = DEFAULT_MODEL
+    name = "force"
+
+    def __post_init__(self) -> None:
+        get_model(self.model)  # an unknown model is refused here, by name
+
+    def speed_bands(self, context: PlanContext) -> SpeedBands:
+        """Every admissible speed band of each segment at its RI (m/s).
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+
+        Returns
+        -------
+        SpeedBands
+        """
+        return speed_bands(context.segments.ri, context.vehicle, model=self.model)
+
+    def check(self, profile: "Profile") -> float:
+        """How far the largest predicted force inside any segment exceeds the limit (relative).
+
+        Parameters
+        ----------
+        profile : Profile
+            The profile about to be returned.
+
+        Returns
+        -------
+        float
+        """
+        return max(float(np.max(profile.force_n / profile.force_limit_n)) - 1.0, 0.0)
+
+    def margins(self, profile: "Profile") -> dict[str, dict]:
+        """The largest predicted force over its limit, and where.
+
+        Parameters
+        ----------
+        profile : Profile
+            A planned profile.
+
+        Returns
+        -------
+        dict
+            ``{"force": {"ratio": float, "s_m": float}}``.
+        """
+        ratio = profile.force_n[:-1] / profile.force_limit_n[:-1]
+        k = int(np.argmax(ratio))
+        return {"force": {"ratio": float(ratio[k]), "s_m": float(profile.s_m[k])}}
+
+    def band_reason(self, profile: "Profile", segment: int) -> str:
+        """The model, its limit and the segment's RI; and whether a faster band was out of reach.
+
+        Parameters
+        ----------
+        profile : Profile
+            A planned profile.
+        segment : int
+            Index of the segment.
+
+        Returns
+        -------
+        str
+        """
+        i = segment
+        spec = get_model(profile.model)
+        tol = 1e-6 * max(float(profile.speed_mps.max()), 1.0)
+        reason = (f"the {spec.label} force limit ({spec.quantity}, {profile.force_limit_n[i]:g} N) "
+                  f"at RI {profile.ri[i]:.3f}")
+        largest = profile.allowable_largest_mps
+        if largest is not None and profile.band_upper_mps[i] < largest[i] - tol:
+            reason += (f", held below resonance: the faster band up to {largest[i]:.3g} m/s "
+                       "cannot be entered or left in time")
+        return reason
+
+
+def max_force_over_segments(model: str, vehicle: "Vehicle", ri: np.ndarray, speed_mps: np.ndarray,
+                            peaks_mps: np.ndarray) -> np.ndarray:
+    """Largest predicted force over the speeds between each segment's two boundary speeds.
+
+    The force of a speed interval is largest at one of its ends or at an interior local
+    maximum of the force (a resonance peak), so those are the only candidates.
+
+    Parameters
+    ----------
+    model : str
+        Force model key.
+    vehicle : Vehicle
+        The quarter car and its limits.
+    ri : numpy.ndarray, shape (N,)
+        RI of each segment.
+    speed_mps : numpy.ndarray, shape (N+1,)
+        Speeds at the boundaries (m/s).
+    peaks_mps : numpy.ndarray, shape (N, P)
+        Speeds of the force's interior local maxima of each segment, NaN-padded
+        (:attr:`profileopt.speeds.SpeedBands.peaks_mps`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+        Force (N).
+    """
+    lo = np.minimum(speed_mps[:-1], speed_mps[1:])[:, None]
+    hi = np.maximum(speed_mps[:-1], speed_mps[1:])[:, None]
+    inside = (peaks_mps >= lo) & (peaks_mps <= hi)
+    candidates = np.concatenate([lo, hi, np.where(inside, peaks_mps, lo)], axis=1)
+    forces = get_model(model).force_n(candidates, np.broadcast_to(ri[:, None], candidates.shape), vehicle)
+    return forces.max(axis=1)

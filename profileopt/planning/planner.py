@@ -1,0 +1,337 @@
+"""The minimum-time speed profile along a route: the orchestration of one plan.
+
+1. Cut the route into segments and measure each one's roughness (:mod:`.segments`).
+2. Ask every limit (:mod:`.limits`) what it allows: speed bands and caps per segment,
+   acceleration bounds, a jerk bound.
+3. Choose one band per segment for the whole route and compute the exact minimum-time
+   profile for it by a forward-backward pass (:mod:`.bands`); with smoothing and jerk off
+   that is already the optimum (status ``exact``).
+4. Otherwise polish it with IPOPT on the NLP in the squared speed b = v^2 (:mod:`.nlp`),
+   a long route in exact pieces (:mod:`.pieces`); check the solution independently and,
+   if IPOPT failed, fall back to a slower profile that keeps every limit (:mod:`.fallback`).
+5. Build the :class:`~.result.Profile` and check it once more against every limit.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+import warnings
+from typing import TYPE_CHECKING, Sequence
+
+import numpy as np
+
+from ..errors import InfeasibleError, InputError, PlanningError
+from ..forces import DEFAULT_MODEL, get_model
+from ..kinematics import segment_accel_mps2, segment_time_s
+from ..speeds import SpeedBands
+from ..vehicle import vehicle_reference
+from .bands import BandChoice, choose_bands
+from .fallback import fallback_choice
+from .limits import Limit, PlanContext, default_limits
+from .limits.force import max_force_over_segments
+from .nlp import Scaling, cached_nlp, objective_s, row_bounds, solve_ipopt
+from .options import SolverOptions
+from .pieces import choose_cuts, cut_scores, solve_pieces
+from .result import Profile
+from .segments import DEFAULT_SEGMENT_LENGTH_M, Segments, segment_route
+
+if TYPE_CHECKING:
+    from ..route import Route
+    from ..vehicle import Vehicle
+
+__all__ = ["plan", "DEFAULT_SMOOTHING", "PLAN_BANDS"]
+
+#: Weight of the jerk term: objective = time + w * integral (jerk / (1 m/s^3))^2 dt, both in s.
+DEFAULT_SMOOTHING = 0.01
+#: The values of :func:`plan`'s ``band``: every band of each segment (chosen over the whole
+#: route), only the band from rest, or only the highest band.
+PLAN_BANDS = ("all", "first", "largest")
+
+
+def _validate_options(vehicle: "Vehicle", smoothing: float, max_jerk_mps3: float, v0_mps: float,
+                      vend_mps: float, method: str, band: str) -> None:
+    if not (math.isfinite(smoothing) and smoothing >= 0):
+        raise InputError(f"smoothing = {smoothing!r}: must be a finite number >= 0 (0 is pure minimum time)")
+    if math.isnan(max_jerk_mps3) or not max_jerk_mps3 > 0:
+        raise InputError(f"max_jerk_mps3 = {max_jerk_mps3!r} m/s^3: must be > 0 ('inf' turns the jerk limit off)")
+    for name, value in (("v0_mps", v0_mps), ("vend_mps", vend_mps)):
+        if not (math.isfinite(value) and value >= 0):
+            raise InputError(f"{name} = {value!r} m/s: must be a finite speed >= 0")
+        if value > vehicle.max_speed_mps:
+            raise InputError(f"{name} = {value:g} m/s is above the vehicle's max_speed_mps = "
+                             f"{vehicle.max_speed_mps:g} m/s; give a lower boundary speed")
+    if method not in ("auto", "ipopt"):
+        raise InputError(f"method = {method!r}: choose 'auto' or 'ipopt'")
+    if band not in PLAN_BANDS:
+        raise InputError(f"band = {band!r}: choose one of {', '.join(repr(b) for b in PLAN_BANDS)}")
+
+
+def plan(
+    route: "Route",
+    vehicle: "Vehicle",
+    *,
+    segment_length_m: float = DEFAULT_SEGMENT_LENGTH_M,
+    model: str = DEFAULT_MODEL,
+    smoothing: float = DEFAULT_SMOOTHING,
+    max_jerk_mps3: float | None = None,
+    v0_mps: float = 0.0,
+    vend_mps: float = 0.0,
+    method: str = "auto",
+    band: str = "all",
+    extra_limits: Sequence[Limit] = (),
+    solver_options: SolverOptions | None = None,
+    bands: str | None = None,
+) -> Profile:
+    """The fastest smooth speed profile along ``route`` that keeps every limit.
+
+    Parameters
+    ----------
+    route : Route
+        The terrain samples (and speed limits) of the route.
+    vehicle : Vehicle
+        The vehicle: quarter car, force limits, top speed, acceleration and jerk bounds.
+    segment_length_m : float, default 5
+        Length of the segments whose roughness is measured (m).
+    model : str, default :data:`~profileopt.forces.DEFAULT_MODEL` (``"sbem_tf"``)
+        Force model: ``"sbem_tf"``, ``"sbem_ef"``, ``"iecm"`` or ``"prev_bem"``.
+    smoothing : float, default :data:`DEFAULT_SMOOTHING` (0.01)
+        Weight w of the comfort term: the objective is travel time + w * integral of
+        (jerk / 1 m/s^3)^2 dt, both in seconds. 0 is pure minimum time.
+    max_jerk_mps3 : float, optional
+        Jerk bound (m/s^3); ``None`` takes the vehicle's ``max_jerk_mps3``, ``inf`` turns
+        it off.
+    v0_mps, vend_mps : float, default 0
+        Speed at the start and at the end of the route (m/s).
+    method : {"auto", "ipopt"}, default "auto"
+        ``"auto"`` returns the exact forward-backward profile without running IPOPT when it
+        is provably optimal (smoothing 0 and no jerk bound); ``"ipopt"`` always solves the
+        NLP (for benchmarks and tests of the NLP itself).
+    band : {"all", "first", "largest"}, default "all"
+        Which admissible speed bands each segment may use: ``"all"``, any band, chosen
+        over the whole route (a resonant vehicle may cross washboard above resonance);
+        ``"first"``, only the band that starts at rest (docs/paper-notes.md, "Which root":
+        safe for a vehicle that may have to slow down anywhere); ``"largest"``, only the
+        highest band (a vehicle that stays above resonance).
+    extra_limits : sequence of Limit, default ()
+        Limits of your own, kept beside the default ones (force, speed caps, acceleration,
+        jerk; :func:`profileopt.planning.limits.default_limits`).
+    solver_options : SolverOptions, optional
+        How the NLP is solved (pieces, IPOPT options); default ``SolverOptions()``.
+    bands : str, optional
+        Deprecated name of ``band``.
+
+    Returns
+    -------
+    Profile
+        ``status`` says how it was obtained; a profile is never returned that breaks a
+        force, speed, acceleration or jerk limit.
+
+    Raises
+    ------
+    InputError
+        Bad options or a route too sparsely sampled for its segments.
+    InfeasibleError
+        No profile keeps every limit (an impassable segment, unreachable boundary speeds).
+    PlanningError
+        IPOPT failed and no limit-keeping fallback profile exists (please report it).
+    """
+    t_start = time.perf_counter()
+    if bands is not None:
+        warnings.warn("plan(bands=...) is deprecated; use plan(band=...)", DeprecationWarning, stacklevel=2)
+        band = bands
+    jerk = vehicle.max_jerk_mps3 if max_jerk_mps3 is None else float(max_jerk_mps3)
+    get_model(model)
+    _validate_options(vehicle, smoothing, jerk, v0_mps, vend_mps, method, band)
+    options = SolverOptions() if solver_options is None else solver_options
+    timings: dict[str, float] = {}
+    seg = segment_route(route, vehicle, segment_length_m)
+    timings["segment"] = time.perf_counter() - t_start
+
+    t = time.perf_counter()
+    limits = (*default_limits(vehicle, model=model, max_jerk_mps3=jerk), *extra_limits)
+    context = PlanContext(route=route, vehicle=vehicle, segments=seg)
+    speed_sets, band_source = _speed_bands(limits, context)
+    cap, cap_source = _speed_caps(limits, context)
+    all_bands = speed_sets.capped(cap)  # every band, for reports and messages
+    if band == "first":
+        usable = speed_sets.first_band_only().capped(cap)
+    elif band == "largest":
+        usable = speed_sets.largest_band_only().capped(cap)
+    else:
+        usable = all_bands
+    timings["bands"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    decel, accel = _accel_bounds(limits, context)
+    jerk_bound = min(limit.jerk_bound_mps3(context) for limit in limits)
+    try:
+        chosen = choose_bands(usable.lower_mps, usable.upper_mps, usable.count, seg.length_m, accel, decel,
+                              v0_mps, vend_mps, seg.boundaries_m)
+    except InfeasibleError as exc:  # name the route, as every input message does
+        raise InfeasibleError(f"{route.source}: {exc}") from None
+    timings["choose"] = time.perf_counter() - t
+
+    notes = list(seg.notes)
+    iterations = pieces = 0
+    if method == "auto" and smoothing == 0 and not math.isfinite(jerk_bound):
+        b, status, success = chosen.greatest_b, "exact", True
+    else:
+        result = _solve_nlp(seg, chosen, decel, accel, smoothing, jerk_bound, options)
+        b, status, iterations, pieces = result.b, result.status, result.iterations, result.pieces
+        timings.update(result.timings)
+        success = status == "optimal"
+        if success:
+            worst = {"speed": chosen.violation(b)}
+            for limit in limits:
+                worst[limit.name] = max(worst.get(limit.name, 0.0), limit.violation(context, b))
+            if max(worst.values()) > options.check_rtol:
+                status, success = f"solution breaks a limit ({max(worst, key=worst.get)})", False
+        if not success:
+            notes.append(f"IPOPT gave no usable solution ({status}); returning a slower profile that keeps "
+                         "every limit")
+            chosen = fallback_choice(usable, seg.length_m, seg.boundaries_m, decel, accel, jerk_bound, v0_mps,
+                                     vend_mps)
+            b = chosen.greatest_b
+            status, pieces = f"fallback: {status}", 0
+    b = np.clip(b, chosen.lower_b, chosen.upper_b) if success else b
+    settings = {
+        "vehicle": vehicle_reference(vehicle) or "unnamed", "model": model,
+        "segment_length_m": float(segment_length_m), "smoothing": float(smoothing),
+        "max_speed_mps": vehicle.max_speed_mps, "max_accel_mps2": vehicle.max_accel_mps2,
+        "max_decel_mps2": vehicle.max_decel_mps2, "max_jerk_mps3": jerk,
+        # "bands" is the profile file's key for the band option (kept so files stay readable)
+        "v0_mps": float(v0_mps), "vend_mps": float(vend_mps), "method": method, "bands": band,
+    }
+    profile = _assemble(seg, b, vehicle, model, speed_sets, all_bands, usable, chosen, cap)
+    profile = dataclasses.replace(
+        profile, status=status, success=success, objective=objective_s(b, seg.length_m, smoothing),
+        iterations=iterations, pieces=pieces, notes=tuple(notes), settings=settings,
+        limits=limits, cap_source=cap_source, band_source=band_source,
+    )
+    for limit in limits:  # the bands promise every limit; never hand back a breach
+        breach = limit.check(profile)
+        if breach > options.check_rtol:
+            raise PlanningError(
+                f"{route.source}: the planned profile breaks the {limit.name} limit (by {breach:.4g} of it) "
+                "although every speed was taken from the admissible bands; please report this with the route "
+                "and vehicle"
+            )
+    timings["total"] = time.perf_counter() - t_start
+    return dataclasses.replace(profile, timings_s=timings)
+
+
+def _speed_bands(limits: Sequence[Limit], context: PlanContext) -> tuple[SpeedBands, int]:
+    """The one limit's speed bands (or [0, inf) everywhere) and its index in ``limits``."""
+    found: list[tuple[int, SpeedBands]] = []
+    for k, limit in enumerate(limits):
+        sets = limit.speed_bands(context)
+        if sets is not None:
+            found.append((k, sets))
+    if len(found) > 1:
+        names = ", ".join(limits[k].name for k, _ in found)
+        raise InputError(f"extra_limits: only one limit may give speed bands, but {names} do; "
+                         "give the others' limits as speed caps")
+    if found:
+        return found[0][1], found[0][0]
+    n = context.segments.count
+    return SpeedBands(lower_mps=np.zeros((n, 1)), upper_mps=np.full((n, 1), np.inf), count=np.ones(n, dtype=int),
+                      peaks_mps=np.full((n, 1), np.nan)), -1
+
+
+def _speed_caps(limits: Sequence[Limit], context: PlanContext) -> tuple[np.ndarray, np.ndarray]:
+    """The lowest cap of each segment (m/s) and the index in ``limits`` of the limit giving it."""
+    n = context.segments.count
+    caps = [(k, cap) for k, limit in enumerate(limits) if (cap := limit.speed_cap_mps(context)) is not None]
+    if not caps:
+        return np.full(n, np.inf), np.full(n, -1)
+    stack = np.vstack([np.broadcast_to(np.asarray(cap, dtype=float), (n,)) for _, cap in caps])
+    which = np.argmin(stack, axis=0)
+    return stack[which, np.arange(n)], np.array([k for k, _ in caps])[which]
+
+
+def _accel_bounds(limits: Sequence[Limit], context: PlanContext) -> tuple[np.ndarray, np.ndarray]:
+    """The tightest deceleration (positive) and acceleration bound of each segment (m/s^2)."""
+    n = context.segments.count
+    decel, accel = np.full(n, np.inf), np.full(n, np.inf)
+    for limit in limits:
+        bounds = limit.accel_bounds_mps2(context)
+        if bounds is not None:
+            decel, accel = np.minimum(decel, bounds[0]), np.minimum(accel, bounds[1])
+    if not (np.all(np.isfinite(decel)) and np.all(np.isfinite(accel))):
+        raise InputError("extra_limits: the plan needs finite acceleration and deceleration bounds")
+    return decel, accel
+
+
+@dataclasses.dataclass(frozen=True)
+class _NlpResult:
+    b: np.ndarray  # (N+1,) squared speeds, m^2/s^2
+    status: str
+    iterations: int  # IPOPT iterations, all solves together
+    pieces: int  # IPOPT solves whose solutions make up b
+    timings: dict[str, float]
+
+
+def _solve_nlp(seg: Segments, chosen: BandChoice, decel: np.ndarray, accel: np.ndarray, smoothing: float,
+               jerk: float, options: SolverOptions) -> _NlpResult:
+    """IPOPT's optimum over the chosen bands: in pieces on a long route (exact, checked), or
+    whole (a short route, or a long one whose cuts do not check out)."""
+    n = seg.count
+    with_jerk = math.isfinite(jerk)
+    scaling = Scaling(b_ref=max(float(chosen.upper_b.max()), 1e-6), l_ref=float(seg.length_m.mean()),
+                      a_ref=float(accel.max()), weight=smoothing, inv_jerk=1.0 / jerk if with_jerk else 0.0,
+                      t_whole=max(objective_s(chosen.greatest_b, seg.length_m, 0.0), 1e-6))
+    timings = {"build": 0.0, "solve": 0.0}
+    iterations = 0
+    if n > max(options.split_above_segments, options.piece_segments):
+        score = cut_scores(chosen.upper_b, chosen.greatest_b, seg.length_m)
+        cuts = choose_cuts(score, options.piece_segments)
+        if cuts.size:
+            b, iterations, pieces = solve_pieces(seg.length_m, chosen, decel, accel, scaling, with_jerk, score, cuts,
+                                                 options, timings)
+            if b is not None:
+                return _NlpResult(b, "optimal", iterations, pieces, timings)
+
+    t = time.perf_counter()
+    solver = cached_nlp(n, with_jerk, options.ipopt_key())
+    timings["build"] += time.perf_counter() - t
+    t = time.perf_counter()
+    b_ref = scaling.b_ref
+    lbg, ubg = row_bounds(with_jerk, decel, accel, scaling.a_ref)
+    result = solve_ipopt(solver, chosen.greatest_b / b_ref, chosen.lower_b / b_ref, chosen.upper_b / b_ref,
+                         seg.length_m / scaling.l_ref, lbg, ubg, scaling.tail(scaling.t_whole))
+    timings["solve"] += time.perf_counter() - t
+    return _NlpResult(result.y * b_ref, result.status, iterations + result.iterations, 1, timings)
+
+
+def _assemble(seg: Segments, b: np.ndarray, vehicle: "Vehicle", model: str, bands: SpeedBands,
+              all_bands: SpeedBands, usable: SpeedBands, chosen: BandChoice, cap: np.ndarray) -> Profile:
+    """The Profile of squared speeds b: per-row arrays, the largest force per segment, and
+    the allowable speeds under both semantics from ``all_bands`` (every band, capped)."""
+    speed = np.sqrt(np.maximum(b, 0.0))
+    accel = segment_accel_mps2(b[:-1], b[1:], seg.length_m)
+    dt = segment_time_s(speed[:-1], speed[1:], seg.length_m)
+    time_s = np.concatenate([[0.0], np.cumsum(dt)])
+    force = max_force_over_segments(model, vehicle, seg.ri, speed, bands.peaks_mps)
+    rows = np.arange(seg.count)
+
+    def per_row(x: np.ndarray) -> np.ndarray:
+        return np.append(x, x[-1])
+
+    return Profile(
+        s_m=seg.boundaries_m,
+        speed_mps=speed,
+        accel_mps2=per_row(accel),
+        time_s=time_s,
+        ri=per_row(seg.ri),
+        e_max_m=per_row(seg.e_max_m),
+        force_n=per_row(force),
+        force_limit_n=np.full(seg.count + 1, get_model(model).limit_n(vehicle)),
+        model=model,
+        allowable_first_mps=all_bands.first(),
+        allowable_largest_mps=all_bands.largest(),
+        speed_cap_mps=cap,
+        band_lower_mps=usable.lower_mps[rows, chosen.band],
+        band_upper_mps=usable.upper_mps[rows, chosen.band],
+    )

@@ -1,0 +1,214 @@
+"""A planned speed profile: what the planner returns, what a profile CSV holds.
+
+:class:`Profile` has one row per segment boundary (the CSV columns
+:data:`PROFILE_COLUMNS`), what the planner knows beyond them (bands, allowable speeds, the
+limits it was planned under) and derived quantities: the jerk at the boundaries and a
+summary for people and for ``--json`` (:meth:`Profile.summary`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..forces import DEFAULT_MODEL
+from ..kinematics import boundary_jerk_mps3
+
+if TYPE_CHECKING:
+    from .limits import Limit
+
+__all__ = ["Profile", "PROFILE_COLUMNS"]
+
+#: Columns of a profile CSV, in order.
+PROFILE_COLUMNS = ("s_m", "speed_mps", "accel_mps2", "time_s", "ri", "e_max_m", "force_n", "force_limit_n")
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Profile:
+    """A speed profile along a route: one row per segment boundary.
+
+    Attributes
+    ----------
+    s_m : numpy.ndarray, shape (N+1,)
+        Segment boundaries (m).
+    speed_mps : numpy.ndarray, shape (N+1,)
+        Speed at each boundary (m/s). Inside a segment the acceleration is constant, so
+        v(s)^2 is linear in s between boundaries.
+    accel_mps2 : numpy.ndarray, shape (N+1,)
+        Acceleration of the segment starting at that row (m/s^2); the last row repeats.
+    time_s : numpy.ndarray, shape (N+1,)
+        Arrival time at each boundary (s).
+    ri, e_max_m, force_n, force_limit_n : numpy.ndarray, shape (N+1,)
+        The segment's RI, worst-case elevation (m), the largest predicted force over the
+        speeds driven inside it (N) and the model's force limit (N); last row repeats.
+    status : str
+        ``"optimal"`` (IPOPT converged), ``"exact"`` (the forward-backward profile is the
+        optimum: smoothing and jerk off), ``"fallback: <IPOPT status>"`` (IPOPT failed; the
+        returned profile keeps every limit but is not optimal) or ``"read"`` (from a file).
+    success : bool
+        True unless the fallback was used.
+    model : str
+        Force model key.
+    objective : float
+        Travel time plus smoothing term (s), as minimised.
+    timings_s : dict
+        Wall-clock seconds of the stages (``segment``, ``bands``, ``choose``, ``build``,
+        ``solve``, ``total``).
+    iterations : int
+        IPOPT iterations (0 if not run), of all its solves together.
+    pieces : int
+        How many IPOPT solves make up the profile: 1 for a route solved whole, more for a
+        long route solved in pieces (exactly; see :data:`SPLIT_ABOVE_SEGMENTS`), 0 if none.
+    notes : tuple of str
+        Remarks for the user (merged segments, fallback, ignored columns).
+    allowable_first_mps, allowable_largest_mps : numpy.ndarray, shape (N,) or None
+        Per-segment allowable speeds of the model under both semantics (m/s), capped by the
+        speed limits, for plots and summaries.
+    speed_cap_mps : numpy.ndarray, shape (N,) or None
+        Per-segment speed caps min(v_max, speed_limit) (m/s).
+    band_lower_mps, band_upper_mps : numpy.ndarray, shape (N,) or None
+        The admissible speed band chosen for each segment (m/s), capped by the speed caps:
+        both boundary speeds of segment i lie in [band_lower_mps[i], band_upper_mps[i]].
+    settings : dict
+        What the profile was planned with: vehicle, model, segment_length_m, smoothing,
+        max_accel_mps2, max_decel_mps2, max_jerk_mps3, v0_mps, vend_mps, method, band.
+        Written into the CSV's first (comment) line and read back by
+        :func:`profileopt.io.read_profile`.
+    limits : tuple of Limit
+        The limits the profile was planned under (empty for a profile read from a file).
+    cap_source : numpy.ndarray of int, shape (N,), or None
+        For each segment, the index in ``limits`` of the limit whose cap is lowest there.
+    band_source : int
+        Index in ``limits`` of the limit that gave the speed bands (-1: none).
+    """
+
+    s_m: np.ndarray
+    speed_mps: np.ndarray
+    accel_mps2: np.ndarray
+    time_s: np.ndarray
+    ri: np.ndarray
+    e_max_m: np.ndarray
+    force_n: np.ndarray
+    force_limit_n: np.ndarray
+    status: str = "read"
+    success: bool = True
+    model: str = DEFAULT_MODEL
+    objective: float = float("nan")
+    timings_s: dict = dataclasses.field(default_factory=dict)
+    iterations: int = 0
+    pieces: int = 0
+    notes: tuple[str, ...] = ()
+    allowable_first_mps: np.ndarray | None = None
+    allowable_largest_mps: np.ndarray | None = None
+    speed_cap_mps: np.ndarray | None = None
+    band_lower_mps: np.ndarray | None = None
+    band_upper_mps: np.ndarray | None = None
+    settings: dict = dataclasses.field(default_factory=dict)
+    limits: tuple["Limit", ...] = ()
+    cap_source: np.ndarray | None = None
+    band_source: int = -1
+
+    @property
+    def travel_time_s(self) -> float:
+        """Time to drive the whole route (s)."""
+        return float(self.time_s[-1])
+
+    @property
+    def distance_m(self) -> float:
+        """Length of the route (m)."""
+        return float(self.s_m[-1] - self.s_m[0])
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The CSV columns by name, in order (:data:`PROFILE_COLUMNS`).
+
+        Returns
+        -------
+        dict of str to numpy.ndarray, each shape (N+1,)
+        """
+        return {name: getattr(self, name) for name in PROFILE_COLUMNS}
+
+    def to_csv(self, path: str | os.PathLike) -> None:
+        """Write the profile CSV atomically (:func:`profileopt.io.write_profile`).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            Output file.
+        """
+        from ..io.profiles import write_profile
+
+        write_profile(self, path)
+
+    def jerk_mps3(self) -> np.ndarray:
+        """Jerk v da/ds at the interior boundaries (m/s^3), shape (N-1,).
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        ds = np.diff(self.s_m)
+        a = self.accel_mps2[:-1]
+        return boundary_jerk_mps3(self.speed_mps[1:-1], a[:-1], a[1:], ds[:-1], ds[1:])
+
+    def summary(self) -> dict:
+        """A short account of a planned profile, for people and for ``--json``.
+
+        Returns
+        -------
+        dict
+            ``distance_m``, ``travel_time_s``, ``mean_speed_mps``, ``segments``, ``model``;
+            ``slowest_segment`` (index, ``s_start_m``, ``s_end_m``, ``top_speed_mps``, ``ri``
+            and ``reason``: which limit holds the vehicle back there; of the segments whose
+            top speed is held by a limit, the slowest, so not the run-up from rest);
+            ``margins`` (from each of :attr:`limits`: the largest ratio of each constrained
+            quantity to its limit, and where: force, accel, decel, jerk); ``solver``
+            (status, success, iterations, pieces, time_s); ``notes``. Plain Python numbers
+            only.
+        """
+        n = self.s_m.size - 1
+        v = self.speed_mps
+        top = np.maximum(v[:-1], v[1:])
+        accel = self.accel_mps2[:-1]
+        tol = 1e-6 * max(float(v.max()), 1.0)
+        # The slowest segment that a limit holds back (its speed reaches its band's upper edge);
+        # the run-up from rest and the final braking are slow too, but tell nothing.
+        band_upper = self.band_upper_mps
+        held = np.flatnonzero(top >= band_upper - tol) if band_upper is not None else np.empty(0, dtype=int)
+        i = int(held[np.argmin(top[held])]) if held.size else int(np.argmin(top))
+        a_max = float(self.settings.get("max_accel_mps2", math.nan))
+        d_max = float(self.settings.get("max_decel_mps2", math.nan))
+        reason = "the acceleration, jerk and smoothing terms"
+        if band_upper is not None and top[i] >= band_upper[i] - tol:
+            cap = self.speed_cap_mps[i] if self.speed_cap_mps is not None else math.inf
+            if band_upper[i] >= cap - tol and self.cap_source is not None:
+                reason = self.limits[int(self.cap_source[i])].cap_reason(self, i)
+            elif self.band_source >= 0:
+                reason = self.limits[self.band_source].band_reason(self, i)
+        elif math.isfinite(a_max) and accel[i] >= a_max * (1 - 1e-6):
+            reason = "accelerating at max_accel_mps2 (from a slower point before it)"
+        elif math.isfinite(d_max) and -accel[i] >= d_max * (1 - 1e-6):
+            reason = "braking at max_decel_mps2 (for a slower point after it)"
+        margins: dict[str, dict] = {}
+        for limit in self.limits:
+            margins.update(limit.margins(self))
+        return {
+            "distance_m": self.distance_m,
+            "travel_time_s": self.travel_time_s,
+            "mean_speed_mps": self.distance_m / self.travel_time_s if self.travel_time_s > 0 else 0.0,
+            "segments": n,
+            "model": self.model,
+            "slowest_segment": {
+                "index": i, "s_start_m": float(self.s_m[i]), "s_end_m": float(self.s_m[i + 1]),
+                "top_speed_mps": float(top[i]), "ri": float(self.ri[i]), "reason": reason,
+            },
+            "margins": margins,
+            "solver": {
+                "status": self.status, "success": self.success, "iterations": self.iterations,
+                "pieces": self.pieces, "time_s": float(self.timings_s.get("total", math.nan)),
+            },
+            "notes": list(self.notes),
+        }
