@@ -26,13 +26,14 @@ _COMMANDS: dict[str, tuple[str, Callable[[argparse.Namespace], int]]] = {}
 
 #: The library names its parameters in messages (``segment_length_m = 0 m: must be > 0``);
 #: the command line says its flags instead. Names that are also plain words (model, band)
-#: are replaced only where a message assigns them (``model = 'x'``).
+#: are replaced only where a message assigns them (``model = 'x'``); a quoted name is a
+#: file's key (``key 'max_jerk_mps3'`` of a vehicle file) and stays as it is.
 API_FLAGS = {
     "segment_length_m": "--segment-length", "v0_mps": "--v0", "vend_mps": "--vend", "max_jerk_mps3": "--max-jerk",
 }
 API_FLAGS_ASSIGNED = {"model": "--model", "smoothing": "--smoothing", "method": "--method", "band": "--band"}
-_FLAG_PATTERN = re.compile(r"\b(" + "|".join(API_FLAGS) + r")\b")
-_ASSIGNED_PATTERN = re.compile(r"(?<![\w.-])(" + "|".join(API_FLAGS_ASSIGNED) + r")(?= = )")
+_FLAG_PATTERN = re.compile(r"(?<![\w'])(" + "|".join(API_FLAGS) + r")(?![\w'])")
+_ASSIGNED_PATTERN = re.compile(r"(?<![\w.'-])(" + "|".join(API_FLAGS_ASSIGNED) + r")(?= = )")
 
 
 def flags_for_parameters(message: str) -> str:

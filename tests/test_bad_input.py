@@ -5,7 +5,7 @@ file, option and profile the command exits with status 2, prints exactly one lin
 that names the file (or option, or key) and the problem, shows no traceback and leaves no
 output file behind (nor replaces a good earlier one). The Python API raises
 :class:`~profileopt.errors.InputError` (a ``ValueError``) with the same message. Also: every
-output goes through :mod:`profileopt._io` (a failed or interrupted write leaves no temporary
+output goes through :mod:`profileopt.io.atomic` (a failed or interrupted write leaves no temporary
 file behind), and the same input gives the same output bytes.
 
 Each case runs ``python -m profileopt`` in a subprocess (about 0.6 s each, mostly imports).
@@ -28,10 +28,10 @@ import numpy as np
 import pytest
 
 from profileopt import cli
-from profileopt._io import atomic_path, atomic_write
+from profileopt.io import atomic_path, atomic_write
 from profileopt.errors import InfeasibleError, InputError
-from profileopt.planner import plan, read_profile
-from profileopt.route import read_route
+from profileopt import plan, read_profile
+from profileopt.io import read_route
 from profileopt.vehicle import load_vehicle
 
 REPO = Path(__file__).resolve().parent.parent
@@ -444,7 +444,7 @@ def test_internal_error_is_one_line_and_exit_1(tmp_path: Path, monkeypatch: pyte
 
 
 # --------------------------------------------------------------------------------------
-# Atomic outputs: every writer goes through profileopt._io, and a failure mid-write leaves
+# Atomic outputs: every writer goes through profileopt.io.atomic, and a failure mid-write leaves
 # neither a partial file nor a temporary one.
 
 
@@ -456,7 +456,7 @@ def _write(writer: str, folder: Path) -> None:
     from profileopt.codegen import export_c
     from profileopt.figures import figure_1, write_figure
     from profileopt.plots import plot_profile
-    from profileopt.verify import plot_verification, verify
+    from profileopt import plot_verification, verify
 
     vehicle = load_vehicle("atv")
     route = read_route_text(folder, SHORT_ROUTE)
@@ -481,7 +481,7 @@ def _write(writer: str, folder: Path) -> None:
 def test_every_output_goes_through_a_temporary_file(writer: str, tmp_path: Path,
                                                     monkeypatch: pytest.MonkeyPatch) -> None:
     """Interrupt every writer at its last step (the rename of the finished temporary file):
-    nothing may appear. A writer that wrote its file directly, not through profileopt._io,
+    nothing may appear. A writer that wrote its file directly, not through profileopt.io.atomic,
     would leave it behind; one that did not clean up would leave the temporary file."""
     _write(writer, tmp_path)  # it works ...
     written = {p.name for p in tmp_path.iterdir()} - {"route.csv"}

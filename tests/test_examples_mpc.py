@@ -18,8 +18,8 @@ import pytest
 
 from profileopt import load_vehicle
 from profileopt.constraints import force_limit_n, force_of_e_max
-from profileopt.planner import segment_route
-from profileopt.route import read_route
+from profileopt.planning import segment_route
+from profileopt.io import read_route
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 DT = 0.25  # the example's control interval (s)

@@ -1,4 +1,4 @@
-"""LAS point clouds (profileopt.realdata.read_las), the RI of real 3-D terrain patches and
+"""LAS point clouds (profileopt.io.read_las), the RI of real 3-D terrain patches and
 examples/lidar_roughness.py.
 
 Reference values: numbers stated by the data's README (shared/data/real/README.md: point
@@ -20,7 +20,7 @@ import pytest
 
 from profileopt import load_vehicle, roughness_index
 from profileopt.errors import InputError
-from profileopt.realdata import LAS_GROUND, read_las
+from profileopt.io import LAS_GROUND, read_las
 
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLE = REPO / "examples" / "lidar_roughness.py"

@@ -1,7 +1,7 @@
-"""The fast NLP builder (profileopt._nlp) against an independently written reference.
+"""The fast NLP builder (profileopt.planning.nlp) against an independently written reference.
 
 The reference below is the planner's NLP written straight from its definition (issue 3 and
-the docstring of ``profileopt._nlp.build_nlp``) as one SX expression over all segments, the
+the docstring of ``profileopt.planning.nlp.build_nlp``) as one SX expression over all segments, the
 way it was built before: y = b / b_ref at the N+1 boundaries, v = sqrt(b + eps^2),
 a_i = (b_{i+1} - b_i) / (2 ds_i), travel time sum 2 ds_i / (v_i + v_{i+1}), smoothing
 sum v_j (a_j - a_{j-1})^2 / dsm_j, jerk v_j (a_j - a_{j-1}) / dsm_j. Its derivatives come
@@ -17,7 +17,8 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from profileopt import _nlp
+from profileopt.planning import nlp as _nlp
+from profileopt.planning.options import DEFAULT_IPOPT_OPTIONS
 
 EPS_MPS = 1e-3  # the speed that keeps sqrt(b) smooth at rest (NOTES: planner NLP)
 
@@ -127,7 +128,7 @@ def test_solution_equals_the_reference_nlpsol(n: int, with_jerk: bool) -> None:
     ng = n + (n - 1 if with_jerk and n >= 2 else 0)
     lbg = np.concatenate([np.full(n, -decel / a_ref), np.full(ng - n, -1.0)])
     args = dict(x0=b / b_ref, lbx=np.zeros(n + 1), ubx=upper, lbg=lbg, ubg=np.ones(ng), p=p)
-    reference = ca.nlpsol("reference", "ipopt", reference_nlp(n, with_jerk), _nlp.IPOPT_OPTIONS)
+    reference = ca.nlpsol("reference", "ipopt", reference_nlp(n, with_jerk), dict(DEFAULT_IPOPT_OPTIONS))
     fast = _nlp.build_nlp(n, with_jerk)
     x_ref = dense(reference(**args)["x"]).ravel()
     x_new = dense(fast(**args)["x"]).ravel()

@@ -16,7 +16,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from profileopt import _casadi, forces, speeds, terrain
+from profileopt import forces, speeds, symbolic as _casadi, terrain
 from profileopt.forces import MODELS
 from profileopt.vehicle import load_vehicle
 

@@ -1,4 +1,4 @@
-"""Solving a long route's NLP in pieces (profileopt._pieces, planner._solve_pieces).
+"""Solving a long route's NLP in pieces (profileopt.planning.pieces).
 
 The reference for every piecewise profile is the same NLP solved whole by IPOPT (an
 independent computation: one KKT system over all segments, no cuts, no padding), and every
@@ -11,9 +11,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import profileopt.planner as planner
-from profileopt import _pieces, load_vehicle, plan
-from profileopt.route import Route, read_route
+import functools
+
+from profileopt import load_vehicle, plan
+from profileopt.planning import SolverOptions, nlp, planner
+from profileopt.planning import pieces as _pieces
+from profileopt import Route, read_route
 from profileopt.synthetic import iso8608_sections
 from test_planner import ROUTES, check_profile
 
@@ -33,9 +36,8 @@ def iso_route() -> Route:
 
 def solve(monkeypatch, route, vehicle, piece_segments, **options):
     """plan() with routes of more than ``piece_segments`` segments cut into pieces that long."""
-    monkeypatch.setattr(planner, "PIECE_SEGMENTS", piece_segments)
-    monkeypatch.setattr(planner, "SPLIT_ABOVE_SEGMENTS", piece_segments)
-    return plan(route, vehicle, **options)
+    pieces = SolverOptions(piece_segments=piece_segments, split_above_segments=piece_segments)
+    return plan(route, vehicle, solver_options=pieces, **options)
 
 
 def assert_same_optimum(split, whole) -> None:
@@ -69,17 +71,17 @@ def whole_solve_with_multipliers(monkeypatch, route, vehicle, **options):
     """The whole route's NLP solved as plan() does, with IPOPT's x, lam_x, lam_g (scaled)
     and the parameters after the segment lengths."""
     calls = []
-    original = planner._ipopt
+    original = planner.solve_ipopt
 
-    def spy(nlp, *args):
-        calls.append((nlp, args))
-        return original(nlp, *args)
+    def spy(solver, *args):
+        calls.append((solver, args))
+        return original(solver, *args)
 
-    monkeypatch.setattr(planner, "_ipopt", spy)
+    monkeypatch.setattr(planner, "solve_ipopt", spy)
     solve(monkeypatch, route, vehicle, 10**9, **options)
-    monkeypatch.setattr(planner, "_ipopt", original)
-    (nlp, (x0, lbx, ubx, length, lbg, ubg, p_tail)), = calls
-    result = nlp.solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=np.concatenate([length, p_tail]))
+    monkeypatch.setattr(planner, "solve_ipopt", original)
+    (solver, (x0, lbx, ubx, length, lbg, ubg, p_tail)), = calls
+    result = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=np.concatenate([length, p_tail]))
     y, lam_x, lam_g = (np.asarray(result[k]).ravel() for k in ("x", "lam_x", "lam_g"))
     return y, lam_x, lam_g, ubx, length, p_tail
 
@@ -96,7 +98,7 @@ def test_cut_check_reproduces_ipopts_bound_multipliers(monkeypatch, iso_route, a
     assert pinned.size >= 20
     lam_jerk = np.zeros(n + 1)
     lam_jerk[1:n] = lam_g[n:]
-    check = planner._build_nlp(5, True).solver
+    check = nlp.cached_nlp(5, True)
     got, scale = _pieces.cut_multipliers(check.get_function("nlp_grad_f"), check.get_function("nlp_jac_g"), y,
                                          p_tail, length, lam_g[:n], lam_jerk, pinned)
     expected = np.stack([lam_x[pinned], lam_x[pinned + 1]], axis=1)
@@ -115,14 +117,14 @@ def test_joined_multipliers_of_the_pieces_match_the_whole_solve(monkeypatch, iso
     options = {"smoothing": 0.0, "method": "ipopt"}
     y, lam_x, *_ = whole_solve_with_multipliers(monkeypatch, iso_route, atv, **options)
     checks = []
-    original = planner.cut_multipliers
+    original = _pieces.cut_multipliers
 
     def spy(*args):
         out = original(*args)
         checks.append((args[-1].copy(), out))
         return out
 
-    monkeypatch.setattr(planner, "cut_multipliers", spy)
+    monkeypatch.setattr(_pieces, "cut_multipliers", spy)
     split = solve(monkeypatch, iso_route, atv, 150, **options)
     assert split.pieces >= 2
     cuts, (got, scale) = checks[-1]  # the check that passed
@@ -153,14 +155,14 @@ def test_a_wrong_cut_is_found_and_replaced(monkeypatch, iso_route, atv, first, e
         return score
 
     replaced = []
-    original_replace = planner.replace_cuts
+    original_replace = _pieces.replace_cuts
 
     def replace(score, cuts, wrong_index, piece_segments, excluded):
         replaced.append([int(k) for k in cuts[wrong_index]])
         return original_replace(score, cuts, wrong_index, piece_segments, excluded)
 
     monkeypatch.setattr(planner, "cut_scores", scores)
-    monkeypatch.setattr(planner, "replace_cuts", replace)
+    monkeypatch.setattr(_pieces, "replace_cuts", replace)
     split = solve(monkeypatch, iso_route, atv, 150)
     assert wrong in replaced[0]  # (its replacement may be rejected in turn)
     assert split.pieces >= 2
@@ -178,14 +180,14 @@ def test_when_no_cut_checks_out_the_route_is_solved_whole(monkeypatch, iso_route
                         & (np.arange(below.size) < below.size - _pieces.CUT_REACH - 1), 1.0, np.inf)
 
     rounds = []
-    original_replace = planner.replace_cuts
+    original_replace = _pieces.replace_cuts
 
     def replace(*args):
         rounds.append(args[2].size)
         return original_replace(*args)
 
     monkeypatch.setattr(planner, "cut_scores", scores)
-    monkeypatch.setattr(planner, "replace_cuts", replace)
+    monkeypatch.setattr(_pieces, "replace_cuts", replace)
     split = solve(monkeypatch, iso_route, atv, 150)
     assert rounds  # other cuts were tried first
     assert split.pieces == 1
@@ -215,7 +217,10 @@ def test_summary_and_command_report_the_pieces(monkeypatch, capsys):
 
     profile = solve(monkeypatch, read_route(ROUTES / "trail.csv"), load_vehicle("atv"), 200)
     assert profile.pieces == 3  # 400 segments, cut at 156 and 315, then 156 and 256 (315 fails the check)
-    assert planner.summarize(profile)["solver"]["pieces"] == 3
+    assert profile.summary()["solver"]["pieces"] == 3
+    # the command plans with the default SolverOptions: make those cut at 200 segments
+    monkeypatch.setattr(planner, "SolverOptions",
+                        functools.partial(SolverOptions, piece_segments=200, split_above_segments=200))
     assert cli.main(["plan", str(ROUTES / "trail.csv"), "--vehicle", "atv"]) == 0
     assert "IPOPT iterations over 3 pieces" in capsys.readouterr().out
 

@@ -18,17 +18,9 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
-import profileopt.planner as planner
-from profileopt import InfeasibleError, InputError, force_n, load_vehicle
-from profileopt.planner import (
-    PROFILE_COLUMNS,
-    greatest_profile,
-    plan,
-    read_profile,
-    segment_route,
-    summarize,
-)
-from profileopt.route import Route, read_route
+from profileopt import InfeasibleError, InputError, force_n, load_vehicle, read_profile
+from profileopt.planning import PROFILE_COLUMNS, greatest_profile, plan, planner, segment_route
+from profileopt import Route, read_route
 
 ROOT = Path(__file__).resolve().parents[1]
 ROUTES = ROOT / "examples" / "routes"
@@ -165,7 +157,7 @@ def test_full_problem_keeps_every_limit(name, vehicle_name):
 def test_resonant_washboard_is_crossed_above_resonance(resonant):
     route = read_route(ROUTES / "washboard.csv")
     fast = plan(route, resonant)
-    safe = plan(route, resonant, bands="first")
+    safe = plan(route, resonant, band="first")
     for profile in (fast, safe):
         assert profile.success
         check_profile(profile, route, resonant)
@@ -182,7 +174,7 @@ def test_resonant_washboard_is_crossed_above_resonance(resonant):
     top = np.maximum(fast.speed_mps[rough], fast.speed_mps[rough + 1])
     assert np.all(top <= fast.allowable_largest_mps[rough] + 1e-9)
     assert top.max() < 0.3
-    summary = summarize(fast)
+    summary = fast.summary()
     assert 350 <= summary["slowest_segment"]["s_start_m"] < 375
     assert "force limit" in summary["slowest_segment"]["reason"]
 
@@ -210,7 +202,7 @@ def test_band_choice_near_a_stop(resonant, end_m, above):
 def test_fallback_keeps_every_limit_when_ipopt_fails(monkeypatch, atv):
     route = read_route(ROUTES / "trail.csv")
 
-    def failing(seg, chosen, vehicle, smoothing, jerk):
+    def failing(seg, chosen, decel, accel, smoothing, jerk, options):
         return planner._NlpResult(chosen.greatest_b * 0.5, "Maximum_Iterations_Exceeded", 300, 1, {})
 
     monkeypatch.setattr(planner, "_solve_nlp", failing)
@@ -226,7 +218,7 @@ def test_infeasible_stop_is_an_input_error(atv):
     route = flat_route(length_m=10.0)
     with pytest.raises(InfeasibleError, match="v0"):
         plan(route, atv, v0_mps=20.0)
-    with pytest.raises(InputError, match="segment-length"):
+    with pytest.raises(InputError, match="segment_length_m"):
         plan(route, atv, segment_length_m=20.0)
 
 
@@ -278,7 +270,7 @@ def test_cli_plan_end_to_end(tmp_path):
 def test_bands_first_still_reports_the_largest_allowable_speed(resonant):
     # "first" restricts the plan, not the report: the washboard's upper band stays visible
     route = read_route(ROUTES / "washboard.csv")
-    fast, safe = plan(route, resonant), plan(route, resonant, bands="first")
+    fast, safe = plan(route, resonant), plan(route, resonant, band="first")
     np.testing.assert_array_equal(safe.allowable_largest_mps, fast.allowable_largest_mps)
     np.testing.assert_array_equal(safe.allowable_first_mps, fast.allowable_first_mps)
     washboard = (safe.s_m[:-1] > 155) & (safe.s_m[:-1] < 295)

@@ -41,7 +41,7 @@ from profileopt import synthetic
 from profileopt.errors import InfeasibleError
 from profileopt.speeds import allowable_speed
 from profileopt.forces import MODELS, get_model
-from profileopt.planner import MIN_SAMPLES_PER_SEGMENT, plan, segment_route
+from profileopt.planning import MIN_SAMPLES_PER_SEGMENT, plan, segment_route
 from profileopt.route import Route
 from profileopt.terrain import roughness_index, segment_roughness_index
 from profileopt.vehicle import Vehicle, load_vehicle

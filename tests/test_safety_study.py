@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from profileopt import force_n, get_model, load_vehicle
-from profileopt.planner import segment_route
+from profileopt.planning import segment_route
 from profileopt.study import INFEASIBLE, SafetyStudy
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "safety_study.py"

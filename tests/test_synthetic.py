@@ -18,7 +18,7 @@ from scipy.signal import welch
 
 from profileopt import load_vehicle, speed_bands
 from profileopt.errors import InputError
-from profileopt.realdata import read_opencrg, read_xy_profile
+from profileopt.io import read_opencrg, read_xy_profile
 from profileopt.synthetic import (
     ISO8608_GD0_M3,
     iso8608_profile,

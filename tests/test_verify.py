@@ -17,10 +17,11 @@ import pytest
 
 from profileopt.terrain import segment_roughness_index
 from profileopt.errors import InputError
-from profileopt.planner import Profile
+from profileopt.planning import Profile
 from profileopt.route import Route
 from profileopt.vehicle import load_vehicle
-from profileopt.verify import VERIFICATION_COLUMNS, plot_verification, verify
+from profileopt.plots import plot_verification
+from profileopt.verification import VERIFICATION_COLUMNS, verify
 
 ATV = load_vehicle("atv")
 WAVELENGTH_M, AMPLITUDE_M, SPEED_MPS, LENGTH_M, SEGMENT_M = 10.0, 0.02, 5.0, 300.0, 10.0
