@@ -11,7 +11,7 @@ and a summary is printed.
 
 Data: ``hexbin-crop.las`` from PDAL (https://github.com/PDAL/PDAL,
 ``test/data/filters/hexbin-crop.las``), BSD licence (``LICENSE.txt`` beside the copy in
-``shared/data/real/pdal-lidar/``). LAS 1.2, point format 1, WGS 84 / UTM zone 42N
+``data/real/pdal-lidar/`` of this repository). LAS 1.2, point format 1, WGS 84 / UTM zone 42N
 (EPSG:32642) in metres: 38,367 points over 293 x 201 m, 35,318 of them classified ground.
 
 Runtime: about 1 s.
@@ -31,7 +31,7 @@ from profileopt import InputError, allowable_speed, load_vehicle, roughness_inde
 from profileopt._io import atomic_path
 from profileopt.realdata import LAS_GROUND, read_las
 
-DEFAULT_LAS = Path(__file__).resolve().parents[2] / "shared" / "data" / "real" / "pdal-lidar" / "hexbin-crop.las"
+DEFAULT_LAS = Path(__file__).resolve().parents[1] / "data" / "real" / "pdal-lidar" / "hexbin-crop.las"
 
 # Patch size. The ground points here are about 0.9 m apart (median distance to the nearest
 # neighbour), roughly 1 point per m^2. A 5 m square (the planner's segment length) would hold

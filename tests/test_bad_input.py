@@ -20,7 +20,6 @@ import json
 import math
 import os
 import subprocess
-import sys
 import tomllib
 from pathlib import Path
 
@@ -34,8 +33,9 @@ from profileopt import plan, read_profile
 from profileopt.io import read_route
 from profileopt.vehicle import load_vehicle
 
-REPO = Path(__file__).resolve().parent.parent
-ATV_TOML = REPO / "models" / "atv.toml"
+from conftest import PROFILEOPT, ROOT
+
+ATV_TOML = ROOT / "models" / "atv.toml"
 
 # --------------------------------------------------------------------------------------
 # Inputs
@@ -295,7 +295,7 @@ FOLDERS = ("routes",)  # made in every case's folder: a path that is a folder, n
 
 def run_cli(cwd: Path, *argv: str) -> subprocess.CompletedProcess:
     env = dict(os.environ, MPLBACKEND="Agg")
-    return subprocess.run([sys.executable, "-m", "profileopt", *argv], cwd=cwd, capture_output=True,
+    return subprocess.run([*PROFILEOPT, *argv], cwd=cwd, capture_output=True,
                           text=True, timeout=120, env=env)
 
 

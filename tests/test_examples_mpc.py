@@ -21,7 +21,9 @@ from profileopt.constraints import force_limit_n, force_of_e_max
 from profileopt.planning import segment_route
 from profileopt.io import read_route
 
-EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+from conftest import ROOT
+
+EXAMPLES = ROOT / "examples"
 DT = 0.25  # the example's control interval (s)
 
 

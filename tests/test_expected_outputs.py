@@ -40,7 +40,7 @@ OPTION_CASES = {
     "krc_rms_1in-atv-iecm": ("krc_rms_1in", "atv", ["--model", "iecm"]),
     "krc_rms_1in-atv-prev_bem-seg2": ("krc_rms_1in", "atv", ["--model", "prev_bem", "--segment-length", "2"]),
     "curb-atv-sbem_ef-v0": ("curb", "atv", ["--model", "sbem_ef", "--v0", "3", "--vend", "2"]),
-    "washboard-atv-resonant-first": ("washboard", "atv-resonant", ["--bands", "first"]),
+    "washboard-atv-resonant-first": ("washboard", "atv-resonant", ["--band", "first"]),
 }
 COMPARE_CASES = (("curb", "atv"), ("washboard", "atv-resonant"), ("krc_rms_1in", "atv"), ("iri_road", "atv-resonant"))
 

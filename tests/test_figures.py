@@ -5,7 +5,6 @@ from __future__ import annotations
 import csv
 import math
 import os
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -16,21 +15,14 @@ import pytest
 from profileopt import allowable_speed, load_vehicle
 from profileopt.figures import figure_1, figure_5, figure_6, write_figure
 
-ROOT = Path(__file__).resolve().parent.parent
+from conftest import ROOT
+
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 EXPECTED_COLUMNS = {
     "fig1_ri_vs_amplitude": ["amplitude_m", "ri"],
     "fig5_allowable_speed": ["amplitude_m", "ri", "prev_bem_mps", "iecm_mps", "sbem_ef_mps", "sbem_tf_mps"],
     "fig6_resonance": ["amplitude_m", "ri", "sbem_ef_mps", "sbem_tf_largest_mps", "sbem_tf_first_mps"],
 }
-
-
-def profileopt_command() -> list[str]:
-    """The installed console script, or the same entry point through this interpreter."""
-    exe = shutil.which("profileopt")
-    if exe:
-        return [exe]
-    return [sys.executable, "-c", "import sys; from profileopt.cli import main; sys.exit(main())"]
 
 
 def read_csv(path: Path) -> tuple[list[str], np.ndarray]:
@@ -52,10 +44,10 @@ def check_outputs(out: Path) -> None:
         np.testing.assert_allclose(table[:, 0], np.linspace(0.0, 0.1, 100), rtol=1e-15)
 
 
-def test_cli_writes_three_pngs_and_three_csvs(tmp_path):
+def test_cli_writes_three_pngs_and_three_csvs(profileopt_command, tmp_path):
     out = tmp_path / "new" / "figs"  # created, parents too
     result = subprocess.run(
-        [*profileopt_command(), "figures", "--out", str(out)], capture_output=True, text=True, timeout=120
+        [*profileopt_command, "figures", "--out", str(out)], capture_output=True, text=True, timeout=120
     )
     assert result.returncode == 0, result.stderr
     printed = result.stdout.split()
@@ -74,20 +66,20 @@ def test_cli_writes_three_pngs_and_three_csvs(tmp_path):
     "args, needle",
     [(["--vehicle", "tank"], "tank"), (["--resonant-vehicle", "nope.toml"], "nope.toml")],
 )
-def test_cli_bad_vehicle_is_one_line_exit_2(tmp_path, args, needle):
+def test_cli_bad_vehicle_is_one_line_exit_2(profileopt_command, tmp_path, args, needle):
     result = subprocess.run(
-        [*profileopt_command(), "figures", "--out", str(tmp_path / "f"), *args], capture_output=True, text=True, timeout=120
+        [*profileopt_command, "figures", "--out", str(tmp_path / "f"), *args], capture_output=True, text=True, timeout=120
     )
     assert result.returncode == 2
     assert result.stderr.count("\n") == 1 and needle in result.stderr and "Traceback" not in result.stderr
     assert not (tmp_path / "f").exists() or not any((tmp_path / "f").iterdir())
 
 
-def test_cli_out_is_a_file(tmp_path):
+def test_cli_out_is_a_file(profileopt_command, tmp_path):
     target = tmp_path / "taken"
     target.write_text("x")
     result = subprocess.run(
-        [*profileopt_command(), "figures", "--out", str(target)], capture_output=True, text=True, timeout=120
+        [*profileopt_command, "figures", "--out", str(target)], capture_output=True, text=True, timeout=120
     )
     assert result.returncode == 2
     assert "not a folder" in result.stderr and result.stderr.count("\n") == 1

@@ -1,7 +1,7 @@
 """LAS point clouds (profileopt.io.read_las), the RI of real 3-D terrain patches and
 examples/lidar_roughness.py.
 
-Reference values: numbers stated by the data's README (shared/data/real/README.md: point
+Reference values: numbers stated by the data's README (data/README.md: point
 counts, 92 % ground, extents in metres), the file size, the ASPRS LAS 1.2/1.4 header layout
 (written here independently with ``struct``), and a plane fit with np.linalg.lstsq.
 """
@@ -22,12 +22,12 @@ from profileopt import load_vehicle, roughness_index
 from profileopt.errors import InputError
 from profileopt.io import LAS_GROUND, read_las
 
-REPO = Path(__file__).resolve().parents[1]
-EXAMPLE = REPO / "examples" / "lidar_roughness.py"
-LIDAR = Path(__file__).resolve().parents[2] / "shared" / "data" / "real" / "pdal-lidar"
+from conftest import REAL_DATA, ROOT
+
+EXAMPLE = ROOT / "examples" / "lidar_roughness.py"
+LIDAR = REAL_DATA / "pdal-lidar"
 HEXBIN = LIDAR / "hexbin-crop.las"
 CROP_4_6 = LIDAR / "4_6_crop.las"
-needs_lidar = pytest.mark.skipif(not HEXBIN.is_file(), reason=f"LiDAR data not found at {LIDAR}")
 
 US_SURVEY_FOOT_M = 1200.0 / 3937.0  # the US survey foot, exactly (EPSG unit 9003)
 H_M = 0.1  # ground clearance of the Table 1 ATV (models/atv.toml)
@@ -36,7 +36,6 @@ H_M = 0.1  # ground clearance of the Table 1 ATV (models/atv.toml)
 # --------------------------------------------------------------- the two PDAL LAS files
 
 
-@needs_lidar
 @pytest.mark.parametrize("path, count", [(HEXBIN, 38367), (CROP_4_6, 23875)])  # counts: data README
 def test_point_count_matches_header_readme_and_file_size(path: Path, count: int) -> None:
     cloud = read_las(path)
@@ -47,7 +46,6 @@ def test_point_count_matches_header_readme_and_file_size(path: Path, count: int)
     assert (path.stat().st_size - offset) == count * cloud.header.record_length_bytes
 
 
-@needs_lidar
 @pytest.mark.parametrize("path", [HEXBIN, CROP_4_6])
 def test_coordinate_range_equals_header_bounds(path: Path) -> None:
     cloud = read_las(path)
@@ -61,7 +59,6 @@ def test_coordinate_range_equals_header_bounds(path: Path) -> None:
         assert values.max() == pytest.approx(high[axis], abs=half_step_m[axis])
 
 
-@needs_lidar
 def test_hexbin_is_metres_utm_and_92_percent_ground() -> None:
     cloud = read_las(HEXBIN)
     assert cloud.header.version == (1, 2) and cloud.header.point_format == 1
@@ -75,7 +72,6 @@ def test_hexbin_is_metres_utm_and_92_percent_ground() -> None:
     assert np.ptp(cloud.y_m) == pytest.approx(201, abs=0.5)
 
 
-@needs_lidar
 def test_4_6_crop_is_converted_from_us_survey_feet() -> None:
     cloud = read_las(CROP_4_6)
     assert cloud.header.point_format == 3
@@ -101,7 +97,6 @@ def _real_patch() -> np.ndarray:
     return ground[inside]
 
 
-@needs_lidar
 def test_ri_of_a_real_patch_against_a_plane_fit() -> None:
     patch = _real_patch()
     assert len(patch) >= 30
@@ -115,7 +110,6 @@ def test_ri_of_a_real_patch_against_a_plane_fit() -> None:
     assert expected > 0.1  # real ground is not a plane: the check is not 0 == 0
 
 
-@needs_lidar
 def test_ri_of_a_real_patch_ignores_a_tilt() -> None:
     patch = _real_patch()
     before = roughness_index(patch, H_M)
@@ -127,7 +121,6 @@ def test_ri_of_a_real_patch_ignores_a_tilt() -> None:
     assert roughness_index(tilted, H_M, detrend=False) > 2 * before
 
 
-@needs_lidar
 def test_example_runs(tmp_path: Path) -> None:
     out = tmp_path / "map.png"
     start = time.perf_counter()

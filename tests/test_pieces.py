@@ -8,22 +8,17 @@ compared with IPOPT's own bound multipliers of the whole solve.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pytest
 
-import functools
-
-from profileopt import load_vehicle, plan
+from profileopt import Route, load_vehicle, plan, read_route
 from profileopt.planning import SolverOptions, nlp, planner
 from profileopt.planning import pieces as _pieces
-from profileopt import Route, read_route
 from profileopt.synthetic import iso8608_sections
-from test_planner import ROUTES, check_profile
 
-
-@pytest.fixture(scope="module")
-def atv():
-    return load_vehicle("atv")
+from conftest import ROUTES
 
 
 @pytest.fixture(scope="module")
@@ -56,8 +51,8 @@ def assert_same_optimum(split, whole) -> None:
     ("iri_road.csv", "atv", 60, {}),  # measured road profile
     ("washboard.csv", "atv-resonant", 60, {}),  # above-resonance bands: lower bounds too
 ])
-def test_pieces_give_the_optimum_of_the_whole_route(monkeypatch, iso_route, name, vehicle_name, piece_segments,
-                                                    options):
+def test_pieces_give_the_optimum_of_the_whole_route(check_profile, monkeypatch, iso_route, name, vehicle_name,
+                                                    piece_segments, options):
     route = iso_route if name == "iso" else read_route(ROUTES / name)
     vehicle = load_vehicle(vehicle_name)
     whole = solve(monkeypatch, route, vehicle, 10**9, **options)
@@ -140,7 +135,7 @@ def test_joined_multipliers_of_the_pieces_match_the_whole_solve(monkeypatch, iso
 # third cut (396, in 380..417) has no other candidate between its neighbours, so the cuts
 # after the one before it (268) are chosen again.
 @pytest.mark.parametrize("first, end", [(112, 150), (380, 418)])
-def test_a_wrong_cut_is_found_and_replaced(monkeypatch, iso_route, atv, first, end):
+def test_a_wrong_cut_is_found_and_replaced(check_profile, monkeypatch, iso_route, atv, first, end):
     """Force a cut onto a segment the optimum does not drive at its cap: the check must
     reject it, other cuts must be tried, and the result must still be the optimum."""
     whole = solve(monkeypatch, iso_route, atv, 10**9)

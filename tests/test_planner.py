@@ -1,6 +1,6 @@
 """The route planner: exact optima, band choice over resonance, constraint checks, CLI.
 
-Every profile produced here is checked by ``check_profile`` below, an evaluation of every
+Every profile produced here is checked by ``check_profile`` (tests/conftest.py), an evaluation of every
 constraint written independently of the planner: speeds against the caps, accelerations
 recomputed from speed^2 differences, jerk v da/ds, and the model's force on a fine grid of
 the speeds each segment passes through.
@@ -11,63 +11,15 @@ from __future__ import annotations
 import json
 import math
 import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.optimize import linprog
 
-from profileopt import InfeasibleError, InputError, force_n, load_vehicle, read_profile
+from profileopt import InfeasibleError, InputError, Route, load_vehicle, read_profile, read_route
 from profileopt.planning import PROFILE_COLUMNS, greatest_profile, plan, planner, segment_route
-from profileopt import Route, read_route
 
-ROOT = Path(__file__).resolve().parents[1]
-ROUTES = ROOT / "examples" / "routes"
-
-
-def check_profile(profile, route, vehicle, *, jerk=None, rtol=1e-6, grid=64):
-    """Assert that ``profile`` keeps every limit (independent of the planner's own check)."""
-    s, v = profile.s_m, profile.speed_mps
-    vmax = vehicle.max_speed_mps
-    assert np.all(v >= 0) and np.all(v <= vmax * (1 + rtol))
-    if route.speed_limit_mps is not None:
-        # every sample inside a segment caps both of the segment's boundary speeds
-        seg = np.searchsorted(s, route.s_m, side="right") - 1
-        seg = np.clip(seg, 0, s.size - 2)
-        cap = np.full(s.size - 1, np.inf)
-        np.minimum.at(cap, seg, route.speed_limit_mps)
-        assert np.all(np.maximum(v[:-1], v[1:]) <= cap * (1 + rtol))
-    ds = np.diff(s)
-    accel = (v[1:] ** 2 - v[:-1] ** 2) / (2 * ds)  # constant acceleration in s: v^2 linear
-    assert np.all(accel <= vehicle.max_accel_mps2 * (1 + rtol))
-    assert np.all(-accel <= vehicle.max_decel_mps2 * (1 + rtol))
-    np.testing.assert_allclose(profile.accel_mps2[:-1], accel, rtol=1e-9, atol=1e-9)
-    j_max = vehicle.max_jerk_mps3 if jerk is None else jerk
-    if math.isfinite(j_max) and ds.size >= 2:
-        jerk_values = v[1:-1] * np.diff(accel) / (0.5 * (ds[:-1] + ds[1:]))
-        assert np.all(np.abs(jerk_values) <= j_max * (1 + rtol))
-    # each segment's RI again, from the route's own samples: Eq. (1) on the residual of a
-    # least-squares line (numpy.polyfit), population std over the clearance h
-    seg_of_sample = np.clip(np.searchsorted(s, route.s_m, side="right") - 1, 0, s.size - 2)
-    ri_route = np.empty(s.size - 1)
-    for i in range(s.size - 1):
-        xs, zs = route.s_m[seg_of_sample == i], route.z_m[seg_of_sample == i]
-        residual = zs - np.polyval(np.polyfit(xs - xs[0], zs, 1), xs - xs[0])
-        ri_route[i] = np.std(residual) / vehicle.ground_clearance_m
-    np.testing.assert_allclose(profile.ri[:-1], ri_route, rtol=1e-6, atol=1e-9)
-    # the force over every speed between the two boundary speeds of each segment
-    frac = np.linspace(0.0, 1.0, grid)
-    speeds = v[:-1, None] + (v[1:] - v[:-1])[:, None] * frac[None, :]
-    ri = ri_route[:, None] * np.ones_like(frac)[None, :]
-    forces = force_n(profile.model, speeds, ri, vehicle)
-    limit = profile.force_limit_n[0]
-    assert np.all(forces <= limit * (1 + rtol)), f"force ratio {forces.max() / limit}"
-    # the reported force is at least what the grid sees, and within the limit
-    assert np.all(profile.force_n[:-1] >= forces.max(axis=1) * (1 - 1e-9))
-    assert np.all(profile.force_n <= limit * (1 + rtol))
-    # time: dt = 2 ds / (v_i + v_{i+1}) for constant acceleration
-    np.testing.assert_allclose(np.diff(profile.time_s), 2 * ds / (v[:-1] + v[1:]), rtol=1e-12)
+from conftest import PROFILEOPT, ROUTES
 
 
 def flat_route(length_m=500.0, spacing_m=0.25, speed_limit=None):
@@ -75,17 +27,7 @@ def flat_route(length_m=500.0, spacing_m=0.25, speed_limit=None):
     return Route(s, np.zeros_like(s), speed_limit, source="flat")
 
 
-@pytest.fixture(scope="module")
-def atv():
-    return load_vehicle("atv")
-
-
-@pytest.fixture(scope="module")
-def resonant():
-    return load_vehicle("atv-resonant")
-
-
-def test_flat_route_matches_the_trapezoid_closed_form(atv):
+def test_flat_route_matches_the_trapezoid_closed_form(check_profile, atv):
     # Flat ground: RI = 0, no force limit, so rest-to-rest at top speed V = 20 m/s with
     # a = 2.5, d = 4 m/s^2. Accelerating takes V^2/(2a) = 80 m (16 segments of 5 m) and
     # braking V^2/(2d) = 50 m (10 segments): the switches fall on boundaries, so the
@@ -98,7 +40,7 @@ def test_flat_route_matches_the_trapezoid_closed_form(atv):
     check_profile(profile, route, atv, jerk=math.inf)
 
 
-def test_speed_limit_column_caps_the_profile(atv):
+def test_speed_limit_column_caps_the_profile(check_profile, atv):
     route = flat_route(speed_limit=np.where(np.arange(0, 500.0001, 0.25) < 250, 20.0, 8.0))
     profile = plan(route, atv)
     check_profile(profile, route, atv)
@@ -127,7 +69,7 @@ def test_greatest_profile_is_the_lp_optimum():
 
 @pytest.mark.parametrize("name,vehicle_name", [("trail.csv", "atv"), ("krc_rms_2in.csv", "atv"),
                                                ("washboard.csv", "atv-resonant")])
-def test_pure_minimum_time_nlp_matches_the_exact_optimum(name, vehicle_name):
+def test_pure_minimum_time_nlp_matches_the_exact_optimum(check_profile, name, vehicle_name):
     # With smoothing 0 and no jerk bound the forward-backward profile over the chosen bands
     # is the exact optimum; IPOPT, forced to solve the NLP, must agree within 1e-4.
     route = read_route(ROUTES / name)
@@ -143,7 +85,7 @@ def test_pure_minimum_time_nlp_matches_the_exact_optimum(name, vehicle_name):
 
 @pytest.mark.parametrize("name,vehicle_name", [("trail.csv", "atv"), ("curb.csv", "atv"),
                                                ("krc_rms_4in.csv", "atv"), ("iri_road.csv", "atv")])
-def test_full_problem_keeps_every_limit(name, vehicle_name):
+def test_full_problem_keeps_every_limit(check_profile, name, vehicle_name):
     route = read_route(ROUTES / name)
     vehicle = load_vehicle(vehicle_name)
     profile = plan(route, vehicle)
@@ -154,13 +96,13 @@ def test_full_problem_keeps_every_limit(name, vehicle_name):
     assert exact.travel_time_s <= profile.travel_time_s <= 1.15 * exact.travel_time_s
 
 
-def test_resonant_washboard_is_crossed_above_resonance(resonant):
+def test_resonant_washboard_is_crossed_above_resonance(check_profile, atv_resonant):
     route = read_route(ROUTES / "washboard.csv")
-    fast = plan(route, resonant)
-    safe = plan(route, resonant, band="first")
+    fast = plan(route, atv_resonant)
+    safe = plan(route, atv_resonant, band="first")
     for profile in (fast, safe):
         assert profile.success
-        check_profile(profile, route, resonant)
+        check_profile(profile, route, atv_resonant)
     on_washboard = (fast.s_m > 155) & (fast.s_m < 295)
     first_cap = fast.allowable_first_mps.max(initial=0, where=(fast.s_m[:-1] > 155) & (fast.s_m[:-1] < 295))
     # the band reachable from rest ends at ~0.32 m/s; the plan holds the upper band (~3.4 m/s)
@@ -180,7 +122,7 @@ def test_resonant_washboard_is_crossed_above_resonance(resonant):
 
 
 @pytest.mark.parametrize("end_m,above", [(320.0, True), (230.0, False)])
-def test_band_choice_near_a_stop(resonant, end_m, above):
+def test_band_choice_near_a_stop(check_profile, atv_resonant, end_m, above):
     # Cut the washboard route short. Ending on 20 m of smooth ground after the washboard
     # (320 m), the vehicle can brake from ~3.4 m/s within a segment, so it crosses above
     # resonance. Ending ON the washboard (230 m), it never can: leaving the upper band
@@ -189,8 +131,8 @@ def test_band_choice_near_a_stop(resonant, end_m, above):
     route = read_route(ROUTES / "washboard.csv")
     keep = route.s_m <= end_m
     short = Route(route.s_m[keep], route.z_m[keep], source="washboard-cut")
-    profile = plan(short, resonant)
-    check_profile(profile, short, resonant)
+    profile = plan(short, atv_resonant)
+    check_profile(profile, short, atv_resonant)
     assert profile.speed_mps[-1] == 0.0
     on_washboard = profile.speed_mps[(profile.s_m > 160) & (profile.s_m < 225)]
     if above:
@@ -199,7 +141,7 @@ def test_band_choice_near_a_stop(resonant, end_m, above):
         assert on_washboard.max() < 0.33
 
 
-def test_fallback_keeps_every_limit_when_ipopt_fails(monkeypatch, atv):
+def test_fallback_keeps_every_limit_when_ipopt_fails(check_profile, monkeypatch, atv):
     route = read_route(ROUTES / "trail.csv")
 
     def failing(seg, chosen, decel, accel, smoothing, jerk, options):
@@ -231,9 +173,9 @@ def test_short_tail_is_merged_and_noted(atv):
     assert seg.samples.sum() == s.size
 
 
-def test_profile_csv_round_trip(tmp_path, resonant):
+def test_profile_csv_round_trip(tmp_path, atv_resonant):
     route = read_route(ROUTES / "washboard.csv")
-    profile = plan(route, resonant, model="sbem_ef")
+    profile = plan(route, atv_resonant, model="sbem_ef")
     path = tmp_path / "p.csv"
     profile.to_csv(path)
     lines = path.read_text().splitlines()
@@ -246,10 +188,10 @@ def test_profile_csv_round_trip(tmp_path, resonant):
 
 
 def run_cli(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "profileopt", *args], capture_output=True, text=True, cwd=cwd)
+    return subprocess.run([*PROFILEOPT, *args], capture_output=True, text=True, cwd=cwd)
 
 
-def test_cli_plan_end_to_end(tmp_path):
+def test_cli_plan_end_to_end(check_profile, tmp_path):
     out, png = tmp_path / "profile.csv", tmp_path / "profile.png"
     done = run_cli("plan", str(ROUTES / "washboard.csv"), "--vehicle", "atv-resonant", "-o", str(out),
                    "--plot", str(png))
@@ -267,25 +209,25 @@ def test_cli_plan_end_to_end(tmp_path):
     assert summary["distance_m"] == pytest.approx(200.0)
 
 
-def test_bands_first_still_reports_the_largest_allowable_speed(resonant):
+def test_bands_first_still_reports_the_largest_allowable_speed(atv_resonant):
     # "first" restricts the plan, not the report: the washboard's upper band stays visible
     route = read_route(ROUTES / "washboard.csv")
-    fast, safe = plan(route, resonant), plan(route, resonant, band="first")
+    fast, safe = plan(route, atv_resonant), plan(route, atv_resonant, band="first")
     np.testing.assert_array_equal(safe.allowable_largest_mps, fast.allowable_largest_mps)
     np.testing.assert_array_equal(safe.allowable_first_mps, fast.allowable_first_mps)
     washboard = (safe.s_m[:-1] > 155) & (safe.s_m[:-1] < 295)
     assert np.all(safe.allowable_largest_mps[washboard] > 3.0)
 
 
-def test_boundary_speed_between_two_bands_is_named_as_such(resonant):
+def test_boundary_speed_between_two_bands_is_named_as_such(atv_resonant):
     route = read_route(ROUTES / "washboard.csv")
     keep = (route.s_m >= 160) & (route.s_m <= 260)  # washboard only: bands [0, ~0.32], [~0.53, ~3.4]
     washboard = Route(route.s_m[keep] - 160.0, route.z_m[keep], source="washboard-only")
     with pytest.raises(InfeasibleError, match=r"--v0 = 0.4 m/s is not an admissible speed.*\[0, 0.32\] and"):
-        plan(washboard, resonant, v0_mps=0.4)
+        plan(washboard, atv_resonant, v0_mps=0.4)
 
 
-def test_text_in_an_ignored_column_is_ignored(tmp_path, atv):
+def test_text_in_an_ignored_column_is_ignored(check_profile, tmp_path, atv):
     s = np.arange(0.0, 50.0 + 1e-9, 0.25)
     lines = ["s,z,comment"] + [f"{a:.2f},{0.01 * math.sin(a):.5f},note {k}" for k, a in enumerate(s)]
     (tmp_path / "r.csv").write_text("\n".join(lines) + "\n")

@@ -24,7 +24,9 @@ from profileopt import force_n, get_model, load_vehicle
 from profileopt.planning import segment_route
 from profileopt.study import INFEASIBLE, SafetyStudy
 
-EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "safety_study.py"
+from conftest import ROOT
+
+EXAMPLE = ROOT / "examples" / "safety_study.py"
 
 
 def _load_example():

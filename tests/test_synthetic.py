@@ -30,10 +30,7 @@ from profileopt.synthetic import (
 )
 from profileopt.terrain import roughness_index, segment_roughness_index
 
-REPO = Path(__file__).resolve().parents[1]
-ROUTES = REPO / "examples" / "routes"
-REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
-needs_real = pytest.mark.skipif(not REAL.is_dir(), reason=f"real terrain data not found at {REAL}")
+from conftest import REAL_DATA, ROUTES
 
 N0 = 0.1  # ISO 8608 reference spatial frequency (cycles/m)
 
@@ -259,11 +256,10 @@ def test_read_xy_profile(tmp_path):
         read_xy_profile(path)
 
 
-@needs_real
 @pytest.mark.parametrize("inches, header_rms_in", [(1, 0.96944), (2, 1.7441), (4, 3.3005)])
 def test_krc_course_length_spacing_and_rms(inches, header_rms_in):
-    s, z = read_opencrg(REAL / "krc-rms-courses" / f"detrended_rms_course_{inches}in.crg")
-    # README of shared/data/real: 504.75 m at 5 cm spacing, 100 m flat run-in
+    s, z = read_opencrg(REAL_DATA / "krc-rms-courses" / f"detrended_rms_course_{inches}in.crg")
+    # data/README.md: 504.75 m at 5 cm spacing, 100 m flat run-in
     assert s.size == 10_096 and s[0] == 0.0 and s[-1] == pytest.approx(504.75, abs=1e-9)
     np.testing.assert_allclose(np.diff(s), 0.05, atol=1e-9)
     assert np.all(z[s < 99.9] == 0.0)
@@ -277,9 +273,8 @@ def test_krc_course_length_spacing_and_rms(inches, header_rms_in):
     assert 0.80 * inches < rms_in < 1.0 * inches
 
 
-@needs_real
 def test_iri_profile_matches_readme():
-    s, z = read_xy_profile(REAL / "iri-road-profile" / "profile_1.txt")
+    s, z = read_xy_profile(REAL_DATA / "iri-road-profile" / "profile_1.txt")
     # README: 544 m at 0.25 m spacing, absolute elevations 582-583 m
     assert s[-1] - s[0] == pytest.approx(544.0) and np.allclose(np.diff(s), 0.25)
     assert 582.0 <= z.min() and z.max() <= 583.2
@@ -294,18 +289,17 @@ def read_csv(path: Path) -> tuple[list[str], np.ndarray]:
 
 
 def test_bundled_routes_are_what_make_routes_writes(tmp_path):
-    real = ["--real", str(REAL)] if REAL.is_dir() else ["--no-real"]
     subprocess.run(
-        [sys.executable, str(ROUTES / "make_routes.py"), "--out", str(tmp_path), "--quiet", *real],
+        [sys.executable, str(ROUTES / "make_routes.py"), "--out", str(tmp_path), "--quiet", "--real", str(REAL_DATA)],
         check=True, capture_output=True, text=True, timeout=120,
     )
     synthetic = {"trail.csv", "washboard.csv", "curb.csv"}
     real_names = {"krc_rms_1in.csv", "krc_rms_2in.csv", "krc_rms_4in.csv", "iri_road.csv"}
     made = {p.name for p in tmp_path.glob("*.csv")}
-    assert made == (synthetic | real_names if REAL.is_dir() else synthetic)
+    assert made == synthetic | real_names
     for name in sorted(made):
         assert (tmp_path / name).read_bytes() == (ROUTES / name).read_bytes(), f"{name} differs: rerun make_routes.py"
-    for name in synthetic | real_names:  # the committed ones exist even without shared/
+    for name in synthetic | real_names:
         assert (ROUTES / name).is_file()
     assert sum((ROUTES / n).stat().st_size for n in synthetic | real_names) < 3e6
 

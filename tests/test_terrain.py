@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -17,8 +16,10 @@ from hypothesis.extra.numpy import arrays
 from profileopt import load_vehicle, roughness_index, step_width, worst_case_elevation
 from profileopt.terrain import elevation_z_score, segment_roughness_index
 
+from conftest import REAL_DATA
+
 ATV = load_vehicle("atv")
-REAL_PROFILE = Path("/work/shared/data/real/iri-road-profile/profile_1.txt")
+REAL_PROFILE = REAL_DATA / "iri-road-profile" / "profile_1.txt"
 
 
 def cosine_profile(amplitude_m: float, frequency_cpm: float, periods: int, per_period: int):
@@ -90,7 +91,6 @@ def test_detrend_removes_a_plane_of_a_point_cloud():
     assert roughness_index(tilted, 0.1, detrend=False) == pytest.approx(np.std(tilted[:, 2] / 0.1), rel=1e-12)
 
 
-@pytest.mark.skipif(not REAL_PROFILE.exists(), reason="real road profile not available")
 @pytest.mark.parametrize("detrend", [True, False])
 def test_segment_ri_of_real_road_profile_matches_lstsq_residual(detrend):
     # michalsorel/iri profile_1.txt (MIT): 544 m of road at 0.25 m, absolute elevations ~582 m

@@ -9,7 +9,6 @@ from __future__ import annotations
 import json
 import math
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +21,8 @@ from profileopt.route import Route
 from profileopt.vehicle import load_vehicle
 from profileopt.plots import plot_verification
 from profileopt.verification import VERIFICATION_COLUMNS, verify
+
+from conftest import PROFILEOPT, ROOT, ROUTES
 
 ATV = load_vehicle("atv")
 WAVELENGTH_M, AMPLITUDE_M, SPEED_MPS, LENGTH_M, SEGMENT_M = 10.0, 0.02, 5.0, 300.0, 10.0
@@ -172,14 +173,11 @@ def test_plot_is_a_png(tmp_path: Path) -> None:
 
 # --------------------------------------------------------------------------- command line
 
-REPO = Path(__file__).resolve().parent.parent
-KRC_1IN = REPO / "examples" / "routes" / "krc_rms_1in.csv"
+KRC_1IN = ROUTES / "krc_rms_1in.csv"
 
 
-def _run(*args: str, cwd: Path = REPO) -> "subprocess.CompletedProcess[str]":
-    # (not "-m profileopt.cli": the sub-commands register with profileopt.cli, not __main__)
-    cli = [sys.executable, "-c", "import sys; from profileopt.cli import main; sys.exit(main())"]
-    return subprocess.run([*cli, *args], cwd=cwd,
+def _run(*args: str, cwd: Path = ROOT) -> "subprocess.CompletedProcess[str]":
+    return subprocess.run([*PROFILEOPT, *args], cwd=cwd,
                           capture_output=True, text=True, timeout=120)
 
 
@@ -218,8 +216,8 @@ def test_verify_command_bad_input_fails_cleanly(tmp_path: Path) -> None:
 
 
 def test_compare_is_reproducible_and_sbem_keeps_the_limit_on_krc_1in() -> None:
-    first = _run("compare", str(KRC_1IN.relative_to(REPO)), "--vehicle", "atv")
-    second = _run("compare", str(KRC_1IN.relative_to(REPO)), "--vehicle", "atv")
+    first = _run("compare", str(KRC_1IN.relative_to(ROOT)), "--vehicle", "atv")
+    second = _run("compare", str(KRC_1IN.relative_to(ROOT)), "--vehicle", "atv")
     assert first.returncode == 0, first.stderr
     assert first.stdout == second.stdout
     for label in ("Prev:BEM", "IECM", "SBEM:EF", "SBEM:TF"):
@@ -238,7 +236,7 @@ def test_compare_is_reproducible_and_sbem_keeps_the_limit_on_krc_1in() -> None:
 
 
 def test_verify_takes_the_vehicle_the_profile_was_planned_for(tmp_path: Path) -> None:
-    route = REPO / "examples" / "routes" / "washboard.csv"
+    route = ROUTES / "washboard.csv"
     profile = tmp_path / "p.csv"
     done = _run("plan", str(route), "--vehicle", "atv-resonant", "-o", str(profile))
     assert done.returncode == 0, done.stderr

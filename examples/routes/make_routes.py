@@ -6,7 +6,7 @@ Run from anywhere::
     python examples/routes/make_routes.py              # all routes, beside this script
     python examples/routes/make_routes.py --out DIR    # somewhere else
     python examples/routes/make_routes.py --real PATH  # real data from PATH (default
-                                                       # ../shared/data/real if present)
+                                                       # data/real of this repository)
 
 Every route is a CSV file: a ``#`` comment block saying what the route is and how it was
 made, then the header ``s,z`` (or ``s,z,speed_limit``): distance along the path s (m),
@@ -82,8 +82,8 @@ from profileopt.synthetic import iso8608_profile, iso8608_sections, step, washbo
 from profileopt.terrain import segment_roughness_index
 
 HERE = Path(__file__).resolve().parent
-#: examples/routes -> repository -> the folder beside it that holds shared/
-DEFAULT_REAL = HERE.parents[2] / "shared" / "data" / "real"
+#: examples/routes -> repository -> data/real (the measured terrain bundled with it)
+DEFAULT_REAL = HERE.parents[1] / "data" / "real"
 SPACING_M = 0.05  # synthetic sample spacing (m)
 SEGMENT_M = 5.0  # the planner's default segment length (m), used for the summaries
 COMMAND = "python examples/routes/make_routes.py"
@@ -248,8 +248,8 @@ def krc_course(real: Path, nominal_in: int) -> BundledRoute:
         "course (measured terrain, detrended): 100 m flat run-in, 304.8 m rough, flat run-out.",
         f"Source: Project Chrono, https://github.com/projectchrono/chrono, {source}",
         "(CRG calculated from KRC data), BSD-3-Clause licence, Copyright (c) 2016 Project Chrono",
-        "Development Team; see the LICENSE of shared/data/real/krc-rms-courses/.",
-        f"Converted by `{COMMAND} --real <shared/data/real>` with profileopt.realdata.read_opencrg",
+        "Development Team; see the LICENSE of data/real/krc-rms-courses/.",
+        f"Converted by `{COMMAND}` from data/real/ with profileopt.realdata.read_opencrg",
         "(the middle of the 3 identical lateral tracks). RMS elevation of 100-404.8 m:",
         f"{1000 * z[rough].std():.1f} mm (nominal {nominal_in} in = {25.4 * nominal_in:.1f} mm).",
         "Units: s = distance along the reference line (m), z = elevation (m); a sample every 0.05 m.",
@@ -267,8 +267,8 @@ def iri_road(real: Path) -> BundledRoute:
         "iri_road.csv: a measured road longitudinal profile (absolute elevations, m).",
         "Source: michalsorel/iri, https://github.com/michalsorel/iri, profile_1.txt, MIT licence,",
         "Copyright (c) 2023 Michal Sorel, Filip Sroubek; see the LICENSE of",
-        "shared/data/real/iri-road-profile/.",
-        f"Converted by `{COMMAND} --real <shared/data/real>` with profileopt.realdata.read_xy_profile;",
+        "data/real/iri-road-profile/.",
+        f"Converted by `{COMMAND}` from data/real/ with profileopt.realdata.read_xy_profile;",
         f"distance shifted by -{offset:g} m so that the route starts at s = 0.",
         "Units: s = distance along the path (m), z = elevation (m); a sample every 0.25 m.",
     ]
@@ -303,7 +303,7 @@ def synthetic_routes() -> list[BundledRoute]:
 
 
 def real_routes(real: Path) -> list[BundledRoute]:
-    """The routes converted from measured terrain in ``real`` (shared/data/real)."""
+    """The routes converted from measured terrain in ``real`` (data/real)."""
     return [krc_course(real, 1), krc_course(real, 2), krc_course(real, 4), iri_road(real)]
 
 
@@ -311,7 +311,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", type=Path, default=HERE, help="folder for the CSV files (default: beside this script)")
     parser.add_argument("--real", type=Path, default=DEFAULT_REAL,
-                        help="the shared/data/real folder of measured terrain (default: %(default)s)")
+                        help="the folder of measured terrain (default: data/real of this repository)")
     parser.add_argument("--no-real", action="store_true", help="write the synthetic routes only")
     parser.add_argument("--quiet", action="store_true", help="do not print the per-section summaries")
     args = parser.parse_args(argv)
@@ -322,7 +322,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     elif args.real.is_dir():
         routes += real_routes(args.real)
     else:
-        print(f"note: {args.real} not found; the real-terrain routes were not rewritten", file=sys.stderr)
+        print(f"error: {args.real} is not a folder of measured terrain (--real); "
+              "pass --no-real to write the synthetic routes only", file=sys.stderr)
+        return 2
     for route in routes:
         path = write(route, args.out)
         if not args.quiet:
