@@ -31,7 +31,7 @@ import numpy as np  # noqa: E402
 
 from profileopt import get_model, load_vehicle  # noqa: E402
 from profileopt._io import atomic_path  # noqa: E402
-from profileopt.constraints import add_force_constraints, force_limit_n, force_of_e_max, speed_bands  # noqa: E402
+from profileopt.constraints import add_force_constraints, force_limit_n, force_n, speed_bands  # noqa: E402
 from profileopt.planner import plan, segment_route  # noqa: E402
 from profileopt.route import read_route  # noqa: E402
 
@@ -49,7 +49,7 @@ args = parser.parse_args()
 route = read_route(args.route)
 vehicle = load_vehicle(args.vehicle)
 model = args.model
-limit_n = force_limit_n(model, vehicle)
+limit_n = force_limit_n(vehicle, model=model)
 label = get_model(model).label
 v_max = vehicle.max_speed_mps
 s_start = float(route.s_m[0]) + args.from_m
@@ -75,12 +75,12 @@ REACH = v_max * DT  # the furthest the vehicle can travel in one interval (m)
 # monotone: admissible speeds form bands and a speed between two stages can be forbidden.
 # Then the controller also bounds v_k and v_{k+1} by the 'first' band edge of every
 # segment within reach (every speed from 0 to it is admissible, so any speed path below it
-# is safe): band_edges/allowable_speed(..., semantics="first"), the docstring of
+# is safe): band_edges/allowable_speed(..., band="first"), the docstring of
 # profileopt.constraints ("Resonance and controllers") says why 'largest' needs more care.
-bands = speed_bands(seg.ri, vehicle, model)
+bands = speed_bands(seg.ri, vehicle, model=model)
 one_band_from_rest = bool(np.all((bands.count == 1) & (bands.lower_mps[:, 0] == 0.0)))
 e_grid = np.linspace(0.0, 1.05 * e_seg.max(), 120)
-f_grid = force_of_e_max(model, np.linspace(0.0, v_max, 120)[:, None], e_grid[None, :], vehicle)
+f_grid = force_n(np.linspace(0.0, v_max, 120)[:, None], vehicle, e_max_m=e_grid[None, :], model=model)
 monotone = one_band_from_rest and bool(np.all(np.diff(f_grid, axis=0) >= 0) and np.all(np.diff(f_grid, axis=1) >= 0))
 ceiling_seg = np.minimum(seg.speed_cap_mps, v_max if monotone else bands.first())
 
@@ -121,7 +121,7 @@ opti.subject_to(v[1:] == v[:-1] + a * DT)
 opti.subject_to(opti.bounded(0, v[1:], v_max))
 terrain_k = e_ahead.map(N)(s[:-1].T).T  # e_max ahead of each interval's start (m)
 # N + 1 speeds against N terrain values: both ends of every interval; plus a's bounds
-add_force_constraints(opti, v, None, vehicle, model, e_max_m=terrain_k, accel_mps2=a)
+add_force_constraints(opti, v, vehicle, e_max_m=terrain_k, model=model, accel_mps2=a)
 if use_ceiling:  # bands (or route speed limits): pin both ends of each interval below
     cap_k = ceiling.map(N)(s[:-1].T).T
     opti.subject_to(v[:-1] <= cap_k)
@@ -158,7 +158,7 @@ def worst_ratio(s0: float, v0: float, acc: float) -> tuple[float, float]:
         va, vb = sorted((v0 + acc * ta, v0 + acc * tb))
         inner = peaks[i][(peaks[i] > va) & (peaks[i] < vb)]
         speeds = np.concatenate([[va, vb], inner])
-        r = float(np.max(force_of_e_max(model, speeds, e_seg[i], vehicle))) / limit_n
+        r = float(np.max(force_n(speeds, vehicle, e_max_m=e_seg[i], model=model))) / limit_n
         if r > worst:
             worst, where = r, sa
     return worst, where

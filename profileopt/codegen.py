@@ -18,7 +18,7 @@ companion with the same inputs and the outputs ``jac_<output>_speed_mps`` and
 ``jac_<output>_ri`` / ``jac_<output>_e_max_m`` (the derivatives, diagonal matrices for
 several stages).
 
-Every file is written atomically (:mod:`profileopt._io`): after a failure nothing is left
+Every file is written atomically (:mod:`profileopt.io.atomic`): after a failure nothing is left
 half-written.
 """
 
@@ -33,10 +33,11 @@ from typing import TYPE_CHECKING, Sequence
 
 import casadi as ca
 
+from ._deprecation import old_forms
 from .io.atomic import atomic_write
-from .constraints import _OF_E_MAX, constraint_function, force_function, force_limit_n
+from .constraints import constraint_function, force_function, force_limit_n
 from .errors import InputError
-from .forces import MODELS, get_model
+from .forces import DEFAULT_MODEL, FORCE_OF_E_MAX, MODELS, get_model
 
 if TYPE_CHECKING:
     from .vehicle import Vehicle
@@ -93,7 +94,13 @@ class CExport:
 
 
 def vehicle_slug(vehicle: "Vehicle") -> str:
-    """The vehicle's name as a C identifier: the file stem, non-identifier characters as '_'."""
+    """The vehicle's name as a C identifier: the file stem, non-identifier characters as '_'.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Named by ``vehicle.name`` (its file), ``"vehicle"`` if it has none.
+    """
     stem = Path(vehicle.name).stem if vehicle.name else "vehicle"
     slug = re.sub(r"[^A-Za-z0-9_]", "_", stem)
     if not slug or slug[0].isdigit():
@@ -106,6 +113,13 @@ def jacobian_function(fn: ca.Function, name: str | None = None) -> ca.Function:
 
     ``fn.jacobian()`` takes the nominal output as an extra (structurally empty) input; this
     wrapper drops it, so that the C function takes exactly the inputs of ``fn``.
+
+    Parameters
+    ----------
+    fn : casadi.Function
+        A Function with one output.
+    name : str, optional
+        Name of the Jacobian Function; default ``fn.name() + "_jac"``.
 
     Returns
     -------
@@ -131,10 +145,7 @@ def _check_models(models: Sequence[str] | None) -> list[str]:
         return list(MODELS)
     out = []
     for m in models:
-        try:
-            get_model(m)
-        except ValueError as exc:
-            raise InputError(str(exc)) from None
+        get_model(m)
         if m not in out:
             out.append(m)
     if not out:
@@ -142,10 +153,11 @@ def _check_models(models: Sequence[str] | None) -> list[str]:
     return out
 
 
+@old_forms(lambda call: call.move(1, ("models",)))
 def c_functions(
     vehicle: "Vehicle",
-    models: Sequence[str] | None = None,
     *,
+    models: Sequence[str] | None = None,
     n_stages: int = 1,
 ) -> list[tuple[ExportedFunction, ca.Function, ca.Function]]:
     """The Functions :func:`export_c` generates, with their C names.
@@ -163,25 +175,30 @@ def c_functions(
     list of (ExportedFunction, value Function, Jacobian Function)
         For each model: force and constraint against the RI, then (except Prev:BEM) against
         e_max.
+
+    Notes
+    -----
+    A positional ``models`` still works for one release, with a ``DeprecationWarning``.
     """
     slug = vehicle_slug(vehicle)
     out = []
     for model in _check_models(models):
-        terrains = ["ri", "e_max"] if model in _OF_E_MAX else ["ri"]
+        terrains = ["ri", "e_max"] if model in FORCE_OF_E_MAX else ["ri"]
         for terrain in terrains:
             for kind, builder in (("force", force_function), ("constraint", constraint_function)):
                 name = f"{slug}_{model}_{kind}_of_{terrain}"
-                fn = builder(model, vehicle, terrain, n_stages=n_stages, name=name)
+                fn = builder(vehicle, model=model, terrain=terrain, n_stages=n_stages, name=name)
                 jac = jacobian_function(fn)
                 out.append((ExportedFunction(name, jac.name(), model, kind, terrain), fn, jac))
     return out
 
 
+@old_forms(lambda call: call.move(2, ("models",)))
 def export_c(
     vehicle: "Vehicle",
     directory: str | Path,
-    models: Sequence[str] | None = None,
     *,
+    models: Sequence[str] | None = None,
     n_stages: int = 1,
     basename: str | None = None,
 ) -> CExport:
@@ -208,6 +225,10 @@ def export_c(
     ------
     InputError
         Unknown model, ``directory`` is a file, a bad ``basename`` or ``n_stages``.
+
+    Notes
+    -----
+    A positional ``models`` still works for one release, with a ``DeprecationWarning``.
     """
     if not (isinstance(n_stages, int) and not isinstance(n_stages, bool) and n_stages >= 1):
         raise InputError(f"--stages {n_stages!r}: must be an integer >= 1")
@@ -218,7 +239,7 @@ def export_c(
     directory = Path(directory)
     if directory.exists() and not directory.is_dir():
         raise InputError(f"{directory}: exists and is not a folder; choose a folder for the C files")
-    triples = c_functions(vehicle, models, n_stages=n_stages)
+    triples = c_functions(vehicle, models=models, n_stages=n_stages)
 
     cg = ca.CodeGenerator(f"{base}.c", {"with_header": True})
     for _, fn, jac in triples:
@@ -240,7 +261,7 @@ def export_c(
     try:
         directory.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise InputError(f"-o {directory}: cannot create the folder ({exc.strerror}); choose another path") from None
+        raise InputError(f"directory {directory}: cannot create the folder ({exc.strerror}); choose another path") from None
     with contextlib.ExitStack() as stack:
         for file_name, text in files.items():
             stack.enter_context(atomic_write(directory / file_name)).write(text)
@@ -257,7 +278,7 @@ def export_c(
 
 def _example_model(exported: Sequence[ExportedFunction]) -> str:
     models = [e.model for e in exported]
-    return "sbem_tf" if "sbem_tf" in models else models[0]
+    return DEFAULT_MODEL if DEFAULT_MODEL in models else models[0]
 
 
 def _example_c(base: str, fn: ExportedFunction, n_stages: int) -> str:
@@ -304,7 +325,7 @@ def _readme(vehicle: "Vehicle", base: str, exported: Sequence[ExportedFunction],
         out = "`force_n` (N)" if e.kind == "force" else "`g` = F / F_limit - 1 (-, <= 0 admissible)"
         rows.append(f"| `{e.name}` / `{e.jacobian_name}` | {label} | `speed_mps` (m/s), {terrain_in} | {out} |")
     limits = ", ".join(
-        f"{get_model(m).label} {force_limit_n(m, vehicle):g} N" for m in dict.fromkeys(e.model for e in exported)
+        f"{get_model(m).label} {force_limit_n(vehicle, model=m):g} N" for m in dict.fromkeys(e.model for e in exported)
     )
     stages = (
         "one stage: every input and output is a single number"

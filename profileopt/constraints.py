@@ -20,8 +20,9 @@ What is here
 ------------
 Forces on any kind of argument (numbers, numpy arrays, ``DM``, ``SX``, ``MX``)
     :func:`iecm_force_n`, :func:`sbem_ef_force_n`, :func:`sbem_tf_force_n` (speed, e_max),
-    :func:`prev_bem_force_n` (speed, RI), and by model name :func:`force_of_ri`,
-    :func:`force_of_e_max`; :func:`force_limit_n` gives the limit.
+    :func:`prev_bem_force_n` (speed, RI), and by model name
+    :func:`~profileopt.forces.force_n` (``ri=`` or ``e_max_m=``); :func:`force_limit_n`
+    gives the limit.
 Constraints over a horizon
     :func:`force_constraints` returns a :class:`ForceConstraints` that unpacks as the
     ``(g, lbg, ubg)`` triple of ``casadi.nlpsol``; :func:`add_force_constraints` adds the
@@ -42,13 +43,14 @@ A minimal problem, fastest speeds over ten stages of varying roughness::
     from profileopt.constraints import force_constraints
     vehicle = load_vehicle("atv")
     v = ca.SX.sym("v", 10)
-    g, lbg, ubg = force_constraints(v, np.linspace(0.05, 0.4, 10), vehicle)
+    g, lbg, ubg = force_constraints(v, vehicle, ri=np.linspace(0.05, 0.4, 10))
     solver = ca.nlpsol("s", "ipopt", {"x": v, "f": -ca.sum1(v), "g": g})
     v_best = solver(x0=1, lbx=0, ubx=vehicle.max_speed_mps, lbg=lbg, ubg=ubg)["x"]
 
 Stages and segments: which speeds a constraint covers
 -----------------------------------------------------
-``force_constraints(speed, terrain, ...)`` accepts two layouts:
+``force_constraints(speed, vehicle, ri=terrain)`` (or ``e_max_m=terrain``) accepts two
+layouts:
 
 * *points*: N speeds and N terrain values (or one value for all): F(v_i, terrain_i) is
   constrained at each stage i;
@@ -57,7 +59,7 @@ Stages and segments: which speeds a constraint covers
   constrained (2 N rows, ordered segment by segment).
 
 Within a segment the vehicle passes through every speed between its entry and exit speeds
-(NOTES.md, "Which root"), so the limit must hold over that whole interval, not only at its
+(docs/paper-notes.md, "Which root"), so the limit must hold over that whole interval, not only at its
 ends. When the force grows monotonically with speed (IECM, SBEM:EF, Prev:BEM always; SBEM:TF
 of a well-damped suspension such as the bundled ``atv``), holding it at both ends holds it
 everywhere in between, and the *segments* layout is exact. When it does not (SBEM:TF of a
@@ -75,7 +77,7 @@ controller should do:
 * **Starting from rest, or whenever you cannot guarantee staying inside one band**, use the
   ``"first"`` band [0, V_first]: every speed from 0 to V_first is admissible, so any path
   of speeds below it is safe. ``band_edges(ri, vehicle, band="first")`` gives it; it is
-  ``allowable_speed(ri, vehicle, semantics="first")``.
+  ``allowable_speed(ri, vehicle, band="first")``.
 * **``"largest"`` only if the vehicle is already above resonance** and the plan keeps it
   there: the top band [lower, upper] is admissible as a whole, but the vehicle must never
   slow through the forbidden speeds below ``lower`` on that terrain. Experienced drivers do
@@ -103,26 +105,39 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
-from typing import TYPE_CHECKING, Any, Callable, Iterator, Literal
+import warnings
+from typing import Any, Iterator, Literal
 
 import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .symbolic import is_symbolic
+from ._deprecation import OldCall, old_forms
 from .errors import InputError
-from .forces import get_model, iecm_force_n, prev_bem_force_n, sbem_ef_force_n, sbem_tf_force_n
+from .forces import (
+    DEFAULT_MODEL,
+    FORCE_OF_E_MAX,
+    force_n,
+    get_model,
+    iecm_force_n,
+    prev_bem_force_n,
+    sbem_ef_force_n,
+    sbem_tf_force_n,
+)
 from .speeds import SpeedBands, allowable_speed, speed_bands
-from .terrain import _check_ri
+from .terrain import check_e_max, check_ri
+from .vehicle import Vehicle
 
-if TYPE_CHECKING:
-    from .vehicle import Vehicle
+Terrain = Literal["ri", "e_max"]
+Band = Literal["first", "largest", "containing"]
 
 __all__ = [
     "iecm_force_n",
     "sbem_ef_force_n",
     "sbem_tf_force_n",
     "prev_bem_force_n",
+    "DEFAULT_MODEL",
+    "force_n",
     "force_of_ri",
     "force_of_e_max",
     "force_limit_n",
@@ -138,44 +153,21 @@ __all__ = [
     "allowable_speed",
 ]
 
-Terrain = Literal["ri", "e_max"]
-Band = Literal["first", "largest", "containing"]
-
-# The models defined on the worst-case elevation e_max (Eq. 8): their own expressions.
-_OF_E_MAX: dict[str, Callable[..., Any]] = {
-    "iecm": iecm_force_n,
-    "sbem_ef": sbem_ef_force_n,
-    "sbem_tf": sbem_tf_force_n,
-}
-
-
-def _model(model: str) -> Any:
-    try:
-        return get_model(model)
-    except ValueError as exc:
-        raise InputError(str(exc)) from None
-
-
 def _check_terrain_kind(terrain: str, model: str) -> None:
+    get_model(model)
     if terrain not in ("ri", "e_max"):
         raise InputError(f"terrain {terrain!r} is unknown; choose 'ri' (roughness index) or 'e_max' (metres)")
-    if terrain == "e_max" and model not in _OF_E_MAX:
+    if terrain == "e_max" and model not in FORCE_OF_E_MAX:
         raise InputError(
             f"model {model!r} is defined on the roughness index only; use terrain='ri' "
-            f"(e_max works with {', '.join(_OF_E_MAX)})"
+            f"(e_max works with {', '.join(FORCE_OF_E_MAX)})"
         )
 
 
-def _check_e_max(e_max_m: Any) -> None:
-    if is_symbolic(e_max_m):
-        return
-    values = np.asarray(e_max_m.full() if isinstance(e_max_m, ca.DM) else e_max_m, dtype=float)
-    if np.any(np.isnan(values)) or np.any(values < 0):
-        raise InputError("e_max_m must be a number >= 0 in metres (NaN or a negative value was given)")
+def force_of_ri(model: str, speed_mps: Any, ri: Any, vehicle: Vehicle) -> Any:
+    """Deprecated alias of ``force_n(speed_mps, vehicle, ri=ri, model=model)``.
 
-
-def force_of_ri(model: str, speed_mps: Any, ri: Any, vehicle: "Vehicle") -> Any:
-    """The force (N) that ``model`` predicts at ``speed_mps`` over terrain of roughness ``ri``.
+    Removed in the next release: use :func:`profileopt.forces.force_n`.
 
     Parameters
     ----------
@@ -191,11 +183,15 @@ def force_of_ri(model: str, speed_mps: Any, ri: Any, vehicle: "Vehicle") -> Any:
     -------
     Same kind as the arguments (a float for two numbers): the force (N).
     """
-    return _model(model).force_n(speed_mps, ri, vehicle)
+    warnings.warn("force_of_ri(model, speed_mps, ri, vehicle) is deprecated, use "
+                  "force_n(speed_mps, vehicle, ri=ri, model=model)", DeprecationWarning, stacklevel=2)
+    return force_n(speed_mps, vehicle, ri=ri, model=model)
 
 
-def force_of_e_max(model: str, speed_mps: Any, e_max_m: Any, vehicle: "Vehicle") -> Any:
-    """The force (N) that ``model`` predicts at ``speed_mps`` for a worst-case elevation.
+def force_of_e_max(model: str, speed_mps: Any, e_max_m: Any, vehicle: Vehicle) -> Any:
+    """Deprecated alias of ``force_n(speed_mps, vehicle, e_max_m=e_max_m, model=model)``.
+
+    Removed in the next release: use :func:`profileopt.forces.force_n`.
 
     Parameters
     ----------
@@ -211,22 +207,34 @@ def force_of_e_max(model: str, speed_mps: Any, e_max_m: Any, vehicle: "Vehicle")
     -------
     Same kind as the arguments (a float for two numbers): the force (N).
     """
-    _model(model)
-    _check_terrain_kind("e_max", model)
-    _check_e_max(e_max_m)
-    return _OF_E_MAX[model](speed_mps, e_max_m, vehicle)
+    warnings.warn("force_of_e_max(model, speed_mps, e_max_m, vehicle) is deprecated, use "
+                  "force_n(speed_mps, vehicle, e_max_m=e_max_m, model=model)", DeprecationWarning, stacklevel=2)
+    return force_n(speed_mps, vehicle, e_max_m=e_max_m, model=model)
 
 
-def force_limit_n(model: str, vehicle: "Vehicle") -> float:
+@old_forms(lambda call: call.model_first(("vehicle",), "force_limit_n(model, vehicle) is deprecated, use "
+                                         "force_limit_n(vehicle, model=model)"))
+def force_limit_n(vehicle: Vehicle, *, model: str = DEFAULT_MODEL) -> float:
     """The force limit (N) ``model`` is held to: ``max_transmitted_force_n`` for SBEM:TF,
-    ``max_excitation_force_n`` for the other three."""
-    return _model(model).limit_n(vehicle)
+    ``max_excitation_force_n`` for the other three.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+    model : str, default ``"sbem_tf"`` (:data:`~profileopt.forces.DEFAULT_MODEL`)
+
+    Notes
+    -----
+    The old call ``force_limit_n(model, vehicle)`` still works for one release, with a
+    ``DeprecationWarning``.
+    """
+    return get_model(model).limit_n(vehicle)
 
 
-def _force(model: str, terrain: Terrain, speed_mps: Any, value: Any, vehicle: "Vehicle") -> Any:
+def _force(model: str, terrain: Terrain, speed_mps: Any, value: Any, vehicle: Vehicle) -> Any:
     if terrain == "ri":
-        return force_of_ri(model, speed_mps, value, vehicle)
-    return force_of_e_max(model, speed_mps, value, vehicle)
+        return force_n(speed_mps, vehicle, ri=value, model=model)
+    return force_n(speed_mps, vehicle, e_max_m=value, model=model)
 
 
 # ---------------------------------------------------------------------------------------
@@ -304,15 +312,29 @@ def _pair_stages(speed: Any, terrain: Any, where: str) -> tuple[Any, Any]:
     )
 
 
+def _horizon_old_forms(n_before: int, old: str, new: str):
+    """Adapter of the old ``f(*before, speed_mps, ri, vehicle, model)``: detected by an
+    argument in the vehicle's position that is not a :class:`~profileopt.vehicle.Vehicle`."""
+
+    def adapt(call: OldCall) -> None:
+        at = n_before + 1
+        if len(call.args) > at and not isinstance(call.args[at], Vehicle):
+            call.move(at, ("ri", "vehicle", "model"), f"{old} is deprecated, use {new}")
+
+    return adapt
+
+
+@old_forms(_horizon_old_forms(0, "force_constraints(speed_mps, ri, vehicle, model)",
+                              "force_constraints(speed_mps, vehicle, ri=ri, model=model)"))
 def force_constraints(
     speed_mps: Any,
-    ri: Any,
-    vehicle: "Vehicle",
-    model: str = "sbem_tf",
+    vehicle: Vehicle,
     *,
+    ri: Any = None,
+    e_max_m: Any = None,
+    model: str = DEFAULT_MODEL,
     normalised: bool = True,
     accel_mps2: Any = None,
-    e_max_m: Any = None,
 ) -> ForceConstraints:
     """The force limit over a horizon of speed symbols, as lbg <= g <= ubg.
 
@@ -320,11 +342,14 @@ def force_constraints(
     ----------
     speed_mps : casadi.SX or casadi.MX, shape (N,) or (N + 1,)
         Stage speeds (m/s). Numbers and arrays work too (g is then a DM).
-    ri : SX, MX, DM, numpy array or number, shape (N,) or scalar, or None
-        Roughness index of each stage or segment (dimensionless, >= 0): parameters or
-        numbers. ``None`` when ``e_max_m`` is given instead.
     vehicle : Vehicle
-    model : str, default ``"sbem_tf"``
+    ri : SX, MX, DM, numpy array or number, shape (N,) or scalar, optional
+        Roughness index of each stage or segment (dimensionless, >= 0): parameters or
+        numbers. Give exactly one of ``ri`` and ``e_max_m``.
+    e_max_m : SX, MX, DM, numpy array or number, shape (N,) or scalar, optional
+        Worst-case elevation (m) of each stage or segment instead of ``ri`` (IECM, SBEM:EF,
+        SBEM:TF only).
+    model : str, default ``"sbem_tf"`` (:data:`~profileopt.forces.DEFAULT_MODEL`)
         ``"prev_bem"``, ``"iecm"``, ``"sbem_ef"`` or ``"sbem_tf"``.
     normalised : bool, default True
         Force rows g = F / F_limit - 1 <= 0 (dimensionless, well scaled for IPOPT) if True,
@@ -332,9 +357,6 @@ def force_constraints(
     accel_mps2 : SX or MX, shape (M,), optional
         Accelerations (m/s^2) to bound by [-max_decel_mps2, max_accel_mps2]; appended after
         the force rows.
-    e_max_m : SX, MX, DM, numpy array or number, shape (N,) or scalar, optional
-        Worst-case elevation (m) of each stage or segment instead of ``ri`` (IECM, SBEM:EF,
-        SBEM:TF only).
 
     Returns
     -------
@@ -349,20 +371,22 @@ def force_constraints(
     InputError
         Unknown model, both or neither of ``ri`` and ``e_max_m``, Prev:BEM with
         ``e_max_m``, mismatched lengths, or a negative or NaN terrain value.
+
+    Notes
+    -----
+    The old call ``force_constraints(speed_mps, ri, vehicle, model)`` still works for one
+    release, with a ``DeprecationWarning``.
     """
-    spec = _model(model)
+    spec = get_model(model)
     if (ri is None) == (e_max_m is None):
         raise InputError("force_constraints: give exactly one of ri (roughness index) and e_max_m (metres)")
     terrain: Terrain = "ri" if e_max_m is None else "e_max"
     _check_terrain_kind(terrain, model)
     value = ri if terrain == "ri" else e_max_m
-    if terrain == "ri":
-        try:
-            _check_ri(value)
-        except ValueError as exc:
-            raise InputError(f"force_constraints: {exc}") from None
-    else:
-        _check_e_max(value)
+    try:
+        (check_ri if terrain == "ri" else check_e_max)(value)
+    except InputError as exc:
+        raise InputError(f"force_constraints: {exc}") from None
     speed_col = _column(speed_mps)
     value_col = _column(value)
     if speed_col.shape[0] == 0:
@@ -396,45 +420,62 @@ def force_constraints(
     )
 
 
+def _add_old_forms(call: OldCall) -> None:
+    call.rename({"opti": "problem"})
+    _horizon_old_forms(1, "add_force_constraints(opti, speed_mps, ri, vehicle, model)",
+                       "add_force_constraints(problem, speed_mps, vehicle, ri=ri, model=model)")(call)
+
+
+@old_forms(_add_old_forms)
 def add_force_constraints(
-    opti: ca.Opti,
-    speed_mps: ca.MX,
-    ri: Any,
-    vehicle: "Vehicle",
-    model: str = "sbem_tf",
+    problem: Any,
+    speed_mps: Any,
+    vehicle: Vehicle,
     *,
+    ri: Any = None,
+    e_max_m: Any = None,
+    model: str = DEFAULT_MODEL,
     normalised: bool = True,
     accel_mps2: Any = None,
-    e_max_m: Any = None,
 ) -> ForceConstraints:
-    """Add the force limit (and acceleration bounds) of :func:`force_constraints` to ``opti``.
+    """Add the force limit (and acceleration bounds) of :func:`force_constraints` to ``problem``.
 
     Parameters
     ----------
-    opti : casadi.Opti
+    problem : casadi.Opti or any object with a ``subject_to`` method
+        The problem to add the constraints to (``casadi.Opti``, a rockit ``Ocp``, ...).
     speed_mps : casadi.MX, shape (N,) or (N + 1,)
         Stage speeds (m/s): ``opti.variable`` entries or expressions of them.
+    vehicle : Vehicle
     ri, e_max_m : exactly one of them
         Roughness index (dimensionless) or worst-case elevation (m) per stage or segment:
         ``opti.parameter`` (set with ``opti.set_value`` before each solve) or numbers.
-    vehicle, model, normalised, accel_mps2
+    model, normalised, accel_mps2
         As for :func:`force_constraints`.
 
     Returns
     -------
     ForceConstraints
         What was added: the force rows as ``g[:n_force] <= ubg[:n_force]``, the acceleration
-        rows as ``opti.bounded(lbg, a, ubg)``.
+        rows as ``casadi.Opti.bounded(lbg, a, ubg)``.
+
+    Notes
+    -----
+    The old call ``add_force_constraints(opti, speed_mps, ri, vehicle, model)`` still works
+    for one release, with a ``DeprecationWarning``.
     """
-    if not isinstance(opti, ca.Opti):
-        raise InputError(f"add_force_constraints: opti must be a casadi.Opti, got {type(opti).__name__}")
+    if not callable(getattr(problem, "subject_to", None)):
+        raise InputError(
+            f"add_force_constraints: problem must have a subject_to method (e.g. a casadi.Opti), "
+            f"got {type(problem).__name__}"
+        )
     cons = force_constraints(
-        speed_mps, ri, vehicle, model, normalised=normalised, accel_mps2=accel_mps2, e_max_m=e_max_m
+        speed_mps, vehicle, ri=ri, e_max_m=e_max_m, model=model, normalised=normalised, accel_mps2=accel_mps2
     )
     n = cons.n_force
-    opti.subject_to(cons.g[:n] <= ca.DM(cons.ubg[:n]))
+    problem.subject_to(cons.g[:n] <= ca.DM(cons.ubg[:n]))
     if cons.g.shape[0] > n:
-        opti.subject_to(opti.bounded(ca.DM(cons.lbg[n:]), cons.g[n:], ca.DM(cons.ubg[n:])))
+        problem.subject_to(ca.Opti.bounded(ca.DM(cons.lbg[n:]), cons.g[n:], ca.DM(cons.ubg[n:])))
     return cons
 
 
@@ -453,11 +494,13 @@ def _function_name(name: str | None, default: str) -> str:
     return out
 
 
+@old_forms(lambda call: call.model_first(("vehicle", "terrain"), "force_function(model, vehicle, terrain) is "
+                                         "deprecated, use force_function(vehicle, model=model, terrain=terrain)"))
 def force_function(
-    model: str,
-    vehicle: "Vehicle",
-    terrain: Terrain = "ri",
+    vehicle: Vehicle,
     *,
+    model: str = DEFAULT_MODEL,
+    terrain: Terrain = "ri",
     n_stages: int = 1,
     name: str | None = None,
 ) -> ca.Function:
@@ -465,10 +508,10 @@ def force_function(
 
     Parameters
     ----------
-    model : str
-        ``"prev_bem"``, ``"iecm"``, ``"sbem_ef"`` or ``"sbem_tf"``.
     vehicle : Vehicle
         Its constants become numbers inside the Function.
+    model : str, default ``"sbem_tf"`` (:data:`~profileopt.forces.DEFAULT_MODEL`)
+        ``"prev_bem"``, ``"iecm"``, ``"sbem_ef"`` or ``"sbem_tf"``.
     terrain : {"ri", "e_max"}, default ``"ri"``
         Second input: the roughness index, or the worst-case elevation in metres (not for
         Prev:BEM).
@@ -484,8 +527,13 @@ def force_function(
         (m), output ``force_n`` (n_stages x 1, N). ``fn.jacobian()`` gives
         ``jac_force_n_speed_mps`` (N per m/s) and ``jac_force_n_ri`` (N) or
         ``jac_force_n_e_max_m`` (N/m), diagonal. At terrain 0 (smooth ground) the force is 0.
+
+    Notes
+    -----
+    The old call ``force_function(model, vehicle, terrain)`` still works for one release,
+    with a ``DeprecationWarning``.
     """
-    spec = _model(model)
+    spec = get_model(model)
     _check_terrain_kind(terrain, model)
     if not (isinstance(n_stages, int) and n_stages >= 1):
         raise InputError(f"n_stages = {n_stages!r}: must be an integer >= 1")
@@ -503,11 +551,14 @@ def force_function(
     return fn
 
 
+@old_forms(lambda call: call.model_first(("vehicle", "terrain"), "constraint_function(model, vehicle, terrain) "
+                                         "is deprecated, use constraint_function(vehicle, model=model, "
+                                         "terrain=terrain)"))
 def constraint_function(
-    model: str,
-    vehicle: "Vehicle",
-    terrain: Terrain = "ri",
+    vehicle: Vehicle,
     *,
+    model: str = DEFAULT_MODEL,
+    terrain: Terrain = "ri",
     normalised: bool = True,
     n_stages: int = 1,
     name: str | None = None,
@@ -516,11 +567,13 @@ def constraint_function(
 
     Parameters
     ----------
-    model, vehicle, terrain, n_stages
+    vehicle, model, terrain
         As for :func:`force_function`.
     normalised : bool, default True
         g = F / F_limit - 1 (dimensionless) if True, g = F - F_limit (N) if False; both
         are <= 0 exactly when the force is within the limit.
+    n_stages : int, default 1
+        As for :func:`force_function`.
     name : str, optional
         Function name (a C identifier); default ``"<model>_constraint_of_<terrain>"``.
 
@@ -530,9 +583,14 @@ def constraint_function(
         Inputs ``speed_mps`` (n_stages x 1, m/s) and ``ri`` or ``e_max_m`` (m), output ``g``
         (n_stages x 1) with g <= 0 admissible. ``fn.jacobian()`` gives ``jac_g_speed_mps``
         and ``jac_g_ri`` / ``jac_g_e_max_m``.
+
+    Notes
+    -----
+    The old call ``constraint_function(model, vehicle, terrain)`` still works for one
+    release, with a ``DeprecationWarning``.
     """
-    spec = _model(model)
-    force_fn = force_function(model, vehicle, terrain, n_stages=n_stages)
+    spec = get_model(model)
+    force_fn = force_function(vehicle, model=model, terrain=terrain, n_stages=n_stages)
     v = ca.SX.sym("speed_mps", n_stages)
     t = ca.SX.sym(_TERRAIN_INPUT[terrain], n_stages)
     force = force_fn(v, t)
@@ -574,10 +632,12 @@ class BandEdges:
     band: str
 
 
+@old_forms(lambda call: call.move(2, ("model", "band", "speed_mps")))
 def band_edges(
     ri: ArrayLike,
-    vehicle: "Vehicle",
-    model: str = "sbem_tf",
+    vehicle: Vehicle,
+    *,
+    model: str = DEFAULT_MODEL,
     band: Band = "first",
     speed_mps: ArrayLike | None = None,
 ) -> BandEdges:
@@ -589,12 +649,13 @@ def band_edges(
     ri : array_like, any shape
         Roughness index of each stage (dimensionless, >= 0).
     vehicle : Vehicle
-    model : str, default ``"sbem_tf"``
+    model : str, default ``"sbem_tf"`` (:data:`~profileopt.forces.DEFAULT_MODEL`)
     band : {"first", "largest", "containing"}, default ``"first"``
         ``"first"``: [0, V_first], safe from rest and for any speed path below V_first.
         ``"largest"``: the top band, only for a vehicle already above resonance that stays
         there. ``"containing"``: the band that contains ``speed_mps`` (the current speed), to
-        keep a vehicle in the band it is in.
+        keep a vehicle in the band it is in. ``"all"`` is refused: one band per terrain
+        value is given here, :func:`~profileopt.speeds.speed_bands` gives every band.
     speed_mps : array_like, broadcast against ``ri``, optional
         Required for ``"containing"`` (m/s).
 
@@ -603,14 +664,28 @@ def band_edges(
     BandEdges
         Bounds (m/s) of the shape of ``ri``. Every band of every RI:
         :func:`~profileopt.speeds.speed_bands`.
+
+    Raises
+    ------
+    InputError
+        Unknown ``model`` or ``band``, ``band="all"``, a NaN or negative ``ri``, or
+        ``band="containing"`` without ``speed_mps``.
+
+    Notes
+    -----
+    The old positional ``model``, ``band`` and ``speed_mps`` still work for one release,
+    with a ``DeprecationWarning``.
     """
-    _model(model)
+    get_model(model)
+    if band == "all":
+        raise InputError("band_edges: band 'all' means every band; use speed_bands(ri, vehicle) for every band, "
+                         "or choose band 'first', 'largest' or 'containing'")
     if band not in ("first", "largest", "containing"):
-        raise InputError(f"band {band!r} is unknown; choose 'first', 'largest' or 'containing'")
+        raise InputError(f"band_edges: band {band!r} is unknown; choose 'first', 'largest' or 'containing'")
     values = np.asarray(ri, dtype=float)
     try:
-        bands = speed_bands(values.ravel(), vehicle, model)
-    except ValueError as exc:
+        bands = speed_bands(values.ravel(), vehicle, model=model)
+    except InputError as exc:
         raise InputError(f"band_edges: {exc}") from None
     n = values.size
     if band == "first":

@@ -11,7 +11,7 @@ from the sampled profile, never from a closed form. Speeds come from
 :func:`~profileopt.speeds.allowable_speed`.
 
 The old RI of the paper's reference [11] is not reconstructed (its text is not available,
-NOTES.md), so Fig. 1 shows the paper's new RI (Eq. 1) only and says so.
+docs/paper-notes.md), so Fig. 1 shows the paper's new RI (Eq. 1) only and says so.
 """
 
 from __future__ import annotations
@@ -49,7 +49,7 @@ __all__ = [
 
 #: The paper's 100 terrain amplitudes, evenly spaced from 0 to 0.1 m (Section 4, Table 1).
 PAPER_AMPLITUDES_M: np.ndarray = np.linspace(0.0, 0.1, 100)
-#: Fig. 1's sinusoids: 2 pi rad/m, that is 1 cycle/m (NOTES.md), and clearance h = 0.1 m.
+#: Fig. 1's sinusoids: 2 pi rad/m, that is 1 cycle/m (docs/paper-notes.md), and clearance h = 0.1 m.
 FIG1_FREQUENCY_CPM = 1.0
 FIG1_CLEARANCE_M = 0.1
 #: Table 1's terrain distance frequency for Figs. 5 and 6 (cycles/m).
@@ -222,7 +222,7 @@ def figure_1(amplitudes_m: np.ndarray = PAPER_AMPLITUDES_M) -> FigureData:
 
     Sinusoids of 2 pi rad/m (1 cycle/m), amplitudes 0 to 0.1 m, h = 0.1 m. For a whole
     number of periods RI = A / (sqrt(2) h), so the line runs from 0 to 0.707. The old RI of
-    the paper's reference [11] is not reconstructed (NOTES.md): only the new RI is shown.
+    the paper's reference [11] is not reconstructed (docs/paper-notes.md): only the new RI is shown.
 
     Parameters
     ----------
@@ -270,7 +270,7 @@ def figure_5(vehicle: Vehicle | None = None, amplitudes_m: np.ndarray = PAPER_AM
     terrain = sinusoid_terrain(amplitudes_m, TERRAIN_FREQUENCY_CPM, vehicle.ground_clearance_m)
     curves = []
     for key, model in MODELS.items():
-        label = model.label + (" (reconstruction of [11], NOTES.md)" if key == "prev_bem" else "")
+        label = model.label + (" (reconstruction of [11], docs/paper-notes.md)" if key == "prev_bem" else "")
         if key == "sbem_tf":
             label += ' ("first"; = "largest" here, force monotone in speed)'
         speed = allowable_speed(terrain.ri, vehicle, key, "first")

@@ -1,19 +1,19 @@
 """The four quarter-car force models, each written once as a CasADi expression.
 
 Every function here builds the force a model predicts when the vehicle drives at speed V
-over terrain of a given roughness. Thanks to :func:`profileopt._casadi.elementwise` each
+over terrain of a given roughness. Thanks to :func:`profileopt.symbolic.elementwise` each
 one takes plain numbers, numpy arrays, ``casadi.DM``, ``SX`` or ``MX`` and returns the same
 kind, so the planner, the constraint exports, the C code and the numeric evaluation all use
 these very expressions. The models know nothing of any optimisation problem.
 
-Equation numbers are those of Wilson et al. (``shared/paper``); ``NOTES.md`` holds the
+Equation numbers are those of Wilson et al. (summarised with the project's errata in ``docs/paper-notes.md``), which holds the
 errata applied here. Quarter-car constants: k = m wn^2, c = 2 zeta m wn.
 
 Models
 ------
 ``prev_bem``
     Prev:BEM, the base-excitation model of the paper's reference [11], as *reconstructed*
-    in NOTES.md (the text of [11] is not available): a sinusoid of amplitude
+    in docs/paper-notes.md (the text of [11] is not available): a sinusoid of amplitude
     Y = sqrt(2) RI h at the estimated maximum terrain frequency f, F = k Y sqrt(1 + (2 zeta
     w / wn)^2) with w = 2 pi f V. Limited by ``max_excitation_force_n``.
 ``iecm``
@@ -21,7 +21,7 @@ Models
     Limited by ``max_excitation_force_n``.
 ``sbem_ef``
     Sinusoidal Base Excitation Model, excitation force (Eq. 9-11, simplified exactly as in
-    NOTES.md): F = e sqrt(k^2 + (c w_b)^2), w_b = pi V / (2 X_w) (Eq. 12). Limited by
+    docs/paper-notes.md): F = e sqrt(k^2 + (c w_b)^2), w_b = pi V / (2 X_w) (Eq. 12). Limited by
     ``max_excitation_force_n``.
 ``sbem_tf``
     Sinusoidal Base Excitation Model, transmitted force (Eq. 12-13): F_T = k e r^2 sqrt((1 +
@@ -29,7 +29,7 @@ Models
     lightly damped suspension (resonance). Limited by ``max_transmitted_force_n``.
 
 For the three paper models e is the worst-case elevation e_max of Eq. (8); at e = 0
-(perfectly smooth ground, RI = 0) the force is 0 (NOTES.md: no force limit).
+(perfectly smooth ground, RI = 0) the force is 0 (docs/paper-notes.md: no force limit).
 """
 
 from __future__ import annotations
@@ -40,16 +40,21 @@ from typing import TYPE_CHECKING, Any, Callable
 
 import casadi as ca
 
-from .symbolic import elementwise, is_symbolic
-from .terrain import _check_ri, step_width, worst_case_elevation
+from .symbolic import elementwise
+from ._deprecation import OldCall, old_forms
+from .errors import InputError
+from .terrain import check_e_max, check_ri, step_width, worst_case_elevation
 
 if TYPE_CHECKING:
     from .vehicle import Vehicle
 
 __all__ = [
+    "DEFAULT_MODEL",
     "ForceModel",
     "MODELS",
+    "FORCE_OF_E_MAX",
     "get_model",
+    "check_e_max_model",
     "force_n",
     "iecm_force_n",
     "sbem_ef_force_n",
@@ -59,17 +64,30 @@ __all__ = [
 ]
 
 
+#: The force model used wherever none is chosen: SBEM:TF, the force transmitted to the frame.
+DEFAULT_MODEL = "sbem_tf"
+
+
 @elementwise
 def base_frequency_radps(speed_mps: Any, e_max_m: Any, vehicle: "Vehicle") -> Any:
     """SBEM base-excitation frequency w_b = pi V / (2 X_w) (Eq. 12), in rad/s.
 
     The step of width X_w is climbed in a quarter period of the sinusoid (Fig. 4).
+
+    Parameters
+    ----------
+    speed_mps : number, array, DM, SX or MX
+        Forward speed V (m/s).
+    e_max_m : number, array, DM, SX or MX
+        Step height e (m), usually e_max of Eq. (8).
+    vehicle : Vehicle
+        Supplies the wheel radius.
     """
     return math.pi * speed_mps / (2.0 * step_width(e_max_m, vehicle))
 
 
 def _smooth_ground_is_zero(e_max_m: Any, force: Any) -> Any:
-    # RI = 0 makes every formula 0/0; the limit is no force at all (NOTES.md).
+    # RI = 0 makes every formula 0/0; the limit is no force at all (docs/paper-notes.md).
     return ca.if_else(e_max_m > 0, force, 0)
 
 
@@ -95,7 +113,7 @@ def iecm_force_n(speed_mps: Any, e_max_m: Any, vehicle: "Vehicle") -> Any:
 def sbem_ef_force_n(speed_mps: Any, e_max_m: Any, vehicle: "Vehicle") -> Any:
     """SBEM:EF peak excitation force F_max = e sqrt(k^2 + (c w_b)^2) (Eq. 11), in N.
 
-    Eq. (11) with t_max of Eq. (10) substituted reduces exactly to this form (NOTES.md),
+    Eq. (11) with t_max of Eq. (10) substituted reduces exactly to this form (docs/paper-notes.md),
     which is defined at V = 0 as well (F = k e, the static force).
 
     Parameters
@@ -118,7 +136,7 @@ def sbem_tf_force_n(speed_mps: Any, e_max_m: Any, vehicle: "Vehicle") -> Any:
 
     F_T = k e r^2 sqrt((1 + (2 zeta r)^2) / ((1 - r^2)^2 + (2 zeta r)^2)), r = w_b / wn,
     the textbook base-excitation force transmissibility (Inman, Engineering Vibration,
-    section 2.4), checked against a time-domain simulation (NOTES.md).
+    section 2.4), checked against a time-domain simulation (docs/paper-notes.md).
 
     Parameters
     ----------
@@ -142,7 +160,7 @@ def prev_bem_force_n(speed_mps: Any, ri: Any, vehicle: "Vehicle") -> Any:
 
     F = k Y sqrt(1 + (2 zeta w / wn)^2) with Y = sqrt(2) RI h (the amplitude of a sinusoid
     whose RI is RI) and w = 2 pi f V at the estimated maximum terrain frequency f
-    (``terrain_frequency_cpm``). A reconstruction, labelled as such: see NOTES.md.
+    (``terrain_frequency_cpm``). A reconstruction, labelled as such: see docs/paper-notes.md.
 
     Parameters
     ----------
@@ -193,13 +211,27 @@ class ForceModel:
     of_ri: Callable
 
     def limit_n(self, vehicle: "Vehicle") -> float:
-        """The force limit this model is held to (N)."""
+        """The force limit this model is held to (N).
+
+        Parameters
+        ----------
+        vehicle : Vehicle
+            Holds the limit in its attribute ``limit_key``.
+        """
         return float(getattr(vehicle, self.limit_key))
 
     def force_n(self, speed_mps: Any, ri: Any, vehicle: "Vehicle") -> Any:
-        """The predicted force (N) at speed (m/s) over terrain of roughness ``ri``."""
-        if not is_symbolic(ri):
-            _check_ri(ri)
+        """The predicted force (N) at speed (m/s) over terrain of roughness ``ri``.
+
+        Parameters
+        ----------
+        speed_mps : number, array, DM, SX or MX
+            Forward speed V (m/s); broadcast against ``ri``.
+        ri : number, array, DM, SX or MX
+            Roughness index (dimensionless), >= 0.
+        vehicle : Vehicle
+        """
+        check_ri(ri)
         return self.of_ri(speed_mps, ri, vehicle)
 
 
@@ -211,31 +243,95 @@ MODELS: dict[str, ForceModel] = {
 }
 
 
+#: The models defined on the worst-case elevation e_max (m) of Eq. (8), each with its own
+#: expression ``force(speed_mps, e_max_m, vehicle)`` (N). Prev:BEM is defined on the RI only.
+FORCE_OF_E_MAX: dict[str, Callable[..., Any]] = {
+    "iecm": iecm_force_n,
+    "sbem_ef": sbem_ef_force_n,
+    "sbem_tf": sbem_tf_force_n,
+}
+
+
 def get_model(model: str) -> ForceModel:
-    """The :class:`ForceModel` called ``model``; ``ValueError`` naming the choices otherwise."""
-    try:
-        return MODELS[model]
-    except (KeyError, TypeError):
-        raise ValueError(f"model {model!r} is unknown; choose one of {', '.join(MODELS)}") from None
-
-
-def force_n(model: str, speed_mps: Any, ri: Any, vehicle: "Vehicle") -> Any:
-    """The force (N) that ``model`` predicts at ``speed_mps`` over terrain of RI ``ri``.
+    """The :class:`ForceModel` called ``model``.
 
     Parameters
     ----------
     model : str
         ``"prev_bem"``, ``"iecm"``, ``"sbem_ef"`` or ``"sbem_tf"``.
+
+    Raises
+    ------
+    InputError
+        Another ``model``; the message names the choices.
+    """
+    try:
+        return MODELS[model]
+    except (KeyError, TypeError):
+        raise InputError(f"model {model!r} is unknown; choose one of {', '.join(MODELS)}") from None
+
+
+def check_e_max_model(model: str) -> None:
+    """Raise :class:`~profileopt.errors.InputError` unless ``model`` is defined on e_max.
+
+    Parameters
+    ----------
+    model : str
+        A model key; Prev:BEM (defined on the roughness index only) and unknown keys fail.
+    """
+    get_model(model)
+    if model not in FORCE_OF_E_MAX:
+        raise InputError(
+            f"model {model!r} is defined on the roughness index only; give ri instead of e_max_m "
+            f"(e_max_m works with {', '.join(FORCE_OF_E_MAX)})"
+        )
+
+
+def _force_n_old_forms(call: OldCall) -> None:
+    call.model_first(("speed_mps", "ri", "vehicle"), "force_n(model, speed_mps, ri, vehicle) is deprecated, use "
+                     "force_n(speed_mps, vehicle, ri=ri, model=model)")
+
+
+@old_forms(_force_n_old_forms)
+def force_n(speed_mps: Any, vehicle: "Vehicle", *, ri: Any = None, e_max_m: Any = None,
+            model: str = DEFAULT_MODEL) -> Any:
+    """The force (N) that ``model`` predicts at ``speed_mps`` over the given terrain.
+
+    Give the terrain as exactly one of ``ri`` (every model) and ``e_max_m`` (IECM, SBEM:EF,
+    SBEM:TF). Both give the very same expression: ``ri`` is turned into e_max by Eq. (8).
+
+    Parameters
+    ----------
     speed_mps : number, array, DM, SX or MX
-        Forward speed (m/s); broadcast against ``ri``.
-    ri : number, array, DM, SX or MX
-        Roughness index (dimensionless), >= 0.
+        Forward speed (m/s); broadcast against the terrain value.
     vehicle : Vehicle
+    ri : number, array, DM, SX or MX, optional
+        Roughness index (dimensionless), >= 0.
+    e_max_m : number, array, DM, SX or MX, optional
+        Worst-case elevation e_max (m) of Eq. (8), >= 0.
+    model : str, default ``"sbem_tf"`` (:data:`DEFAULT_MODEL`)
+        ``"prev_bem"``, ``"iecm"``, ``"sbem_ef"`` or ``"sbem_tf"``.
 
     Returns
     -------
-    Same kind as the inputs: force (N).
-    """
-    return get_model(model).force_n(speed_mps, ri, vehicle)
+    Same kind as the inputs (a float for numbers): force (N).
 
-DEFAULT_MODEL = "sbem_tf"  # TEMPORARY until the vocabulary branch is merged
+    Raises
+    ------
+    InputError
+        Unknown ``model``, both or neither of ``ri`` and ``e_max_m``, ``e_max_m`` with
+        Prev:BEM, or a NaN or negative terrain value.
+
+    Notes
+    -----
+    The old call ``force_n(model, speed_mps, ri, vehicle)`` still works for one release,
+    with a ``DeprecationWarning``.
+    """
+    spec = get_model(model)
+    if (ri is None) == (e_max_m is None):
+        raise InputError("give exactly one of ri (roughness index) and e_max_m (worst-case elevation, m)")
+    if e_max_m is None:
+        return spec.force_n(speed_mps, ri, vehicle)
+    check_e_max_model(model)
+    check_e_max(e_max_m)
+    return FORCE_OF_E_MAX[model](speed_mps, e_max_m, vehicle)

@@ -29,7 +29,7 @@ def plot_profile(profile: "Profile", path: str | Path, title: str | None = None)
     """Draw a profile's speed, the per-segment allowable speeds and RI against distance.
 
     Top: planned speed (m/s) beside each segment's allowable speed under both semantics of
-    NOTES.md ("first": every speed from rest up to it is admissible; "largest": the fastest
+    docs/paper-notes.md ("first": every speed from rest up to it is admissible; "largest": the fastest
     admissible speed, possibly above resonance) and the speed cap. Bottom: segment RI.
     Written atomically as PNG.
 

@@ -7,7 +7,7 @@ samples at the speeds of a profile and records the forces.
 
 Model
 -----
-A sprung mass m on a spring k = m wn^2 and a damper c = 2 zeta m wn (NOTES.md), linear,
+A sprung mass m on a spring k = m wn^2 and a damper c = 2 zeta m wn (docs/paper-notes.md), linear,
 written about static equilibrium (gravity and the static spring force cancel and are left
 out). The base input y is the height of the wheel's lowest point (its centre minus r), the
 wheel being rigid, of radius r, and always in contact:

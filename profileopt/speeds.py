@@ -15,7 +15,8 @@ converges:
 3. every sign change of g between consecutive candidates brackets exactly one root;
    refine it with safeguarded Newton on g.
 
-NOTES.md ("Which root") defines the two semantics of :func:`allowable_speed`.
+docs/paper-notes.md ("Which root") defines the bands of :func:`allowable_speed` (``band``, one of
+:data:`BAND_CHOICES`).
 """
 
 from __future__ import annotations
@@ -29,15 +30,22 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .symbolic import numpy_evaluator
-from .forces import get_model
-from .terrain import _check_ri
+from ._deprecation import OldCall, old_forms
+from .errors import InputError
+from .forces import DEFAULT_MODEL, get_model
+from .terrain import check_ri
 
 if TYPE_CHECKING:
     from .vehicle import Vehicle
 
-__all__ = ["SpeedBands", "speed_bands", "allowable_speed", "safeguarded_newton"]
+__all__ = ["BAND_CHOICES", "SpeedBands", "speed_bands", "allowable_speed", "safeguarded_newton"]
 
-Semantics = Literal["first", "largest"]
+#: Which admissible band(s) of speeds: ``"first"`` the band from rest (every speed from 0 up
+#: to its upper edge is admissible), ``"largest"`` the highest band, ``"all"`` every band
+#: (meaningful only to the route planner, which chooses among them).
+BAND_CHOICES = ("first", "largest", "all")
+
+Band = Literal["first", "largest", "all"]
 
 #: Points of the log-spaced search grid, spanning 6 decades below v_max (ratio 1.07 between
 #: neighbours): far finer than a resonance peak (relative width ~ zeta) for zeta >= 0.02.
@@ -78,7 +86,7 @@ class SpeedBands:
         return np.where(self.starts_at_rest(), self.upper_mps[:, 0], 0.0)
 
     def first_band_only(self) -> "SpeedBands":
-        """The same rows keeping only the band that starts at rest (the "first" semantics)."""
+        """The same rows keeping only the band that starts at rest (``band="first"``)."""
         rest = self.starts_at_rest()
         return dataclasses.replace(
             self,
@@ -87,9 +95,28 @@ class SpeedBands:
             count=rest.astype(self.count.dtype),
         )
 
+    def largest_band_only(self) -> "SpeedBands":
+        """The same rows keeping only the highest band (``band="largest"``); rows without
+        any band stay empty."""
+        has = self.count > 0
+        rows = np.arange(self.count.size)
+        last = np.maximum(self.count - 1, 0)
+        return dataclasses.replace(
+            self,
+            lower_mps=np.where(has, self.lower_mps[rows, last], np.nan)[:, None],
+            upper_mps=np.where(has, self.upper_mps[rows, last], np.nan)[:, None],
+            count=has.astype(self.count.dtype),
+        )
+
     def capped(self, cap_mps: np.ndarray) -> "SpeedBands":
-        """Every band intersected with [0, cap] (m/s, shape (N,)): upper edges clipped, bands
-        starting above the cap dropped."""
+        """Every band intersected with [0, cap]: upper edges clipped, bands starting above
+        the cap dropped.
+
+        Parameters
+        ----------
+        cap_mps : numpy.ndarray, shape (N,)
+            The cap of each row (m/s).
+        """
         cap = np.asarray(cap_mps, dtype=float)[:, None]
         keep = self.lower_mps <= cap  # NaN compares False: padding stays dropped
         return dataclasses.replace(
@@ -125,7 +152,7 @@ def _constraint_evaluators(model: str, vehicle: "Vehicle") -> tuple[Callable, Ca
     """numpy evaluators of the two Functions of :func:`_constraint_derivatives`.
 
     They run those Functions' own instruction lists on whole arrays
-    (:func:`profileopt._casadi.numpy_evaluator`), bitwise equal to CasADi's evaluation.
+    (:func:`profileopt.symbolic.numpy_evaluator`), bitwise equal to CasADi's evaluation.
     """
     return tuple(numpy_evaluator(fun) for fun in _constraint_derivatives(model, vehicle))
 
@@ -193,7 +220,8 @@ def safeguarded_newton(
     return x
 
 
-def speed_bands(ri: ArrayLike, vehicle: "Vehicle", model: str = "sbem_tf") -> SpeedBands:
+@old_forms(lambda call: call.move(2, ("model",)))
+def speed_bands(ri: ArrayLike, vehicle: "Vehicle", *, model: str = DEFAULT_MODEL) -> SpeedBands:
     """Every band of admissible speeds of ``model`` for each RI value.
 
     Parameters
@@ -202,16 +230,26 @@ def speed_bands(ri: ArrayLike, vehicle: "Vehicle", model: str = "sbem_tf") -> Sp
         Roughness index of each terrain patch (dimensionless), >= 0.
     vehicle : Vehicle
         Quarter car, force limits and top speed v_max.
-    model : str, default ``"sbem_tf"``
+    model : str, default ``"sbem_tf"`` (:data:`~profileopt.forces.DEFAULT_MODEL`)
         ``"prev_bem"``, ``"iecm"``, ``"sbem_ef"`` or ``"sbem_tf"``.
 
     Returns
     -------
     SpeedBands
         Band edges (m/s) within [0, v_max]; edges are roots to within 1e-12 v_max.
+
+    Raises
+    ------
+    InputError
+        Unknown ``model``, or a NaN or negative ``ri``.
+
+    Notes
+    -----
+    A positional ``model`` still works for one release, with a ``DeprecationWarning``.
     """
     ri = np.atleast_1d(np.asarray(ri, dtype=float))
-    _check_ri(ri)
+    check_ri(ri)
+    get_model(model)
     if ri.size > _BLOCK_ROWS:  # rows are independent: bound the (rows x grid) temporaries
         blocks = [_speed_bands(ri[i:i + _BLOCK_ROWS], vehicle, model) for i in range(0, ri.size, _BLOCK_ROWS)]
         return SpeedBands(*(_stack_padded([getattr(b, name) for b in blocks]) for name in
@@ -303,37 +341,62 @@ def _ragged_to_padded(rows: np.ndarray, values: np.ndarray, n: int) -> np.ndarra
     return out
 
 
+def _allowable_speed_old_forms(call: OldCall) -> None:
+    call.rename({"semantics": "band"})
+    call.move(2, ("model", "band"))
+
+
+def _check_band(band: str) -> None:
+    if band == "all":
+        raise InputError("allowable_speed: band 'all' means every band; use speed_bands(ri, vehicle) for every "
+                         "band, or choose band 'first' or 'largest'")
+    if band not in ("first", "largest"):
+        raise InputError(f"allowable_speed: band {band!r} is unknown; choose 'first' or 'largest'")
+
+
+@old_forms(_allowable_speed_old_forms)
 def allowable_speed(
     ri: ArrayLike,
     vehicle: "Vehicle",
-    model: str = "sbem_tf",
-    semantics: Semantics = "first",
+    *,
+    model: str = DEFAULT_MODEL,
+    band: Band = "first",
 ) -> np.ndarray | float:
     """The fastest speed (m/s) that keeps ``model``'s force within the vehicle's limit.
 
     Parameters
     ----------
     ri : array_like, any shape, or float
-        Roughness index (dimensionless), >= 0; NaN or negative raises ``ValueError``.
+        Roughness index (dimensionless), >= 0; NaN or negative raises ``InputError``.
     vehicle : Vehicle
-    model : str, default ``"sbem_tf"``
+    model : str, default ``"sbem_tf"`` (:data:`~profileopt.forces.DEFAULT_MODEL`)
         ``"prev_bem"``, ``"iecm"``, ``"sbem_ef"`` or ``"sbem_tf"``.
-    semantics : {"first", "largest"}, default ``"first"``
+    band : {"first", "largest"}, default ``"first"``
         ``"first"`` (safe from rest): the largest V such that every speed in [0, V] keeps
         the force within the limit. ``"largest"``: the largest speed <= v_max whose force is
         within the limit (the root the paper's Newton iteration lands on; Fig. 6). They
-        coincide when the force grows monotonically with speed.
+        coincide when the force grows monotonically with speed. ``"all"`` (every band) is
+        refused: :func:`speed_bands` gives every band.
 
     Returns
     -------
     float or numpy.ndarray of the shape of ``ri``
         Speed in [0, v_max] (m/s). RI = 0 gives v_max; a limit below the force at rest
         gives 0.
+
+    Raises
+    ------
+    InputError
+        Unknown ``model`` or ``band``, or a NaN or negative ``ri``.
+
+    Notes
+    -----
+    The old positional ``model`` and ``semantics`` and the keyword ``semantics=`` still
+    work for one release, with a ``DeprecationWarning``.
     """
-    if semantics not in ("first", "largest"):
-        raise ValueError(f"semantics {semantics!r} is unknown; choose 'first' or 'largest'")
+    _check_band(band)
     get_model(model)
     values = np.asarray(ri, dtype=float)
-    bands = speed_bands(values.ravel(), vehicle, model)
-    out = (bands.first() if semantics == "first" else bands.largest()).reshape(values.shape)
+    bands = speed_bands(values.ravel(), vehicle, model=model)
+    out = (bands.first() if band == "first" else bands.largest()).reshape(values.shape)
     return float(out) if values.ndim == 0 else out

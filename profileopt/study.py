@@ -1,7 +1,7 @@
 """Plan with every force model, check each plan in simulation, and pool the results.
 
 The force models predict a worst case from a statistic of the terrain (the RI and a
-confidence level); :func:`profileopt.verify.verify` measures the forces a plan really
+confidence level); :func:`profileopt.verify` measures the forces a plan really
 causes in the quarter-car simulation. This module runs that check for several models:
 
 :func:`run_model`

@@ -4,7 +4,7 @@ Every generator returns elevations in metres along a distance s in metres. The r
 ones are fully determined by their arguments and an integer ``seed`` (a
 :func:`numpy.random.default_rng` stream), so examples and tests are reproducible.
 
-ISO 8608 (see ``NOTES.md``, "Terrain for examples and tests") classifies road roughness by
+ISO 8608 (see ``docs/paper-notes.md``, "Terrain for examples and tests") classifies road roughness by
 the one-sided displacement power spectral density
 
     Gd(n) = Gd(n0) (n / n0)^-2,   n0 = 0.1 cycles/m,
@@ -43,7 +43,7 @@ __all__ = [
 ISO8608_N0_CPM = 0.1
 
 #: Geometric-mean displacement PSD Gd(n0) of each ISO 8608 class (m^3 = m^2 / (cycles/m)).
-#: Class limits are a factor 2 either side (NOTES.md).
+#: Class limits are a factor 2 either side (docs/paper-notes.md).
 ISO8608_GD0_M3: dict[str, float] = {
     letter: 16e-6 * 4.0**i for i, letter in enumerate("ABCDEFGH")
 }
@@ -113,7 +113,7 @@ def _sample_count(length_m: float, spacing_m: float) -> int:
 def iso8608_variance_m2(gd0_m3: float, n_min_cpm: float, n_max_cpm: float) -> float:
     """Variance of an ISO 8608 profile band-limited to [n_min, n_max] (m^2).
 
-    The integral of Gd(n) = Gd(n0) (n / n0)^-2 over the band (NOTES.md):
+    The integral of Gd(n) = Gd(n0) (n / n0)^-2 over the band (docs/paper-notes.md):
     sigma^2 = Gd(n0) n0^2 (1 / n_min - 1 / n_max).
 
     Parameters
@@ -137,7 +137,7 @@ def _unit_iso8608(n_samples: int, spacing_m: float, seed: int, n_min: float, n_m
     The frequencies are the FFT bins n_k = k / L of a period L >= the profile length and
     >= 8 / n_min (so that a bin is at most n_min / 8 wide and no power falls on the
     constant bin). Component k carries exactly the power of Gd over its bin
-    [n_k - dn/2, n_k + dn/2] clipped to [n_min, n_max] (the exact form of NOTES.md's
+    [n_k - dn/2, n_k + dn/2] clipped to [n_min, n_max] (the exact form of docs/paper-notes.md's
     Gd(n_k) dn), a_k = sqrt(2 P_k), so over one period the variance is exactly
     :func:`iso8608_variance_m2`. The cosine sum sum_k a_k cos(2 pi n_k s - phi_k) at
     s = j spacing is then one inverse real FFT: O(L log L) instead of O(K M).
@@ -172,7 +172,7 @@ def iso8608_profile(
 
     z(s) = sum_k a_k cos(2 pi n_k s - phi_k) with phases phi_k uniform in [0, 2 pi) drawn
     from ``numpy.random.default_rng(seed)`` and a_k^2 / 2 the power of
-    Gd(n) = Gd(n0) (n / n0)^-2 in the band of n_k (NOTES.md). The frequencies are
+    Gd(n) = Gd(n0) (n / n0)^-2 in the band of n_k (docs/paper-notes.md). The frequencies are
     evenly spaced (bins of width dn = 1 / L, L = max(length, 8 / n_min) rounded up to a fast
     FFT size), so the profile is evaluated with one inverse FFT: 100 km at 0.05 m takes a
     fraction of a second. The variance over a long profile is
@@ -296,7 +296,7 @@ def washboard(
     """Sinusoidal corrugation z = A sin(2 pi (s - start) / wavelength) (m).
 
     Over a whole number of wavelengths its standard deviation is A / sqrt(2), so its RI
-    (Eq. 1) is A / (sqrt(2) h) (NOTES.md, "Fig. 1"). It starts at zero height at
+    (Eq. 1) is A / (sqrt(2) h) (docs/paper-notes.md, "Fig. 1"). It starts at zero height at
     ``start_m``; choose the section length as a whole number of wavelengths to end at zero
     too.
 

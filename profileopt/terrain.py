@@ -3,7 +3,7 @@ width of a step the wheel rolls over (Eq. 2).
 
 Equation numbers are those of Wilson et al., "Velocity Selection for High-Speed UGVs in
 Rough Unknown Terrains using Force Prediction" (see ``shared/paper``), with the project's
-errata in ``NOTES.md``.
+errata in ``docs/paper-notes.md``.
 """
 
 from __future__ import annotations
@@ -17,6 +17,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .symbolic import elementwise, is_symbolic
+from ._deprecation import OldCall, old_forms
+from .errors import InputError
 
 if TYPE_CHECKING:
     from .vehicle import Vehicle
@@ -29,13 +31,22 @@ __all__ = [
     "elevation_z_score",
     "worst_case_elevation",
     "step_width",
+    "check_ri",
+    "check_e_max",
 ]
 
 
+def _roughness_index_old_forms(call: OldCall) -> None:
+    call.rename({"elevations": "elevations_m", "clearance": "clearance_m", "positions": "positions_m"})
+    call.move(2, ("positions_m", "detrend"))
+
+
+@old_forms(_roughness_index_old_forms)
 def roughness_index(
-    elevations: ArrayLike,
-    clearance: float,
-    positions: ArrayLike | None = None,
+    elevations_m: ArrayLike,
+    clearance_m: float,
+    *,
+    positions_m: ArrayLike | None = None,
     detrend: bool = True,
 ) -> float:
     """Roughness Index RI = STD(e / h) of a terrain patch (Eq. 1).
@@ -51,11 +62,11 @@ def roughness_index(
 
     Parameters
     ----------
-    elevations : array_like, shape (M,) or (M, 3)
+    elevations_m : array_like, shape (M,) or (M, 3)
         A longitudinal profile of elevations e (m), or a point cloud of rows (x, y, z) (m).
-    clearance : float
+    clearance_m : float
         Ground clearance h (m), > 0.
-    positions : array_like, shape (M,), optional
+    positions_m : array_like, shape (M,), optional
         Distance along the profile of each elevation (m), used to fit the trend of a 1-D
         profile. If omitted, the samples are taken as evenly spaced. Not used for clouds.
     detrend : bool, default True
@@ -68,19 +79,24 @@ def roughness_index(
 
     Raises
     ------
-    ValueError
+    InputError
         Non-finite values, fewer than 2 samples (3 points for a cloud), mismatched shapes
         or a clearance that is not > 0.
+
+    Notes
+    -----
+    The old keywords ``elevations``, ``clearance`` and ``positions`` and a positional
+    ``positions_m`` still work for one release, with a ``DeprecationWarning``.
     """
-    h = float(clearance)
+    h = float(clearance_m)
     if not (math.isfinite(h) and h > 0):
-        raise ValueError(f"clearance = {clearance!r} m: must be a finite number > 0")
-    e = np.asarray(elevations, dtype=float)
+        raise InputError(f"clearance_m = {clearance_m!r} m: must be a finite number > 0")
+    e = np.asarray(elevations_m, dtype=float)
     if not np.all(np.isfinite(e)):
-        raise ValueError("elevations contain NaN or inf; remove or fill those samples")
+        raise InputError("elevations_m contain NaN or inf; remove or fill those samples")
     if e.ndim == 2 and e.shape[1] == 3:
         if e.shape[0] < 3:
-            raise ValueError(f"a point cloud needs at least 3 points, got {e.shape[0]}")
+            raise InputError(f"a point cloud needs at least 3 points, got {e.shape[0]}")
         z = e[:, 2]
         if detrend:
             design = np.column_stack([np.ones(len(z)), e[:, 0] - e[:, 0].mean(), e[:, 1] - e[:, 1].mean()])
@@ -88,14 +104,14 @@ def roughness_index(
             z = z - design @ coef
         return float(np.std(z / h))
     if e.ndim != 1:
-        raise ValueError(f"elevations must have shape (M,) or (M, 3), got {e.shape}")
+        raise InputError(f"elevations_m must have shape (M,) or (M, 3), got {e.shape}")
     if e.size < 2:
-        raise ValueError(f"a profile needs at least 2 samples, got {e.size}")
-    s = np.arange(e.size, dtype=float) if positions is None else np.asarray(positions, dtype=float)
+        raise InputError(f"a profile needs at least 2 samples, got {e.size}")
+    s = np.arange(e.size, dtype=float) if positions_m is None else np.asarray(positions_m, dtype=float)
     if s.shape != e.shape:
-        raise ValueError(f"positions have shape {s.shape} but elevations {e.shape}")
+        raise InputError(f"positions_m have shape {s.shape} but elevations_m {e.shape}")
     if not np.all(np.isfinite(s)):
-        raise ValueError("positions contain NaN or inf")
+        raise InputError("positions_m contain NaN or inf")
     return float(segment_roughness_index(s, e, np.array([0]), h, detrend=detrend)[0])
 
 
@@ -225,17 +241,54 @@ def elevation_z_score(confidence: float) -> float:
     """The factor sqrt(2) erfinv(2 Pe - 1) of Eq. (8) (dimensionless).
 
     The z-score below which a zero-mean normal elevation stays with probability Pe;
-    4.7534 for Pe = 0.999999 (NOTES.md).
+    4.7534 for Pe = 0.999999 (docs/paper-notes.md).
+
+    Parameters
+    ----------
+    confidence : float
+        The probability Pe in (0, 1), e.g. ``vehicle.confidence``.
     """
     return math.sqrt(2.0) * float(ca.erfinv(2.0 * confidence - 1.0))
 
 
-def _check_ri(ri: Any) -> None:
+def check_ri(ri: Any) -> None:
+    """Raise :class:`~profileopt.errors.InputError` unless every roughness index is >= 0.
+
+    Parameters
+    ----------
+    ri : float, array_like, casadi.DM, SX or MX
+        Roughness index (dimensionless). Symbols (SX, MX) are not checked.
+
+    Raises
+    ------
+    InputError
+        A NaN or negative value.
+    """
     if is_symbolic(ri):
         return
     values = np.asarray(ri.full() if isinstance(ri, ca.DM) else ri, dtype=float)
     if np.any(np.isnan(values)) or np.any(values < 0):
-        raise ValueError("RI must be a number >= 0 (NaN or a negative RI was given)")
+        raise InputError("RI must be a number >= 0 (NaN or a negative RI was given)")
+
+
+def check_e_max(e_max_m: Any) -> None:
+    """Raise :class:`~profileopt.errors.InputError` unless every worst-case elevation is >= 0.
+
+    Parameters
+    ----------
+    e_max_m : float, array_like, casadi.DM, SX or MX
+        Worst-case elevation e_max (m) of Eq. (8). Symbols (SX, MX) are not checked.
+
+    Raises
+    ------
+    InputError
+        A NaN or negative value.
+    """
+    if is_symbolic(e_max_m):
+        return
+    values = np.asarray(e_max_m.full() if isinstance(e_max_m, ca.DM) else e_max_m, dtype=float)
+    if np.any(np.isnan(values)) or np.any(values < 0):
+        raise InputError("e_max_m must be a number >= 0 in metres (NaN or a negative value was given)")
 
 
 def worst_case_elevation(ri: Any, vehicle: "Vehicle") -> Any:
@@ -252,28 +305,34 @@ def worst_case_elevation(ri: Any, vehicle: "Vehicle") -> Any:
     -------
     Same kind and shape as ``ri``: e_max (m).
     """
-    _check_ri(ri)
+    check_ri(ri)
     return elevation_z_score(vehicle.confidence) * vehicle.ground_clearance_m * ri
 
 
+@old_forms(lambda call: call.rename({"e_m": "e_max_m"}))
 @elementwise
-def step_width(e_m: Any, vehicle: "Vehicle") -> Any:
+def step_width(e_max_m: Any, vehicle: "Vehicle") -> Any:
     """Horizontal distance X_w over which the wheel climbs a step of height e (Eq. 2), in m.
 
-    X_w = sqrt(2 e r - e^2), saturated at the wheel radius r once e >= r (NOTES.md),
+    X_w = sqrt(2 e r - e^2), saturated at the wheel radius r once e >= r (docs/paper-notes.md),
     written as sqrt(e_c (2 r - e_c)) with e_c = min(e, r) so that it is continuous.
 
     Parameters
     ----------
-    e_m : float, array_like, casadi.DM, SX or MX
-        Step height e (m), >= 0. Any shape.
+    e_max_m : float, array_like, casadi.DM, SX or MX
+        Step height e (m), >= 0, usually the worst-case elevation e_max of Eq. (8). Any
+        shape.
     vehicle : Vehicle
         Supplies the wheel radius r (m).
 
     Returns
     -------
-    Same kind and shape as ``e_m``: X_w (m).
+    Same kind and shape as ``e_max_m``: X_w (m).
+
+    Notes
+    -----
+    The old keyword ``e_m`` still works for one release, with a ``DeprecationWarning``.
     """
     r = vehicle.wheel_radius_m
-    e_c = ca.fmin(e_m, r)
+    e_c = ca.fmin(e_max_m, r)
     return ca.sqrt(e_c * (2.0 * r - e_c))

@@ -112,7 +112,7 @@ class Vehicle:
                 "give the probability Pe that e <= e_max, for example 0.999999"
             )
 
-    # Quarter-car constants (NOTES.md): k = m wn^2, c = 2 zeta m wn.
+    # Quarter-car constants (docs/paper-notes.md): k = m wn^2, c = 2 zeta m wn.
     @property
     def spring_n_per_m(self) -> float:
         """Suspension stiffness k = m wn^2 (N/m)."""

@@ -54,7 +54,7 @@ def _close(actual: np.ndarray, expected: np.ndarray) -> None:
 def _check_library(so: Path, functions, vehicle, n_stages: int, rng: np.random.Generator) -> None:
     for e in functions:
         builder = force_function if e.kind == "force" else constraint_function
-        py = builder(e.model, vehicle, e.terrain, n_stages=n_stages)
+        py = builder(vehicle, model=e.model, terrain=e.terrain, n_stages=n_stages)
         py_jac = py.jacobian()  # CasADi's own Jacobian, not the exporter's wrapper
         c = ca.external(e.name, str(so))
         c_jac = ca.external(e.jacobian_name, str(so))
@@ -95,7 +95,7 @@ def test_command_line_export_with_stages_and_example_program(tmp_path: Path, cap
     files = sorted(p.name for p in out.iterdir())
     assert files == ["README.md", "example.c", "profileopt_atv_resonant.c", "profileopt_atv_resonant.h"]
     vehicle = load_vehicle("atv-resonant")
-    functions = [t[0] for t in c_functions(vehicle, ["sbem_tf"], n_stages=3)]
+    functions = [t[0] for t in c_functions(vehicle, models=["sbem_tf"], n_stages=3)]
     so = _compile_shared(out / "profileopt_atv_resonant.c", tmp_path / "lib3.so")
     _check_library(so, functions, vehicle, 3, np.random.default_rng(5))
 
@@ -107,7 +107,7 @@ def test_command_line_export_with_stages_and_example_program(tmp_path: Path, cap
     pattern = rf"speed {number} m/s, RI {number}: g {number}, dg/dspeed {number} s/m, dg/dRI {number}"
     rows = [list(map(float, re.fullmatch(pattern, line).groups())) for line in printed.strip().splitlines()]
     assert len(rows) == 3
-    g = constraint_function("sbem_tf", vehicle)
+    g = constraint_function(vehicle, model="sbem_tf")
     jac = g.jacobian()
     for speed, ri, g_c, dv_c, dri_c in rows:
         _close(np.array([g_c]), np.asarray(g(speed, ri)).ravel())
@@ -135,3 +135,24 @@ def test_output_that_is_a_file_is_refused(tmp_path: Path, capsys) -> None:
     assert main(["export-c", "--vehicle", "atv", "-o", str(target)]) == 2
     assert "is not a folder" in capsys.readouterr().err
     assert target.read_text() == "keep me"
+
+
+# ------------------------------------------------------------------ one vocabulary (issue 9)
+
+def test_c_functions_positional_models_still_work_with_a_warning() -> None:
+    vehicle = load_vehicle("atv")
+    with pytest.warns(DeprecationWarning, match="pass models= by keyword"):
+        old = c_functions(vehicle, ["iecm"])
+    new = c_functions(vehicle, models=["iecm"])
+    assert [t[0] for t in old] == [t[0] for t in new]
+    assert [str(t[1]) for t in old] == [str(t[1]) for t in new]
+
+
+def test_export_c_positional_models_still_work_with_a_warning(tmp_path: Path) -> None:
+    vehicle = load_vehicle("atv")
+    with pytest.warns(DeprecationWarning, match="pass models= by keyword"):
+        old = export_c(vehicle, tmp_path / "old", ["iecm"])
+    new = export_c(vehicle, tmp_path / "new", models=["iecm"])
+    assert old.functions == new.functions
+    for name in ("source", "header", "example", "readme"):
+        assert getattr(old, name).read_bytes() == getattr(new, name).read_bytes()

@@ -24,8 +24,7 @@ from profileopt.constraints import (
     force_constraints,
     force_function,
     force_limit_n,
-    force_of_e_max,
-    force_of_ri,
+    force_n,
 )
 
 MODELS = ["prev_bem", "iecm", "sbem_ef", "sbem_tf"]
@@ -60,19 +59,19 @@ def _hand_force(model: str, v: float, ri: float) -> float:
 @pytest.mark.parametrize("model", MODELS)
 def test_constraint_function_matches_hand_calculation_and_limit(model: str) -> None:
     limit = {"prev_bem": 4000.0, "iecm": 4000.0, "sbem_ef": 4000.0, "sbem_tf": 5000.0}[model]
-    assert force_limit_n(model, ATV) == limit
+    assert force_limit_n(ATV, model=model) == limit
     for v, ri in [(3.0, 0.1), (12.0, 0.35), (7.5, 0.6)]:  # e_max below and above r
         expected = _hand_force(model, v, ri)
-        assert force_of_ri(model, v, ri, ATV) == pytest.approx(expected, rel=1e-13)
-        assert float(force_function(model, ATV)(v, ri)) == pytest.approx(expected, rel=1e-13)
-        g = constraint_function(model, ATV)
+        assert force_n(v, ATV, ri=ri, model=model) == pytest.approx(expected, rel=1e-13)
+        assert float(force_function(ATV, model=model)(v, ri)) == pytest.approx(expected, rel=1e-13)
+        g = constraint_function(ATV, model=model)
         assert float(g(v, ri)) == pytest.approx(expected / limit - 1.0, rel=1e-12, abs=1e-14)
-        raw = constraint_function(model, ATV, normalised=False)
+        raw = constraint_function(ATV, model=model, normalised=False)
         assert float(raw(v, ri)) == pytest.approx(expected - limit, rel=1e-12)
         if model in E_MAX_MODELS:
             e = Z * ri * 0.1
-            assert force_of_e_max(model, v, e, ATV) == pytest.approx(expected, rel=1e-12)
-            assert float(force_function(model, ATV, "e_max")(v, e)) == pytest.approx(expected, rel=1e-12)
+            assert force_n(v, ATV, e_max_m=e, model=model) == pytest.approx(expected, rel=1e-12)
+            assert float(force_function(ATV, model=model, terrain="e_max")(v, e)) == pytest.approx(expected, rel=1e-12)
 
 
 @pytest.mark.parametrize("vehicle", [ATV, RESONANT], ids=["atv", "atv-resonant"])
@@ -81,28 +80,28 @@ def test_numbers_numpy_sx_mx_dm_agree(model: str, vehicle) -> None:
     rng = np.random.default_rng(1)
     speed = np.r_[0.0, rng.uniform(0, 20, 9)]
     ri = np.r_[0.3, 0.0, rng.uniform(0, 1.5, 8)]
-    numbers = np.array([force_of_ri(model, float(v), float(r), vehicle) for v, r in zip(speed, ri)])
-    assert isinstance(force_of_ri(model, 1.0, 0.2, vehicle), float)
-    as_numpy = force_of_ri(model, speed, ri, vehicle)
+    numbers = np.array([force_n(float(v), vehicle, ri=float(r), model=model) for v, r in zip(speed, ri)])
+    assert isinstance(force_n(1.0, vehicle, ri=0.2, model=model), float)
+    as_numpy = force_n(speed, vehicle, ri=ri, model=model)
     assert isinstance(as_numpy, np.ndarray) and as_numpy.shape == (10,)
-    as_dm = force_of_ri(model, ca.DM(speed), ca.DM(ri), vehicle)
+    as_dm = force_n(ca.DM(speed), vehicle, ri=ca.DM(ri), model=model)
     assert isinstance(as_dm, ca.DM)
     results = {"numpy": as_numpy, "DM": np.asarray(as_dm).ravel()}
     for kind in (ca.SX, ca.MX):
         v, r = kind.sym("v", 10), kind.sym("r", 10)
-        expr = force_of_ri(model, v, r, vehicle)
+        expr = force_n(v, vehicle, ri=r, model=model)
         assert isinstance(expr, kind)
         results[kind.__name__] = np.asarray(ca.Function("f", [v, r], [expr])(speed, ri)).ravel()
-    results["Function"] = np.asarray(force_function(model, vehicle, n_stages=10)(speed, ri)).ravel()
+    results["Function"] = np.asarray(force_function(vehicle, model=model, n_stages=10)(speed, ri)).ravel()
     for kind, values in results.items():
         np.testing.assert_allclose(values, numbers, rtol=1e-14, atol=1e-12, err_msg=kind)
     assert numbers[1] == 0.0 or model == "prev_bem"  # smooth ground: no force (NOTES.md)
     if model in E_MAX_MODELS:
         e = Z * ri * vehicle.ground_clearance_m
         v, t = ca.MX.sym("v", 10), ca.MX.sym("e", 10)
-        mx = ca.Function("f", [v, t], [force_of_e_max(model, v, t, vehicle)])(speed, e)
+        mx = ca.Function("f", [v, t], [force_n(v, vehicle, e_max_m=t, model=model)])(speed, e)
         np.testing.assert_allclose(np.asarray(mx).ravel(), numbers, rtol=1e-12, atol=1e-12)
-        np.testing.assert_allclose(force_of_e_max(model, speed, e, vehicle), numbers, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(force_n(speed, vehicle, e_max_m=e, model=model), numbers, rtol=1e-12, atol=1e-12)
 
 
 @pytest.mark.parametrize("vehicle", [ATV, RESONANT], ids=["atv", "atv-resonant"])
@@ -111,13 +110,13 @@ def test_numbers_numpy_sx_mx_dm_agree(model: str, vehicle) -> None:
 )
 def test_jacobians_match_central_differences(model: str, terrain: str, vehicle) -> None:
     rng = np.random.default_rng(2)
-    fn = force_function(model, vehicle, terrain)
+    fn = force_function(vehicle, model=model, terrain=terrain)
     jac = fn.jacobian()
-    g_jac = constraint_function(model, vehicle, terrain).jacobian()
-    limit = force_limit_n(model, vehicle)
+    g_jac = constraint_function(vehicle, model=model, terrain=terrain).jacobian()
+    limit = force_limit_n(vehicle, model=model)
 
     def force(v: float, t: float) -> float:  # the plain-number path, not the Function
-        return force_of_ri(model, v, t, vehicle) if terrain == "ri" else force_of_e_max(model, v, t, vehicle)
+        return force_n(v, vehicle, ri=t, model=model) if terrain == "ri" else force_n(v, vehicle, e_max_m=t, model=model)
 
     checked = 0
     while checked < 12:
@@ -141,19 +140,19 @@ def test_jacobians_match_central_differences(model: str, terrain: str, vehicle) 
 
 def test_layouts_points_segments_and_scalar_terrain() -> None:
     speed, ri = np.array([2.0, 6.0, 9.0]), np.array([0.1, 0.3])
-    f = lambda v, r: force_of_ri("sbem_tf", v, r, ATV)  # noqa: E731
-    cons = force_constraints(speed, ri, ATV, normalised=False)
+    f = lambda v, r: force_n(v, ATV, ri=r, model="sbem_tf")  # noqa: E731
+    cons = force_constraints(speed, ATV, ri=ri, normalised=False)
     assert isinstance(cons, ForceConstraints) and cons.n_force == 4
     expected = [f(2.0, 0.1), f(6.0, 0.1), f(6.0, 0.3), f(9.0, 0.3)]  # both ends of each segment
     np.testing.assert_allclose(np.asarray(cons.g).ravel(), expected, rtol=1e-14)
     np.testing.assert_array_equal(cons.ubg, np.full(4, 5000.0))
-    g, lbg, ubg = force_constraints(speed[:2], ri, ATV)  # points
+    g, lbg, ubg = force_constraints(speed[:2], ATV, ri=ri)  # points
     np.testing.assert_allclose(np.asarray(g).ravel(), [f(2.0, 0.1) / 5000 - 1, f(6.0, 0.3) / 5000 - 1], rtol=1e-13)
     assert np.all(lbg == -np.inf) and np.all(ubg == 0.0)
-    g, _, _ = force_constraints(speed, 0.2, ATV)  # one terrain value for every speed
+    g, _, _ = force_constraints(speed, ATV, ri=0.2)  # one terrain value for every speed
     np.testing.assert_allclose(np.asarray(g).ravel(), f(speed, 0.2) / 5000 - 1, rtol=1e-13)
     a = ca.SX.sym("a", 2)
-    g, lbg, ubg = force_constraints(ca.SX.sym("v", 3), ri, ATV, accel_mps2=a)
+    g, lbg, ubg = force_constraints(ca.SX.sym("v", 3), ATV, ri=ri, accel_mps2=a)
     assert g.shape == (6, 1)
     np.testing.assert_array_equal(lbg[4:], [-4.0, -4.0])
     np.testing.assert_array_equal(ubg[4:], [2.5, 2.5])
@@ -162,14 +161,14 @@ def test_layouts_points_segments_and_scalar_terrain() -> None:
 @pytest.mark.parametrize(
     "call, message",
     [
-        (lambda v: force_constraints(v, None, ATV), "exactly one of ri"),
-        (lambda v: force_constraints(v, 0.2, ATV, e_max_m=0.1), "exactly one of ri"),
-        (lambda v: force_constraints(v, None, ATV, "prev_bem", e_max_m=0.1), "roughness index only"),
-        (lambda v: force_constraints(v, np.ones(3), ATV), "do not match"),
-        (lambda v: force_constraints(v, np.array([0.1, -0.1, 0.2, 0.1, 0.1]), ATV), ">= 0"),
-        (lambda v: force_constraints(v, None, ATV, e_max_m=np.full(5, np.nan)), ">= 0"),
-        (lambda v: force_constraints(v, 0.1, ATV, "sbem"), "unknown"),
-        (lambda v: force_function("sbem_tf", ATV, "height"), "unknown"),
+        (lambda v: force_constraints(v, ATV), "exactly one of ri"),
+        (lambda v: force_constraints(v, ATV, ri=0.2, e_max_m=0.1), "exactly one of ri"),
+        (lambda v: force_constraints(v, ATV, model="prev_bem", e_max_m=0.1), "roughness index only"),
+        (lambda v: force_constraints(v, ATV, ri=np.ones(3)), "do not match"),
+        (lambda v: force_constraints(v, ATV, ri=np.array([0.1, -0.1, 0.2, 0.1, 0.1])), ">= 0"),
+        (lambda v: force_constraints(v, ATV, e_max_m=np.full(5, np.nan)), ">= 0"),
+        (lambda v: force_constraints(v, ATV, ri=0.1, model="sbem"), "unknown"),
+        (lambda v: force_function(ATV, model="sbem_tf", terrain="height"), "unknown"),
         (lambda v: band_edges([0.1], ATV, band="middle"), "unknown"),
         (lambda v: band_edges([0.1], ATV, band="containing"), "needs speed_mps"),
     ],
@@ -184,9 +183,9 @@ RI_HORIZON = np.array([0.0, 0.02, 0.1, 0.2, 0.3, 0.45, 0.6, 0.25, 0.05, 0.9])
 
 def _check_speeds(v: np.ndarray, ri: np.ndarray, vehicle, model: str = "sbem_tf") -> None:
     """Independent check: allowable speeds by bracketing Newton, forces evaluated again."""
-    expected = allowable_speed(ri, vehicle, model)
+    expected = allowable_speed(ri, vehicle, model=model)
     np.testing.assert_allclose(v, expected, rtol=1e-6, atol=1e-6)
-    ratio = force_of_ri(model, v, ri, vehicle) / force_limit_n(model, vehicle)
+    ratio = force_n(v, vehicle, ri=ri, model=model) / force_limit_n(vehicle, model=model)
     assert np.all(ratio <= 1 + 1e-6)
     active = expected < vehicle.max_speed_mps
     assert active.sum() >= 6 and (~active).sum() >= 2  # the test exercises both cases
@@ -197,7 +196,7 @@ def _check_speeds(v: np.ndarray, ri: np.ndarray, vehicle, model: str = "sbem_tf"
 @pytest.mark.parametrize("normalised", [True, False])
 def test_nlpsol_maximises_speeds_up_to_the_force_limit(normalised: bool) -> None:
     v = ca.SX.sym("v", 10)
-    g, lbg, ubg = force_constraints(v, RI_HORIZON, ATV, normalised=normalised)
+    g, lbg, ubg = force_constraints(v, ATV, ri=RI_HORIZON, normalised=normalised)
     solver = ca.nlpsol("horizon", "ipopt", {"x": v, "f": -ca.sum1(v), "g": g}, IPOPT)
     sol = solver(x0=1.0, lbx=0.0, ubx=ATV.max_speed_mps, lbg=lbg, ubg=ubg)
     assert solver.stats()["success"]
@@ -208,7 +207,7 @@ def test_nlpsol_with_parameters_segments_and_acceleration() -> None:
     """Segments of 5 m from rest: v_{i+1}^2 = v_i^2 + 2 a_i ds, ri as parameters."""
     n, ds = 10, 5.0
     v, a, p = ca.SX.sym("v", n + 1), ca.SX.sym("a", n), ca.SX.sym("ri", n)
-    cons = force_constraints(v, p, ATV, accel_mps2=a)
+    cons = force_constraints(v, ATV, ri=p, accel_mps2=a)
     dyn = v[1:] ** 2 - v[:-1] ** 2 - 2 * a * ds
     x = ca.vertcat(v, a)
     solver = ca.nlpsol("segments", "ipopt", {"x": x, "p": p, "f": -ca.sum1(v), "g": ca.vertcat(cons.g, dyn)}, IPOPT)
@@ -221,7 +220,7 @@ def test_nlpsol_with_parameters_segments_and_acceleration() -> None:
     assert np.all(accel <= 2.5 + 1e-6) and np.all(accel >= -4.0 - 1e-6)
     # both ends of every segment within the limit of that segment's terrain
     for i in range(n):
-        ends = force_of_ri("sbem_tf", speed[i:i + 2], ri[i], ATV) / 5000.0
+        ends = force_n(speed[i:i + 2], ATV, ri=ri[i], model="sbem_tf") / 5000.0
         assert np.all(ends <= 1 + 1e-6)
     # Independent reference: the classic forward-backward pass. Boundary i is capped by the
     # allowable speeds of both segments it touches; v^2 grows by at most 2 a_max ds forward
@@ -240,7 +239,7 @@ def test_nlpsol_with_parameters_segments_and_acceleration() -> None:
 def test_opti_helper_with_parameters_and_resolve() -> None:
     opti = ca.Opti()
     v, ri = opti.variable(10), opti.parameter(10)
-    cons = add_force_constraints(opti, v, ri, ATV)
+    cons = add_force_constraints(opti, v, ATV, ri=ri)
     opti.subject_to(opti.bounded(0, v, ATV.max_speed_mps))
     opti.minimize(-ca.sum1(v))
     opti.solver("ipopt", {"print_time": False}, {"print_level": 0, "sb": "yes", "tol": 1e-10})
@@ -249,14 +248,14 @@ def test_opti_helper_with_parameters_and_resolve() -> None:
         opti.set_value(ri, ri_value)
         sol = opti.solve()
         _check_speeds(sol.value(v), ri_value, ATV)
-        np.testing.assert_allclose(sol.value(cons.force_n), force_of_ri("sbem_tf", sol.value(v), ri_value, ATV))
+        np.testing.assert_allclose(sol.value(cons.force_n), force_n(sol.value(v), ATV, ri=ri_value, model="sbem_tf"))
 
 
 def test_opti_helper_with_e_max_and_acceleration_bounds() -> None:
     opti = ca.Opti()
     v, a = opti.variable(11), opti.variable(10)
     e = Z * 0.1 * RI_HORIZON
-    add_force_constraints(opti, v, None, ATV, "sbem_ef", e_max_m=e, accel_mps2=a)
+    add_force_constraints(opti, v, ATV, model="sbem_ef", e_max_m=e, accel_mps2=a)
     opti.subject_to(v[1:] ** 2 == v[:-1] ** 2 + 2 * a * 5.0)
     opti.subject_to(opti.bounded(0, v, ATV.max_speed_mps))
     opti.minimize(-ca.sum1(v))
@@ -267,7 +266,7 @@ def test_opti_helper_with_e_max_and_acceleration_bounds() -> None:
     assert np.all(accel <= 2.5 + 1e-6) and np.all(accel >= -4.0 - 1e-6)
     assert accel.max() == pytest.approx(2.5, abs=1e-6) and accel.min() == pytest.approx(-4.0, abs=1e-6)
     for i in range(10):
-        assert np.all(force_of_ri("sbem_ef", speed[i:i + 2], RI_HORIZON[i], ATV) <= 4000 * (1 + 1e-6))
+        assert np.all(force_n(speed[i:i + 2], ATV, ri=RI_HORIZON[i], model="sbem_ef") <= 4000 * (1 + 1e-6))
 
 
 def test_band_edges_of_resonant_vehicle() -> None:
@@ -279,9 +278,9 @@ def test_band_edges_of_resonant_vehicle() -> None:
     for i in range(2):
         for lo, hi in ((first.lower_mps[i], first.upper_mps[i]), (largest.lower_mps[i], largest.upper_mps[i])):
             inside = np.linspace(lo, hi, 2001)
-            assert np.all(force_of_ri("sbem_tf", inside, ri[i], RESONANT) <= 1000.0 * (1 + 1e-9))
+            assert np.all(force_n(inside, RESONANT, ri=ri[i], model="sbem_tf") <= 1000.0 * (1 + 1e-9))
     gap = np.linspace(first.upper_mps[1] + 1e-3, largest.lower_mps[1] - 1e-3, 200)
-    assert np.all(force_of_ri("sbem_tf", gap, 0.3, RESONANT) > 1000.0)
+    assert np.all(force_n(gap, RESONANT, ri=0.3, model="sbem_tf") > 1000.0)
     containing = band_edges(ri, RESONANT, band="containing", speed_mps=[1.0, 2.0])
     np.testing.assert_allclose(containing.lower_mps, [0.0, largest.lower_mps[1]])
     assert np.isnan(band_edges([0.3], RESONANT, band="containing", speed_mps=0.45).upper_mps[0])
@@ -293,7 +292,7 @@ def test_pointwise_constraint_jumps_a_band_and_band_bounds_prevent_it() -> None:
     would have to pass through; the 'first' band bound keeps every speed below admissible."""
     ri = np.full(3, 0.3)
     v = ca.SX.sym("v", 3)
-    g, lbg, ubg = force_constraints(v, ri, RESONANT)
+    g, lbg, ubg = force_constraints(v, RESONANT, ri=ri)
     solver = ca.nlpsol("bands", "ipopt", {"x": v, "f": -ca.sum1(v), "g": g}, IPOPT)
     edges = band_edges(ri, RESONANT, band="first")
     free = np.asarray(solver(x0=2.0, lbx=0, ubx=20.0, lbg=lbg, ubg=ubg)["x"]).ravel()
@@ -302,4 +301,106 @@ def test_pointwise_constraint_jumps_a_band_and_band_bounds_prevent_it() -> None:
     np.testing.assert_allclose(pinned, edges.upper_mps, rtol=1e-6)
     for speed in pinned:  # every speed from rest up to the pinned one is admissible
         path = np.linspace(0.0, speed, 500)
-        assert np.all(force_of_ri("sbem_tf", path, 0.3, RESONANT) <= 1000.0 * (1 + 1e-6))
+        assert np.all(force_n(path, RESONANT, ri=0.3, model="sbem_tf") <= 1000.0 * (1 + 1e-6))
+
+
+# ------------------------------------------------------------------ one vocabulary (issue 9)
+
+def test_band_edges_refuses_all_and_names_speed_bands() -> None:
+    with pytest.raises(InputError, match="speed_bands"):
+        band_edges([0.1], ATV, band="all")
+
+
+class _Recorder:
+    """Not a casadi.Opti: anything with subject_to (rockit's Ocp, a user's own wrapper)."""
+
+    def __init__(self) -> None:
+        self.constraints: list = []
+
+    def subject_to(self, constraint) -> None:
+        self.constraints.append(constraint)
+
+
+def test_add_force_constraints_accepts_any_problem_with_subject_to() -> None:
+    problem = _Recorder()
+    v, a = ca.MX.sym("v", 4), ca.MX.sym("a", 3)
+    cons = add_force_constraints(problem, v, ATV, ri=np.full(3, 0.2), accel_mps2=a)
+    assert len(problem.constraints) == 2 and cons.n_force == 6
+    with pytest.raises(InputError, match="subject_to"):
+        add_force_constraints(object(), v, ATV, ri=0.2)
+
+
+def _same_constraints(old: ForceConstraints, new: ForceConstraints) -> None:
+    assert str(old.g) == str(new.g)
+    np.testing.assert_array_equal(old.lbg, new.lbg)
+    np.testing.assert_array_equal(old.ubg, new.ubg)
+    assert (old.model, old.n_force, old.limit_n) == (new.model, new.n_force, new.limit_n)
+
+
+def test_force_constraints_old_positional_form_still_works_with_a_warning() -> None:
+    v = ca.SX.sym("v", 4)
+    ri = np.array([0.1, 0.2, 0.3])
+    with pytest.warns(DeprecationWarning, match=r"use force_constraints\(speed_mps, vehicle, ri=ri, model=model\)"):
+        old = force_constraints(v, ri, ATV, "iecm", normalised=False)
+    _same_constraints(old, force_constraints(v, ATV, ri=ri, model="iecm", normalised=False))
+
+
+def test_add_force_constraints_old_positional_form_still_works_with_a_warning() -> None:
+    opti = ca.Opti()
+    v = opti.variable(4)
+    with pytest.warns(DeprecationWarning, match=r"use add_force_constraints\(problem, speed_mps, vehicle, ri=ri"):
+        old = add_force_constraints(opti, v, None, ATV, "sbem_ef", e_max_m=0.02)
+    new = add_force_constraints(opti, v, ATV, e_max_m=0.02, model="sbem_ef")
+    _same_constraints(old, new)
+    assert opti.ng == 2 * 4
+    with pytest.warns(DeprecationWarning, match="opti= is deprecated, use problem="):
+        add_force_constraints(opti=opti, speed_mps=v, vehicle=ATV, ri=0.1)
+    assert opti.ng == 3 * 4
+
+
+def test_force_function_old_positional_form_still_works_with_a_warning() -> None:
+    with pytest.warns(DeprecationWarning, match=r"use force_function\(vehicle, model=model, terrain=terrain\)"):
+        old = force_function("sbem_ef", ATV, "e_max", n_stages=2)
+    new = force_function(ATV, model="sbem_ef", terrain="e_max", n_stages=2)
+    assert old.name() == new.name() and old.name_in() == new.name_in()
+    np.testing.assert_array_equal(np.asarray(old([3.0, 9.0], [0.02, 0.1])), np.asarray(new([3.0, 9.0], [0.02, 0.1])))
+
+
+def test_constraint_function_old_positional_form_still_works_with_a_warning() -> None:
+    with pytest.warns(DeprecationWarning, match=r"use constraint_function\(vehicle, model=model, terrain=terrain\)"):
+        old = constraint_function("iecm", ATV, normalised=False)
+    new = constraint_function(ATV, model="iecm", normalised=False)
+    assert old.name() == new.name()
+    assert float(old(5.0, 0.3)) == float(new(5.0, 0.3))
+
+
+def test_force_limit_n_old_positional_form_still_works_with_a_warning() -> None:
+    with pytest.warns(DeprecationWarning, match=r"use force_limit_n\(vehicle, model=model\)"):
+        old = force_limit_n("iecm", ATV)
+    assert old == force_limit_n(ATV, model="iecm") == 4000.0
+    assert force_limit_n(ATV) == 5000.0  # DEFAULT_MODEL: SBEM:TF, the transmitted force
+
+
+def test_band_edges_old_positional_form_still_works_with_a_warning() -> None:
+    ri = np.array([0.1, 0.3])
+    with pytest.warns(DeprecationWarning, match="pass model=, band= by keyword"):
+        old = band_edges(ri, RESONANT, "sbem_tf", "largest")
+    new = band_edges(ri, RESONANT, band="largest")
+    np.testing.assert_array_equal(old.lower_mps, new.lower_mps)
+    np.testing.assert_array_equal(old.upper_mps, new.upper_mps)
+
+
+def test_force_of_ri_is_a_deprecated_alias_of_force_n() -> None:
+    from profileopt.constraints import force_of_ri
+
+    with pytest.warns(DeprecationWarning, match=r"use force_n\(speed_mps, vehicle, ri=ri, model=model\)"):
+        old = force_of_ri("sbem_ef", 4.0, 0.3, ATV)
+    assert old == force_n(4.0, ATV, ri=0.3, model="sbem_ef")
+
+
+def test_force_of_e_max_is_a_deprecated_alias_of_force_n() -> None:
+    from profileopt.constraints import force_of_e_max
+
+    with pytest.warns(DeprecationWarning, match=r"use force_n\(speed_mps, vehicle, e_max_m=e_max_m, model=model\)"):
+        old = force_of_e_max("iecm", 4.0, 0.03, ATV)
+    assert old == force_n(4.0, ATV, e_max_m=0.03, model="iecm")

@@ -18,7 +18,7 @@ import scipy.integrate
 import scipy.signal
 import scipy.special
 
-from profileopt import MODELS, force_n, get_model, load_vehicle
+from profileopt import MODELS, InputError, force_n, get_model, load_vehicle
 from profileopt.forces import (
     base_frequency_radps,
     iecm_force_n,
@@ -78,15 +78,15 @@ def test_prev_bem_hand_value():
     expected = 900.0 * math.sqrt(2) * 0.05 * math.sqrt(1.0 + 4.0 * math.pi**2)
     assert prev_bem_force_n(2.0, 0.5, ATV) == pytest.approx(expected, rel=1e-13)
     assert expected == pytest.approx(404.89, abs=0.01)
-    assert force_n("prev_bem", 2.0, 0.5, ATV) == pytest.approx(expected, rel=1e-13)
+    assert force_n(2.0, ATV, ri=0.5, model="prev_bem") == pytest.approx(expected, rel=1e-13)
 
 
 def test_models_of_ri_use_e_max_of_eq8():
     # RI such that e_max = Z RI h = 0.02 m: every paper model then gives its hand value
     ri = 0.02 / (Z * 0.1)
-    assert force_n("iecm", 2.0, ri, ATV) == pytest.approx(218.0, rel=1e-12)
-    assert force_n("sbem_ef", V6, ri, ATV) == pytest.approx(45.0 / math.sqrt(1.25), rel=1e-12)
-    assert force_n("sbem_tf", V6, ri, ATV) == pytest.approx(72.0 * math.sqrt(5.0 / 13.0), rel=1e-12)
+    assert force_n(2.0, ATV, ri=ri, model="iecm") == pytest.approx(218.0, rel=1e-12)
+    assert force_n(V6, ATV, ri=ri, model="sbem_ef") == pytest.approx(45.0 / math.sqrt(1.25), rel=1e-12)
+    assert force_n(V6, ATV, ri=ri, model="sbem_tf") == pytest.approx(72.0 * math.sqrt(5.0 / 13.0), rel=1e-12)
     assert get_model("sbem_tf").limit_n(RES) == 1000.0
     assert get_model("iecm").limit_n(ATV) == 5000.0
 
@@ -107,11 +107,11 @@ def test_step_saturation_e_at_least_r():
 @pytest.mark.parametrize("key", list(MODELS))
 def test_smooth_ground_gives_zero_force(key):
     speeds = np.array([0.0, 0.1, 5.0, 20.0])
-    np.testing.assert_array_equal(force_n(key, speeds, 0.0, ATV), 0.0)
-    np.testing.assert_array_equal(force_n(key, speeds, np.zeros(4), RES), 0.0)
+    np.testing.assert_array_equal(force_n(speeds, ATV, ri=0.0, model=key), 0.0)
+    np.testing.assert_array_equal(force_n(speeds, RES, ri=np.zeros(4), model=key), 0.0)
     # the same through a symbolic evaluation (the untaken 0/0 branch must not leak a NaN)
     v, ri = ca.SX.sym("v"), ca.SX.sym("ri")
-    fun = ca.Function("f", [v, ri], [force_n(key, v, ri, ATV)])
+    fun = ca.Function("f", [v, ri], [force_n(v, ATV, ri=ri, model=key)])
     assert float(fun(3.0, 0.0)) == 0.0
 
 
@@ -119,7 +119,7 @@ def test_smooth_ground_gives_zero_force(key):
 @pytest.mark.parametrize("ri", [math.nan, -0.01])
 def test_bad_ri_raises(key, ri):
     with pytest.raises(ValueError, match="RI"):
-        force_n(key, 1.0, ri, ATV)
+        force_n(1.0, ATV, ri=ri, model=key)
 
 
 def test_unknown_model_names_the_choices():
@@ -208,19 +208,19 @@ POINTS = [(0.0, 0.05), (0.7, 0.1), (3.0, 0.15), (12.0, 0.4), (20.0, 0.7)]
 def test_numbers_arrays_dm_sx_mx_agree(key, vehicle):
     v = np.array([p[0] for p in POINTS])
     ri = np.array([p[1] for p in POINTS])
-    numbers = np.array([force_n(key, a, b, vehicle) for a, b in POINTS])
-    assert all(isinstance(force_n(key, a, b, vehicle), float) for a, b in POINTS)
-    np.testing.assert_allclose(force_n(key, v, ri, vehicle), numbers, rtol=1e-14)
+    numbers = np.array([force_n(a, vehicle, ri=b, model=key) for a, b in POINTS])
+    assert all(isinstance(force_n(a, vehicle, ri=b, model=key), float) for a, b in POINTS)
+    np.testing.assert_allclose(force_n(v, vehicle, ri=ri, model=key), numbers, rtol=1e-14)
     # broadcasting: a (5, 1) speed column against a (1, 5) RI row
-    grid = force_n(key, v[:, None], ri[None, :], vehicle)
+    grid = force_n(v[:, None], vehicle, ri=ri[None, :], model=key)
     assert grid.shape == (5, 5)
     np.testing.assert_allclose(np.diag(grid), numbers, rtol=1e-14)
-    dm = force_n(key, ca.DM(v), ca.DM(ri), vehicle)
+    dm = force_n(ca.DM(v), vehicle, ri=ca.DM(ri), model=key)
     assert isinstance(dm, ca.DM)
     np.testing.assert_allclose(np.asarray(dm).ravel(), numbers, rtol=1e-14)
     for sym in (ca.SX, ca.MX):
         sv, sr = sym.sym("v"), sym.sym("ri")
-        expr = force_n(key, sv, sr, vehicle)
+        expr = force_n(sv, vehicle, ri=sr, model=key)
         assert isinstance(expr, sym)
         fun = ca.Function("f", [sv, sr], [expr])
         got = np.array([float(fun(a, b)) for a, b in POINTS])
@@ -234,12 +234,52 @@ def test_casadi_jacobians_match_central_differences(key, sym):
     points = [(0.5, 0.05), (3.0, 0.15), (9.0, 0.4), (V6, 0.1)]
     for vehicle in (ATV, RES):
         sv, sr = sym.sym("v"), sym.sym("ri")
-        expr = force_n(key, sv, sr, vehicle)
+        expr = force_n(sv, vehicle, ri=sr, model=key)
         jac = ca.Function("j", [sv, sr], [ca.jacobian(expr, ca.vertcat(sv, sr))])
         for v, ri in points:
             exact = np.asarray(jac(v, ri)).ravel()
             hv, hr = 1e-6 * max(v, 1.0), 1e-7
-            fd_v = (force_n(key, v + hv, ri, vehicle) - force_n(key, v - hv, ri, vehicle)) / (2 * hv)
-            fd_r = (force_n(key, v, ri + hr, vehicle) - force_n(key, v, ri - hr, vehicle)) / (2 * hr)
-            scale = abs(force_n(key, v, ri, vehicle))
+            fd_v = (force_n(v + hv, vehicle, ri=ri, model=key) - force_n(v - hv, vehicle, ri=ri, model=key)) / (2 * hv)
+            fd_r = (force_n(v, vehicle, ri=ri + hr, model=key) - force_n(v, vehicle, ri=ri - hr, model=key)) / (2 * hr)
+            scale = abs(force_n(v, vehicle, ri=ri, model=key))
             np.testing.assert_allclose(exact, [fd_v, fd_r], rtol=1e-6, atol=1e-8 * scale)
+
+
+# ------------------------------------------------------------------ one vocabulary (issue 9)
+
+def test_force_n_of_e_max_is_the_models_own_expression():
+    from profileopt.forces import DEFAULT_MODEL, FORCE_OF_E_MAX
+
+    assert DEFAULT_MODEL == "sbem_tf" and set(FORCE_OF_E_MAX) == {"iecm", "sbem_ef", "sbem_tf"}
+    assert force_n(V6, ATV, e_max_m=0.02) == sbem_tf_force_n(V6, 0.02, ATV)
+    assert force_n(2.0, ATV, e_max_m=0.02, model="iecm") == iecm_force_n(2.0, 0.02, ATV)
+    ri = 0.02 / (Z * 0.1)
+    assert force_n(V6, ATV, ri=ri) == force_n(V6, ATV, ri=ri, model="sbem_tf")
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [({}, "ri.*e_max_m"), ({"ri": 0.1, "e_max_m": 0.02}, "ri.*e_max_m"),
+     ({"e_max_m": 0.02, "model": "prev_bem"}, "model 'prev_bem'.*ri"), ({"ri": 0.1, "model": "tf"}, "model 'tf'"),
+     ({"e_max_m": -0.1}, "e_max_m")],
+)
+def test_force_n_input_errors_name_the_parameters(kwargs, match):
+    with pytest.raises(InputError, match=match):
+        force_n(1.0, ATV, **kwargs)
+
+
+def test_force_n_rejects_a_misspelt_keyword():
+    with pytest.raises(TypeError):
+        force_n(1.0, ATV, r=0.1)
+
+
+def test_get_model_raises_input_error():
+    with pytest.raises(InputError, match="model 'sbem'.*sbem_tf"):
+        get_model("sbem")
+
+
+def test_force_n_old_positional_form_still_works_with_a_warning():
+    ri = np.array([0.05, 0.2, 0.6])
+    with pytest.warns(DeprecationWarning, match=r"use force_n\(speed_mps, vehicle, ri=ri, model=model\)"):
+        old = force_n("iecm", 3.0, ri, RES)
+    np.testing.assert_array_equal(old, force_n(3.0, RES, ri=ri, model="iecm"))

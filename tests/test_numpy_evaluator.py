@@ -104,7 +104,7 @@ def test_speed_bands_unchanged_by_the_numpy_evaluator(model: str, vehicle_name: 
     # RI from smooth to impassable, a dense sweep through the resonant vehicle's band changes
     ri = np.concatenate([[0.0], rng.uniform(0, 0.05, 100), rng.uniform(0, 1.5, 300),
                          np.linspace(0.1, 0.6, 200)])
-    fast = speeds.speed_bands(ri, vehicle, model)
+    fast = speeds.speed_bands(ri, vehicle, model=model)
     if model == "sbem_tf" and vehicle_name == "atv-resonant":  # the multi-band path is exercised
         assert fast.count.max() >= 2 and np.isfinite(fast.peaks_mps).any()
 
@@ -113,7 +113,7 @@ def test_speed_bands_unchanged_by_the_numpy_evaluator(model: str, vehicle_name: 
                      for f in speeds._constraint_derivatives(model_, vehicle_))
 
     monkeypatch.setattr(speeds, "_constraint_evaluators", casadi_evaluators)
-    slow = speeds.speed_bands(ri, vehicle, model)
+    slow = speeds.speed_bands(ri, vehicle, model=model)
     np.testing.assert_array_equal(fast.count, slow.count)
     for name in ("lower_mps", "upper_mps", "peaks_mps"):
         a, b = getattr(fast, name), getattr(slow, name)
@@ -125,9 +125,9 @@ def test_speed_bands_in_row_blocks_equal_all_at_once(monkeypatch) -> None:
     # rows are independent, so splitting a long RI array into blocks changes nothing
     vehicle = load_vehicle("atv-resonant")
     ri = np.concatenate([np.linspace(0.0, 0.6, 150), [0.0, 5.0]])  # one band and two bands
-    whole = speeds.speed_bands(ri, vehicle, "sbem_tf")
+    whole = speeds.speed_bands(ri, vehicle, model="sbem_tf")
     monkeypatch.setattr(speeds, "_BLOCK_ROWS", 7)
-    blocks = speeds.speed_bands(ri, vehicle, "sbem_tf")
+    blocks = speeds.speed_bands(ri, vehicle, model="sbem_tf")
     assert set(whole.count) == {1, 2}
     for name in ("lower_mps", "upper_mps", "count", "peaks_mps"):
         np.testing.assert_array_equal(getattr(blocks, name), getattr(whole, name))

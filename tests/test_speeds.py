@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 import scipy.special
 
-from profileopt import MODELS, allowable_speed, force_n, get_model, load_vehicle, speed_bands
+from profileopt import MODELS, InputError, allowable_speed, force_n, get_model, load_vehicle, speed_bands
+from profileopt.speeds import BAND_CHOICES
 from profileopt.figures import PAPER_AMPLITUDES_M, TERRAIN_FREQUENCY_CPM, sinusoid_terrain
 
 ATV = load_vehicle("atv")
@@ -68,12 +69,12 @@ def prev_bem_closed_form(ri, vehicle):
 CLOSED_FORMS = {"iecm": iecm_closed_form, "sbem_ef": sbem_ef_closed_form, "prev_bem": prev_bem_closed_form}
 
 
-@pytest.mark.parametrize("semantics", ["first", "largest"])
+@pytest.mark.parametrize("band", ["first", "largest"])
 @pytest.mark.parametrize("key", list(CLOSED_FORMS))
 @pytest.mark.parametrize("vehicle", [ATV, RES, ATV.replace(max_excitation_force_n=800.0)], ids=["atv", "resonant", "weak"])
-def test_newton_solver_matches_closed_form_inverse(vehicle, key, semantics):
+def test_newton_solver_matches_closed_form_inverse(vehicle, key, band):
     expected = CLOSED_FORMS[key](FINE_RI, vehicle)
-    got = allowable_speed(FINE_RI, vehicle, key, semantics)
+    got = allowable_speed(FINE_RI, vehicle, model=key, band=band)
     # the grid must exercise every regime: top speed, interior root and 0
     assert np.any(expected == vehicle.max_speed_mps) and np.any((expected > 0) & (expected < vehicle.max_speed_mps))
     np.testing.assert_allclose(got, expected, rtol=1e-9, atol=1e-10)
@@ -84,9 +85,9 @@ def test_hand_value_sbem_ef_inverse():
     # (test_forces), so the inverse must return V = 2 X_w w_b / pi = 0.72 / pi m/s.
     vehicle = ATV.replace(max_excitation_force_n=18.0 * math.sqrt(5.0))
     ri = 0.02 / (Z * 0.1)
-    assert allowable_speed(ri, vehicle, "sbem_ef") == pytest.approx(0.72 / math.pi, rel=1e-10)
+    assert allowable_speed(ri, vehicle, model="sbem_ef") == pytest.approx(0.72 / math.pi, rel=1e-10)
     # IECM hand value: 218 N at 2 m/s (test_forces) -> limit 218 N gives 2 m/s
-    assert allowable_speed(ri, ATV.replace(max_excitation_force_n=218.0), "iecm") == pytest.approx(2.0, rel=1e-10)
+    assert allowable_speed(ri, ATV.replace(max_excitation_force_n=218.0), model="iecm") == pytest.approx(2.0, rel=1e-10)
 
 
 # ------------------------------------------------------------ SBEM:TF (no closed form)
@@ -96,23 +97,23 @@ def test_sbem_tf_first_and_largest_are_what_they_claim(vehicle):
     limit = vehicle.max_transmitted_force_n
     vmax = vehicle.max_speed_mps
     ris = FIG_RI[1::3]
-    first = allowable_speed(ris, vehicle, "sbem_tf", "first")
-    largest = allowable_speed(ris, vehicle, "sbem_tf", "largest")
+    first = allowable_speed(ris, vehicle, model="sbem_tf", band="first")
+    largest = allowable_speed(ris, vehicle, model="sbem_tf", band="largest")
     assert np.all(first <= largest)
     for v in (first, largest):  # an interior answer is a root: the force equals the limit
         interior = (v > 0) & (v < vmax)
-        np.testing.assert_allclose(force_n("sbem_tf", v[interior], ris[interior], vehicle), limit, rtol=1e-9)
+        np.testing.assert_allclose(force_n(v[interior], vehicle, ri=ris[interior], model="sbem_tf"), limit, rtol=1e-9)
     # "first": every speed from rest up to it is admissible (a fine grid, far finer than the
     # resonance peak, whose relative width is ~ zeta), and just above it is not
     unit = np.linspace(0.0, 1.0, 4001)[None, :]
     below = first[:, None] * unit
-    assert np.all(force_n("sbem_tf", below, ris[:, None], vehicle) <= limit * (1 + 1e-9))
+    assert np.all(force_n(below, vehicle, ri=ris[:, None], model="sbem_tf") <= limit * (1 + 1e-9))
     short = first < vmax
-    assert np.all(force_n("sbem_tf", first[short] * (1 + 1e-6) + 1e-9, ris[short], vehicle) > limit)
+    assert np.all(force_n(first[short] * (1 + 1e-6) + 1e-9, vehicle, ri=ris[short], model="sbem_tf") > limit)
     # "largest": no speed above it, up to v_max, is admissible
     above = largest[:, None] + (vmax - largest[:, None]) * unit[:, 1:]
     short = largest < vmax
-    assert np.all(force_n("sbem_tf", above[short], ris[short, None], vehicle) > limit)
+    assert np.all(force_n(above[short], vehicle, ri=ris[short, None], model="sbem_tf") > limit)
 
 
 @pytest.mark.parametrize("key", list(MODELS))
@@ -122,47 +123,47 @@ def test_every_band_edge_is_a_root(key, vehicle):
     # bracket midpoint (SBEM:TF, atv-resonant, RI = 0.154 gave 0.33725 m/s, a speed where
     # the force is 3 % below the limit, instead of the root 0.34175 m/s).
     ri = np.linspace(1e-3, 0.8, 800)
-    bands = speed_bands(ri, vehicle, key)
+    bands = speed_bands(ri, vehicle, model=key)
     limit = get_model(key).limit_n(vehicle)
     rows = np.broadcast_to(ri[:, None], bands.lower_mps.shape)
     for edges in (bands.lower_mps, bands.upper_mps):
         interior = np.isfinite(edges) & (edges > 0) & (edges < vehicle.max_speed_mps)
-        np.testing.assert_allclose(force_n(key, edges[interior], rows[interior], vehicle), limit, rtol=1e-9)
+        np.testing.assert_allclose(force_n(edges[interior], vehicle, ri=rows[interior], model=key), limit, rtol=1e-9)
     # Reference: Eq. (13) set equal to 1000 N and solved independently with scipy's brentq on
     # [0.2, 0.4] m/s for atv-resonant at RI 0.154 (e_max = 4.7534 * 0.154 * 0.1 m): 0.3417451789.
-    assert allowable_speed(0.154, RES, "sbem_tf", "first") == pytest.approx(0.34174518, rel=1e-6)
+    assert allowable_speed(0.154, RES, model="sbem_tf", band="first") == pytest.approx(0.34174518, rel=1e-6)
 
 
 def test_sbem_tf_table_1_is_monotone_so_semantics_agree():
     np.testing.assert_array_equal(
-        allowable_speed(FINE_RI, ATV, "sbem_tf", "first"), allowable_speed(FINE_RI, ATV, "sbem_tf", "largest")
+        allowable_speed(FINE_RI, ATV, model="sbem_tf", band="first"), allowable_speed(FINE_RI, ATV, model="sbem_tf", band="largest")
     )
 
 
 # ------------------------------------------------------------ edge cases
 
-@pytest.mark.parametrize("semantics", ["first", "largest"])
+@pytest.mark.parametrize("band", ["first", "largest"])
 @pytest.mark.parametrize("key", list(MODELS))
-def test_smooth_ground_allows_top_speed(key, semantics):
-    assert allowable_speed(0.0, RES, key, semantics) == RES.max_speed_mps
-    np.testing.assert_array_equal(allowable_speed(np.zeros(3), ATV, key, semantics), ATV.max_speed_mps)
+def test_smooth_ground_allows_top_speed(key, band):
+    assert allowable_speed(0.0, RES, model=key, band=band) == RES.max_speed_mps
+    np.testing.assert_array_equal(allowable_speed(np.zeros(3), ATV, model=key, band=band), ATV.max_speed_mps)
 
 
-@pytest.mark.parametrize("semantics", ["first", "largest"])
+@pytest.mark.parametrize("band", ["first", "largest"])
 @pytest.mark.parametrize("key", ["prev_bem", "iecm", "sbem_ef"])
-def test_limit_below_static_force_gives_zero(key, semantics):
+def test_limit_below_static_force_gives_zero(key, band):
     # RI = 0.5: static forces k e_max = 900 * 0.2377 = 214 N (IECM, SBEM:EF) and
     # k Y = 900 * 0.0707 = 63.6 N (Prev:BEM) both exceed a 10 N limit
     weak = ATV.replace(max_excitation_force_n=10.0)
-    assert allowable_speed(0.5, weak, key, semantics) == 0.0
-    assert speed_bands(0.5, weak, key).count[0] == 0
+    assert allowable_speed(0.5, weak, model=key, band=band) == 0.0
+    assert speed_bands(0.5, weak, model=key).count[0] == 0
 
 
 def test_sbem_tf_has_no_static_force():
     # F_T ~ k e r^2 as V -> 0: even a tiny limit leaves a small positive speed
-    v = allowable_speed(0.5, ATV.replace(max_transmitted_force_n=1.0), "sbem_tf")
+    v = allowable_speed(0.5, ATV.replace(max_transmitted_force_n=1.0), model="sbem_tf")
     assert 0 < v < 0.1
-    assert force_n("sbem_tf", v, 0.5, ATV) == pytest.approx(1.0, rel=1e-9)
+    assert force_n(v, ATV, ri=0.5, model="sbem_tf") == pytest.approx(1.0, rel=1e-9)
 
 
 @pytest.mark.parametrize("ri", [math.nan, -0.1, [0.1, math.nan], [-1e-12]])
@@ -173,15 +174,15 @@ def test_nan_or_negative_ri_raises(ri):
 
 def test_bad_model_and_semantics_raise():
     with pytest.raises(ValueError, match="largest"):
-        allowable_speed(0.1, ATV, "sbem_tf", "last")
+        allowable_speed(0.1, ATV, model="sbem_tf", band="last")
     with pytest.raises(ValueError, match="sbem_tf"):
-        allowable_speed(0.1, ATV, "sbem")
+        allowable_speed(0.1, ATV, model="sbem")
 
 
 def test_shapes_scalar_and_array():
     assert isinstance(allowable_speed(0.3, ATV), float)
     grid = np.array([[0.0, 0.1], [0.3, 0.7]])
-    out = allowable_speed(grid, ATV, "iecm")
+    out = allowable_speed(grid, ATV, model="iecm")
     assert out.shape == (2, 2)
     np.testing.assert_allclose(out, iecm_closed_form(grid, ATV), rtol=1e-9)
 
@@ -191,7 +192,7 @@ def test_shapes_scalar_and_array():
 def test_fig5_ordering_prev_bem_iecm_sbem_ef():
     # "the method derived in [11] produces the most aggressive velocity profile ... IECM had a
     # more aggressive velocity profile than the two SBEM methods"
-    prev, iecm, ef = (allowable_speed(FIG_RI, ATV, k) for k in ("prev_bem", "iecm", "sbem_ef"))
+    prev, iecm, ef = (allowable_speed(FIG_RI, ATV, model=k) for k in ("prev_bem", "iecm", "sbem_ef"))
     assert np.all(prev >= iecm - 1e-12)
     assert np.all(iecm >= ef - 1e-12)
     assert np.any(prev > iecm + 1) and np.any(iecm > ef + 1)  # not trivially equal
@@ -199,8 +200,8 @@ def test_fig5_ordering_prev_bem_iecm_sbem_ef():
 
 def test_fig5_sbem_ef_and_tf_almost_identical():
     # "SBEM:EF and SBEM:TF produced almost identical profiles": within 0.5 %
-    ef = allowable_speed(FIG_RI, ATV, "sbem_ef")
-    tf = allowable_speed(FIG_RI, ATV, "sbem_tf")
+    ef = allowable_speed(FIG_RI, ATV, model="sbem_ef")
+    tf = allowable_speed(FIG_RI, ATV, model="sbem_tf")
     np.testing.assert_allclose(tf, ef, rtol=0.005)
     assert ef.min() < 4.0  # the comparison covers the slow, rough end too
 
@@ -208,8 +209,8 @@ def test_fig5_sbem_ef_and_tf_almost_identical():
 def test_fig6_largest_follows_ef_then_collapses_at_ri_045():
     # "With resonance ... SBEM:TF deviates significantly from SBEM:EF, especially starting at
     # RI ~ 0.45" (NOTES.md: this is the "largest" root)
-    ef = allowable_speed(FIG_RI, RES, "sbem_ef")
-    tf = allowable_speed(FIG_RI, RES, "sbem_tf", "largest")
+    ef = allowable_speed(FIG_RI, RES, model="sbem_ef")
+    tf = allowable_speed(FIG_RI, RES, model="sbem_tf", band="largest")
     near = FIG_RI <= 0.36
     np.testing.assert_allclose(tf[near], ef[near], rtol=0.05)
     upto = FIG_RI <= 0.40
@@ -222,7 +223,56 @@ def test_fig6_largest_follows_ef_then_collapses_at_ri_045():
 def test_fig6_first_collapses_from_ri_013():
     # NOTES.md: the first crossing (every speed from rest admissible) collapses to the band
     # below resonance, about 0.3 m/s, already from RI ~ 0.13 on
-    first = allowable_speed(FIG_RI, RES, "sbem_tf", "first")
+    first = allowable_speed(FIG_RI, RES, model="sbem_tf", band="first")
     assert np.all(first[FIG_RI >= 0.13] < 0.4)
     assert np.all(first[FIG_RI >= 0.13] > 0.2)
     assert np.all(first[FIG_RI <= 0.1] > 8.0)  # and it really is a collapse
+
+
+# ------------------------------------------------------------------ one vocabulary (issue 9)
+
+def test_band_choices_and_all_is_refused_by_allowable_speed():
+    assert BAND_CHOICES == ("first", "largest", "all")
+    with pytest.raises(InputError, match="speed_bands"):
+        allowable_speed(0.3, RES, band="all")
+    with pytest.raises(InputError, match="band 'last'"):
+        allowable_speed(0.3, RES, band="last")
+    with pytest.raises(TypeError):
+        allowable_speed(0.3, RES, semantic="first")  # a misspelt keyword
+
+
+def test_largest_band_only_keeps_the_top_band():
+    ri = np.array([0.0, 0.3, 0.5])
+    bands = speed_bands(ri, RES.replace(max_transmitted_force_n=1000.0))
+    weak = speed_bands(np.array([0.5]), ATV.replace(max_excitation_force_n=10.0), model="iecm")
+    assert bands.count.max() >= 2 and weak.count[0] == 0  # several bands, and none at all
+    top = bands.largest_band_only()
+    np.testing.assert_array_equal(top.count, np.minimum(bands.count, 1))
+    np.testing.assert_array_equal(top.upper_mps[:, 0], bands.largest())
+    np.testing.assert_array_equal(top.largest(), bands.largest())
+    last = bands.count - 1
+    np.testing.assert_array_equal(top.lower_mps[:, 0], bands.lower_mps[np.arange(3), last])
+    empty = weak.largest_band_only()
+    assert empty.count[0] == 0 and np.isnan(empty.lower_mps[0, 0]) and empty.largest()[0] == 0.0
+    np.testing.assert_array_equal(bands.first_band_only().first(), bands.first())
+
+
+def test_speed_bands_positional_model_still_works_with_a_warning():
+    ri = np.array([0.1, 0.3])
+    with pytest.warns(DeprecationWarning, match="pass model= by keyword"):
+        old = speed_bands(ri, RES, "sbem_ef")
+    new = speed_bands(ri, RES, model="sbem_ef")
+    for name in ("lower_mps", "upper_mps", "count", "peaks_mps"):
+        np.testing.assert_array_equal(getattr(old, name), getattr(new, name))
+
+
+def test_allowable_speed_positional_model_and_semantics_still_work_with_a_warning():
+    with pytest.warns(DeprecationWarning, match="pass model=, band= by keyword"):
+        old = allowable_speed(FIG_RI, RES, "sbem_tf", "largest")
+    np.testing.assert_array_equal(old, allowable_speed(FIG_RI, RES, model="sbem_tf", band="largest"))
+
+
+def test_allowable_speed_semantics_keyword_still_works_with_a_warning():
+    with pytest.warns(DeprecationWarning, match="semantics= is deprecated, use band="):
+        old = allowable_speed(FIG_RI, RES, semantics="largest")
+    np.testing.assert_array_equal(old, allowable_speed(FIG_RI, RES, band="largest"))

@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from profileopt import load_vehicle, roughness_index, step_width, worst_case_elevation
+from profileopt import InputError, load_vehicle, roughness_index, step_width, worst_case_elevation
 from profileopt.terrain import elevation_z_score, segment_roughness_index
 
 from conftest import REAL_DATA
@@ -39,7 +39,7 @@ def test_ri_of_sinusoid_whole_periods_is_closed_form(amplitude_m, frequency_cpm,
     s, z = cosine_profile(amplitude_m, frequency_cpm, periods=7, per_period=40)
     # population variance of A cos over whole periods = A^2 / 2, so RI = A / (sqrt(2) h)
     expected = amplitude_m / (math.sqrt(2) * h)
-    assert roughness_index(z, h, positions=s, detrend=detrend) == pytest.approx(expected, rel=1e-12)
+    assert roughness_index(z, h, positions_m=s, detrend=detrend) == pytest.approx(expected, rel=1e-12)
 
 
 def test_sine_over_whole_periods_raw_ri_and_detrend_effect():
@@ -48,9 +48,9 @@ def test_sine_over_whole_periods_raw_ri_and_detrend_effect():
     n, per = 10, 200
     s = np.arange(n * per) / per
     z = 0.08 * np.sin(2 * math.pi * s)
-    raw = roughness_index(z, 0.1, positions=s, detrend=False)
+    raw = roughness_index(z, 0.1, positions_m=s, detrend=False)
     assert raw == pytest.approx(0.08 / (math.sqrt(2) * 0.1), rel=1e-12)
-    detrended = roughness_index(z, 0.1, positions=s, detrend=True)
+    detrended = roughness_index(z, 0.1, positions_m=s, detrend=True)
     expected = math.sqrt(0.08**2 / 2 - 3 * 0.08**2 / (math.pi**2 * n**2)) / 0.1
     assert detrended == pytest.approx(expected, rel=1e-3)
     assert detrended < raw
@@ -68,11 +68,11 @@ def test_detrend_removes_a_constant_grade_of_a_profile():
     s = np.sort(rng.uniform(0, 20, 300))
     z = 0.03 * rng.standard_normal(300)
     graded = z + 582.0 + 0.12 * s  # a 12 % climb at absolute altitude
-    assert roughness_index(graded, 0.1, s) == pytest.approx(roughness_index(z, 0.1, s), rel=1e-9)
+    assert roughness_index(graded, 0.1, positions_m=s) == pytest.approx(roughness_index(z, 0.1, positions_m=s), rel=1e-9)
     # without detrend the grade counts as roughness: STD of 0.12 s on [0, 20] ~ 0.12 * 20 / sqrt(12)
-    assert roughness_index(graded, 0.1, s, detrend=False) > 5.0
+    assert roughness_index(graded, 0.1, positions_m=s, detrend=False) > 5.0
     # a pure line is perfectly smooth
-    assert roughness_index(3.0 - 0.5 * s, 0.1, s) == pytest.approx(0.0, abs=1e-9)
+    assert roughness_index(3.0 - 0.5 * s, 0.1, positions_m=s) == pytest.approx(0.0, abs=1e-9)
 
 
 def test_detrend_removes_a_plane_of_a_point_cloud():
@@ -114,7 +114,7 @@ def test_segment_ri_of_real_road_profile_matches_lstsq_residual(detrend):
     np.testing.assert_allclose(got, expected, rtol=1e-7)
     # roughness_index of one segment agrees too
     a, b = bounds[3], bounds[4]
-    assert roughness_index(z[a:b], 0.1, s[a:b], detrend=detrend) == pytest.approx(expected[3], rel=1e-7)
+    assert roughness_index(z[a:b], 0.1, positions_m=s[a:b], detrend=detrend) == pytest.approx(expected[3], rel=1e-7)
 
 
 @pytest.mark.parametrize(
@@ -186,15 +186,49 @@ finite = st.one_of(st.just(0.0), st.floats(1e-6, 1.0), st.floats(-1.0, -1e-6))
 def test_ri_invariant_to_offset_and_grade_and_linear_in_amplitude(z, spacing, offset, grade, scale):
     s = np.arange(z.size) * spacing
     h = 0.1
-    base = roughness_index(z, h, s)
+    base = roughness_index(z, h, positions_m=s)
     # tolerance from rounding: the moments of O(offset + grade * length) numbers lose about
     # eps * size^2 in the variance, i.e. sqrt of that in the STD
     size = abs(offset) + abs(grade) * s[-1] + np.abs(z).max()
     atol = 1e-6 * size / h
-    assert roughness_index(z + offset + grade * s, h, s) == pytest.approx(base, rel=1e-9, abs=atol)
+    assert roughness_index(z + offset + grade * s, h, positions_m=s) == pytest.approx(base, rel=1e-9, abs=atol)
     # linear in amplitude, both definitions (STD scales with |scale|)
-    assert roughness_index(scale * z, h, s) == pytest.approx(abs(scale) * base, rel=1e-9, abs=1e-6 * abs(scale) * np.abs(z).max() / h)
-    raw = roughness_index(z, h, s, detrend=False)
-    assert roughness_index(scale * z, h, s, detrend=False) == pytest.approx(abs(scale) * raw, rel=1e-9, abs=1e-12)
+    assert roughness_index(scale * z, h, positions_m=s) == pytest.approx(abs(scale) * base, rel=1e-9, abs=1e-6 * abs(scale) * np.abs(z).max() / h)
+    raw = roughness_index(z, h, positions_m=s, detrend=False)
+    assert roughness_index(scale * z, h, positions_m=s, detrend=False) == pytest.approx(abs(scale) * raw, rel=1e-9, abs=1e-12)
     # raw RI is invariant to the offset only
-    assert roughness_index(z + offset, h, s, detrend=False) == pytest.approx(raw, rel=1e-9, abs=1e-6 * (abs(offset) + 1) / h)
+    assert roughness_index(z + offset, h, positions_m=s, detrend=False) == pytest.approx(raw, rel=1e-9, abs=1e-6 * (abs(offset) + 1) / h)
+
+
+# ------------------------------------------------------------------ deprecated forms (issue 9)
+
+def test_roughness_index_old_keywords_still_work_with_a_warning():
+    s = np.linspace(0.0, 5.0, 50)
+    z = 0.02 * np.sin(3 * s) + 0.1 * s
+    new = roughness_index(z, 0.1, positions_m=s)
+    with pytest.warns(DeprecationWarning, match="use elevations_m=.*use clearance_m=.*use positions_m="):
+        old = roughness_index(elevations=z, clearance=0.1, positions=s)
+    assert old == new
+
+
+def test_roughness_index_positional_positions_still_works_with_a_warning():
+    s = np.linspace(0.0, 5.0, 50)
+    z = 0.02 * np.sin(3 * s) + 0.1 * s
+    with pytest.warns(DeprecationWarning, match="pass positions_m=, detrend= by keyword"):
+        old = roughness_index(z, 0.1, s, False)
+    assert old == roughness_index(z, 0.1, positions_m=s, detrend=False)
+
+
+def test_step_width_old_keyword_still_works_with_a_warning():
+    with pytest.warns(DeprecationWarning, match="e_m= is deprecated, use e_max_m="):
+        old = step_width(e_m=0.02, vehicle=ATV)
+    assert old == step_width(e_max_m=0.02, vehicle=ATV) == step_width(0.02, ATV)
+
+
+def test_input_errors_name_the_parameters():
+    with pytest.raises(InputError, match="clearance_m"):
+        roughness_index([0.0, 1.0], 0.0)
+    with pytest.raises(InputError, match="positions_m"):
+        roughness_index([0.0, 1.0, 2.0], 0.1, positions_m=[0.0, 1.0])
+    with pytest.raises(TypeError):
+        roughness_index([0.0, 1.0], 0.1, position_m=[0.0, 1.0])  # a misspelt keyword
