@@ -34,7 +34,7 @@ any difference is the solver's. Its end-to-end time runs the same pipeline as th
 planner's (read the CSV, segment, speed bands, solve, write the profile CSV through the
 same ``Profile.to_csv``); only the solver differs.
 
-Every optimum is compared with the exact one, :func:`profileopt.planner.greatest_profile`
+Every optimum is compared with the exact one, :func:`profileopt.planning.greatest_profile`
 on the same caps, and every written profile is read back and checked against the caps,
 the acceleration bounds (and the jerk bound and force limit for the full problem).
 
@@ -66,10 +66,9 @@ import numpy as np
 
 import profileopt
 from profileopt import load_vehicle
-from profileopt import planner as planner_module
 from profileopt.forces import get_model
-from profileopt.planner import Profile, greatest_profile, plan, read_profile, segment_route
-from profileopt.route import read_route
+from profileopt.io import read_profile, read_route
+from profileopt.planning import DEFAULT_SMOOTHING, Profile, greatest_profile, plan, segment_route
 from profileopt.speeds import speed_bands
 from profileopt.synthetic import iso8608_sections
 
@@ -180,9 +179,9 @@ def travel_time_s(b: np.ndarray, length_m: np.ndarray) -> float:
 def convex_caps(route_path: Path, vehicle) -> ConvexProblem:
     """Segment the route and compute the caps of the convex subset (not timed)."""
     seg = segment_route(read_route(route_path), vehicle, SEGMENT_LENGTH_M)
-    bands = speed_bands(seg.ri, vehicle, MODEL)
+    bands = speed_bands(seg.ri, vehicle, model=MODEL)
     single = bool(np.all(bands.count == 1) and np.all(bands.lower_mps[:, 0] == 0.0))
-    cap = np.minimum(bands.first(), seg.speed_cap_mps)
+    cap = np.minimum(bands.first(), vehicle.max_speed_mps)  # the benchmark routes have no speed_limit
     boundary_cap = np.concatenate([[cap[0]], np.minimum(cap[:-1], cap[1:]), [cap[-1]]])
     upper_b = boundary_cap**2
     upper_b[0] = upper_b[-1] = 0.0  # v0 = vend = 0
@@ -303,8 +302,8 @@ def run_toppra(route_path: Path, out_path: Path, vehicle) -> Run:
     """The planner's pipeline with TOPP-RA as the solver: read, segment, bands, solve, write."""
     start = time.perf_counter()
     seg = segment_route(read_route(route_path), vehicle, SEGMENT_LENGTH_M)
-    bands = speed_bands(seg.ri, vehicle, MODEL)
-    cap = np.minimum(bands.first(), seg.speed_cap_mps)
+    bands = speed_bands(seg.ri, vehicle, model=MODEL)
+    cap = np.minimum(bands.first(), vehicle.max_speed_mps)  # the benchmark routes have no speed_limit
     boundary_cap = np.concatenate([[cap[0]], np.minimum(cap[:-1], cap[1:]), [cap[-1]]])
     problem = ConvexProblem(seg.boundaries_m, seg.length_m, seg.ri, seg.e_max_m, cap, boundary_cap,
                             np.empty(0), np.empty(0), math.nan, True)
@@ -499,7 +498,7 @@ def bench_size(n: int, repeats: int, workdir: Path, vehicle, spacing_m: float, s
         raise RuntimeError(f"expected {n} segments, the planner made {problem.length_m.size}")
     has_method = "method" in inspect.signature(plan).parameters
 
-    full = {"smoothing": planner_module.DEFAULT_SMOOTHING, "max_jerk_mps3": None}
+    full = {"smoothing": DEFAULT_SMOOTHING, "max_jerk_mps3": None}
     convex = {"smoothing": 0.0, "max_jerk_mps3": math.inf}
     cases: dict[tuple[str, str], Callable[[], Run]] = {
         ("full", "plan (IPOPT)"): lambda: run_plan(route_path, workdir / "full.csv", vehicle, **full),

@@ -28,8 +28,8 @@ from matplotlib.colors import LogNorm
 from matplotlib.figure import Figure
 
 from profileopt import InputError, allowable_speed, load_vehicle, roughness_index
-from profileopt._io import atomic_path
-from profileopt.realdata import LAS_GROUND, read_las
+from profileopt.io import atomic_path
+from profileopt.io import LAS_GROUND, read_las
 
 DEFAULT_LAS = Path(__file__).resolve().parents[1] / "data" / "real" / "pdal-lidar" / "hexbin-crop.las"
 
@@ -88,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
 
     # 3. The allowable speed from rest of each patch under SBEM:TF ('first': every speed from
     #    0 up to it keeps the transmitted force within the limit; NOTES.md "Which root").
-    speed_mps = np.asarray(allowable_speed(ri, vehicle, "sbem_tf", "first"), dtype=float)
+    speed_mps = np.asarray(allowable_speed(ri, vehicle, model="sbem_tf", band="first"), dtype=float)
 
     # 4. Summary. What to expect: the slope here is steep (the fitted planes tilt 15-40
     #    degrees) and a 10 m plane leaves the curvature of ridges and gullies in the residual,

@@ -30,10 +30,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from profileopt import get_model, load_vehicle  # noqa: E402
-from profileopt._io import atomic_path  # noqa: E402
+from profileopt.io import atomic_path, read_route  # noqa: E402
 from profileopt.constraints import add_force_constraints, force_limit_n, force_n, speed_bands  # noqa: E402
-from profileopt.planner import plan, segment_route  # noqa: E402
-from profileopt.route import read_route  # noqa: E402
+from profileopt.planning import PlanContext, SpeedLimit, plan, segment_route  # noqa: E402
+from profileopt.stations import segment_index  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -58,6 +58,8 @@ s_stop = float(route.s_m[-1]) if args.until_m is None else min(s_start + args.un
 # --- Terrain: the planner's own 5 m segments, each with its worst-case elevation (Eq. 8) ---
 seg = segment_route(route, vehicle, segment_length_m=5.0)
 bounds_m, e_seg = seg.boundaries_m, seg.e_max_m
+# the planner's speed cap of each segment: top speed and the route's speed_limit column
+cap_seg = SpeedLimit(max_speed_mps=v_max).speed_cap_mps(PlanContext(route=route, vehicle=vehicle, segments=seg))
 
 # --- Controller settings ------------------------------------------------------------------
 DT, N = 0.25, 16  # control interval (s) and horizon (stages): 4 s of preview
@@ -82,7 +84,7 @@ one_band_from_rest = bool(np.all((bands.count == 1) & (bands.lower_mps[:, 0] == 
 e_grid = np.linspace(0.0, 1.05 * e_seg.max(), 120)
 f_grid = force_n(np.linspace(0.0, v_max, 120)[:, None], vehicle, e_max_m=e_grid[None, :], model=model)
 monotone = one_band_from_rest and bool(np.all(np.diff(f_grid, axis=0) >= 0) and np.all(np.diff(f_grid, axis=1) >= 0))
-ceiling_seg = np.minimum(seg.speed_cap_mps, v_max if monotone else bands.first())
+ceiling_seg = np.minimum(cap_seg, v_max if monotone else bands.first())
 
 # Preview tables as smooth functions of the predicted position s: cubic B-splines whose
 # coefficient j is the worst value (largest e_max, smallest ceiling) over every segment
@@ -97,8 +99,8 @@ H, DEGREE = 0.5, 3
 knots = np.arange(s_start - REACH - DEGREE * H, route.s_m[-1] + (N + 2) * REACH, H)
 lo = knots[: -DEGREE - 1]
 hi = knots[DEGREE + 1:] + REACH
-j_lo = np.clip(np.searchsorted(bounds_m, lo, side="right") - 1, 0, e_seg.size - 1)  # segment of lo
-j_hi = np.clip(np.searchsorted(bounds_m, hi, side="right") - 1, 0, e_seg.size - 1)  # segment of hi
+j_lo = segment_index(lo, bounds_m)  # segment of lo
+j_hi = segment_index(hi, bounds_m)  # segment of hi
 e_coef, ceiling_coef = e_seg[j_lo].copy(), ceiling_seg[j_lo].copy()
 for d in range(1, int(np.max(j_hi - j_lo)) + 1):
     idx = np.minimum(j_lo + d, j_hi)
@@ -154,7 +156,7 @@ def worst_ratio(s0: float, v0: float, acc: float) -> tuple[float, float]:
     for ta, tb in zip(t[:-1], t[1:]):
         sa = s0 + v0 * ta + acc * ta**2 / 2
         sb = s0 + v0 * tb + acc * tb**2 / 2
-        i = int(np.clip(np.searchsorted(bounds_m, 0.5 * (sa + sb), side="right") - 1, 0, e_seg.size - 1))
+        i = int(segment_index([0.5 * (sa + sb)], bounds_m)[0])
         va, vb = sorted((v0 + acc * ta, v0 + acc * tb))
         inner = peaks[i][(peaks[i] > va) & (peaks[i] < vb)]
         speeds = np.concatenate([[va, vb], inner])
@@ -229,7 +231,7 @@ out.mkdir(parents=True, exist_ok=True)
 fig, (ax_v, ax_r) = plt.subplots(2, 1, sharex=True, figsize=(9, 6))
 ax_v.plot(profile.s_m, profile.speed_mps, color="0.6", label="offline plan (minimum time)")
 ax_v.plot(log["s"], log["v"], color="C0", label=f"closed-loop MPC (cruise {args.cruise:g} m/s)")
-first_seg = np.minimum(seg.speed_cap_mps, bands.first())
+first_seg = np.minimum(cap_seg, bands.first())
 ax_v.stairs(first_seg, bounds_m, color="C3", lw=0.8, label="allowable speed per segment ('first')")
 ax_v.set_ylabel("speed (m/s)")
 ax_v.set_ylim(0, v_max * 1.05)

@@ -20,8 +20,8 @@ from pathlib import Path
 from typing import Sequence
 
 from profileopt import load_vehicle
-from profileopt._io import atomic_write
-from profileopt.route import Route, read_route
+from profileopt.io import atomic_write, read_route
+from profileopt.route import Route
 from profileopt.study import SafetyStudy, safety_study
 from profileopt.synthetic import iso8608_profile
 

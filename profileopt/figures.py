@@ -198,7 +198,7 @@ def sinusoid_terrain(
     positions = np.arange(n_samples) / (samples_per_period * frequency_cpm)
     shape = washboard(positions, 1.0, 1.0 / frequency_cpm)  # unit amplitude; each profile is A * shape
     ri = np.array([
-        roughness_index(a * shape, clearance_m, positions=positions, detrend=False) for a in amplitudes
+        roughness_index(a * shape, clearance_m, positions_m=positions, detrend=False) for a in amplitudes
     ])
     return SinusoidTerrain(
         amplitude_m=amplitudes,
@@ -273,7 +273,7 @@ def figure_5(vehicle: Vehicle | None = None, amplitudes_m: np.ndarray = PAPER_AM
         label = model.label + (" (reconstruction of [11], docs/paper-notes.md)" if key == "prev_bem" else "")
         if key == "sbem_tf":
             label += ' ("first"; = "largest" here, force monotone in speed)'
-        speed = allowable_speed(terrain.ri, vehicle, key, "first")
+        speed = allowable_speed(terrain.ri, vehicle, model=key, band="first")
         curves.append(Curve(f"{key}_mps", label, np.asarray(speed, dtype=float)))
     return FigureData(
         stem="fig5_allowable_speed",
@@ -311,9 +311,9 @@ def figure_6(vehicle: Vehicle | None = None, amplitudes_m: np.ndarray = PAPER_AM
     """
     vehicle = vehicle if vehicle is not None else load_vehicle("atv-resonant")
     terrain = sinusoid_terrain(amplitudes_m, TERRAIN_FREQUENCY_CPM, vehicle.ground_clearance_m)
-    ef = allowable_speed(terrain.ri, vehicle, "sbem_ef", "first")
-    tf_largest = allowable_speed(terrain.ri, vehicle, "sbem_tf", "largest")
-    tf_first = allowable_speed(terrain.ri, vehicle, "sbem_tf", "first")
+    ef = allowable_speed(terrain.ri, vehicle, model="sbem_ef", band="first")
+    tf_largest = allowable_speed(terrain.ri, vehicle, model="sbem_tf", band="largest")
+    tf_first = allowable_speed(terrain.ri, vehicle, model="sbem_tf", band="first")
     return FigureData(
         stem="fig6_resonance",
         title=f"Fig. 6: allowable speed vs. RI, resonance case ({_vehicle_text(vehicle)})",

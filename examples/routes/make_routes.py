@@ -76,9 +76,9 @@ from typing import Sequence
 import numpy as np
 
 from profileopt import load_vehicle, speed_bands
-from profileopt._io import atomic_write
-from profileopt.realdata import read_opencrg, read_xy_profile
+from profileopt.io import atomic_write, read_opencrg, read_xy_profile
 from profileopt.synthetic import iso8608_profile, iso8608_sections, step, washboard
+from profileopt.stations import segment_samples
 from profileopt.terrain import segment_roughness_index
 
 HERE = Path(__file__).resolve().parent
@@ -137,7 +137,7 @@ def rounded(route: BundledRoute) -> tuple[np.ndarray, np.ndarray]:
 def segment_ri(s_m: np.ndarray, z_m: np.ndarray, clearance_m: float) -> tuple[np.ndarray, np.ndarray]:
     """Start (m) and RI of each SEGMENT_M segment from s = 0: s_i <= s < s_i + SEGMENT_M."""
     edges = np.arange(s_m[0], s_m[-1], SEGMENT_M)
-    starts = np.searchsorted(s_m, edges, side="left")
+    starts, _ = segment_samples(s_m, np.append(edges, s_m[-1]))
     return edges, segment_roughness_index(s_m, z_m, starts, clearance_m)
 
 

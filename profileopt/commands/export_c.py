@@ -27,7 +27,7 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     vehicle = load_vehicle(args.vehicle)
-    result = export_c(vehicle, args.output, args.model, n_stages=args.stages)
+    result = export_c(vehicle, args.output, models=args.model, n_stages=args.stages)
     for path in (result.source, result.header, result.example, result.readme):
         print(path)
     print(f"{len(result.functions)} functions, each with its Jacobian (*_jac); see README.md there")
