@@ -93,7 +93,7 @@ def _check_profile(profile, route, vehicle, *, jerk=None, rtol=1e-6, grid=64):
     frac = np.linspace(0.0, 1.0, grid)
     speeds = v[:-1, None] + (v[1:] - v[:-1])[:, None] * frac[None, :]
     ri = ri_route[:, None] * np.ones_like(frac)[None, :]
-    forces = force_n(profile.model, speeds, ri, vehicle)
+    forces = force_n(speeds, vehicle, ri=ri, model=profile.model)
     limit = profile.force_limit_n[0]
     assert np.all(forces <= limit * (1 + rtol)), f"force ratio {forces.max() / limit}"
     # the reported force is at least what the grid sees, and within the limit

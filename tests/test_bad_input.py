@@ -418,7 +418,9 @@ def test_python_api_raises_input_error_with_the_same_message(case_id: str, tmp_p
         assert isinstance(raised.value, InfeasibleError)
     message = str(raised.value)
     assert "\n" not in message
-    assert assert_one_clean_line(outcomes[case_id].done, case.argv[0], case.fragments) == message
+    # the library names its parameters (segment_length_m), the command its flags (--segment-length)
+    expected = cli.flags_for_parameters(message)
+    assert assert_one_clean_line(outcomes[case_id].done, case.argv[0], case.fragments) == expected
 
 
 # --------------------------------------------------------------------------------------

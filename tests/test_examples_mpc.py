@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from profileopt import load_vehicle
-from profileopt.constraints import force_limit_n, force_of_e_max
+from profileopt.constraints import force_limit_n, force_n
 from profileopt.planning import segment_route
 from profileopt.io import read_route
 
@@ -58,7 +58,7 @@ def test_mpc_example_keeps_the_force_limit(tmp_path: Path, route: str, vehicle: 
     s, v = s0 + v0 * tau + a * tau**2 / 2, v0 + a * tau
     np.testing.assert_allclose(s[:-1, -1], log["s_m"][1:], rtol=0, atol=1e-9)  # the log is consistent
     i = np.clip(np.searchsorted(seg.boundaries_m, s, side="right") - 1, 0, seg.count - 1)
-    ratio = force_of_e_max("sbem_tf", v, seg.e_max_m[i], veh) / force_limit_n("sbem_tf", veh)
+    ratio = force_n(v, veh, e_max_m=seg.e_max_m[i], model="sbem_tf") / force_limit_n(veh, model="sbem_tf")
     assert ratio.max() <= 1 + 1e-6
     assert ratio.max() > 0.999  # the limit was met, so this run tested something
     assert reported <= 1 + 1e-6 and reported >= ratio.max() - 1e-9  # the example's exact check agrees

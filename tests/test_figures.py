@@ -57,7 +57,7 @@ def test_cli_writes_three_pngs_and_three_csvs(profileopt_command, tmp_path):
     header, table = read_csv(out / "fig6_resonance.csv")
     ri = table[:, header.index("ri")]
     np.testing.assert_allclose(
-        table[:, header.index("sbem_tf_first_mps")], allowable_speed(ri, load_vehicle("atv-resonant"), "sbem_tf", "first"),
+        table[:, header.index("sbem_tf_first_mps")], allowable_speed(ri, load_vehicle("atv-resonant"), model="sbem_tf", band="first"),
         rtol=1e-12,
     )
 
@@ -109,11 +109,11 @@ def test_figure_5_and_6_curves_are_the_library_speeds():
     ri = fig5.x.values
     assert fig5.columns == tuple(EXPECTED_COLUMNS["fig5_allowable_speed"])
     for key in ("prev_bem", "iecm", "sbem_ef", "sbem_tf"):
-        np.testing.assert_array_equal(fig5.curve(f"{key}_mps").values, allowable_speed(ri, atv, key))
+        np.testing.assert_array_equal(fig5.curve(f"{key}_mps").values, allowable_speed(ri, atv, model=key))
     fig6 = figure_6(res)
     assert fig6.columns == tuple(EXPECTED_COLUMNS["fig6_resonance"])
     np.testing.assert_array_equal(
-        fig6.curve("sbem_tf_largest_mps").values, allowable_speed(ri, res, "sbem_tf", "largest")
+        fig6.curve("sbem_tf_largest_mps").values, allowable_speed(ri, res, model="sbem_tf", band="largest")
     )
     labels = " ".join(c.label for c in fig6.curves)
     assert '"first"' in labels and '"largest"' in labels

@@ -223,7 +223,7 @@ def test_boundary_speed_between_two_bands_is_named_as_such(atv_resonant):
     route = read_route(ROUTES / "washboard.csv")
     keep = (route.s_m >= 160) & (route.s_m <= 260)  # washboard only: bands [0, ~0.32], [~0.53, ~3.4]
     washboard = Route(route.s_m[keep] - 160.0, route.z_m[keep], source="washboard-only")
-    with pytest.raises(InfeasibleError, match=r"--v0 = 0.4 m/s is not an admissible speed.*\[0, 0.32\] and"):
+    with pytest.raises(InfeasibleError, match=r"v0_mps = 0.4 m/s is not an admissible speed.*\[0, 0.32\] and"):
         plan(washboard, atv_resonant, v0_mps=0.4)
 
 

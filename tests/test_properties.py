@@ -127,7 +127,7 @@ def problems(draw: st.DrawFn) -> dict:
             "max_jerk_mps3": draw(st.one_of(st.sampled_from([None, math.inf]), st.floats(0.3, 30.0))),
             "v0_mps": draw(boundary),
             "vend_mps": draw(boundary),
-            "bands": draw(st.sampled_from(["all", "first"])),
+            "band": draw(st.sampled_from(["all", "first"])),
             "method": draw(st.sampled_from(["auto", "ipopt"])),
         },
     }
@@ -143,7 +143,7 @@ def segment_ri(route: Route, boundaries_m: np.ndarray, clearance_m: float) -> np
         last = i == boundaries_m.size - 2
         inside = (route.s_m >= boundaries_m[i]) & ((route.s_m <= boundaries_m[i + 1]) if last
                                                     else (route.s_m < boundaries_m[i + 1]))
-        out.append(roughness_index(route.z_m[inside], clearance_m, route.s_m[inside]))
+        out.append(roughness_index(route.z_m[inside], clearance_m, positions_m=route.s_m[inside]))
     return np.asarray(out)
 
 
@@ -219,7 +219,7 @@ def check_plan(profile, route: Route, vehicle: Vehicle, options: dict) -> None:
     np.testing.assert_allclose(np.diff(profile.time_s), dt, rtol=1e-9)
 
 
-NAMES_THE_CAUSE = re.compile(r"--v0|--vend|segment \d+|s = [-0-9.e+]+ m")
+NAMES_THE_CAUSE = re.compile(r"v0_mps|vend_mps|segment \d+|s = [-0-9.e+]+ m")
 
 
 @FAST
@@ -242,7 +242,7 @@ def test_every_plan_keeps_every_limit(problem: dict) -> None:
         ri = segment_ri(route, boundaries, vehicle.ground_clearance_m)
         force_at_rest = np.asarray(get_model(options["model"]).force_n(np.zeros_like(ri), ri, vehicle))
         rest_is_admissible = bool(np.all(force_at_rest <= get_model(options["model"]).limit_n(vehicle)))
-        crawl_exists = boundaries.size >= 3 and bool(np.all(allowable_speed(ri, vehicle, options["model"]) > 0))
+        crawl_exists = boundaries.size >= 3 and bool(np.all(allowable_speed(ri, vehicle, model=options["model"]) > 0))
         try:
             profile = plan(route, vehicle, **at_rest)
         except InfeasibleError as again:
@@ -261,7 +261,7 @@ def test_every_plan_keeps_every_limit(problem: dict) -> None:
 def test_braking_further_than_the_route_is_always_infeasible(problem: dict, fraction: float) -> None:
     """The obvious case: from v0 the vehicle needs v0^2 / (2 d) to stop. On the first stretch
     of the route shorter than that, no profile ends at rest (whatever the terrain, vehicle
-    and options), so the planner must refuse and say that --v0 is the cause."""
+    and options), so the planner must refuse and say that v0_mps is the cause."""
     route, vehicle, options = problem["route"], problem["vehicle"], dict(problem["options"])
     decel, spacing = vehicle.max_decel_mps2, float(np.diff(route.s_m).max())
     # the longest stretch from which max_speed / 1.05 can still not stop
@@ -275,7 +275,7 @@ def test_braking_further_than_the_route_is_always_infeasible(problem: dict, frac
     with pytest.raises(InfeasibleError) as raised:
         plan(short, vehicle, **options)
     # (or, as the planner checks first, a segment that no speed at all may cross)
-    assert "--v0" in str(raised.value) or "at every speed" in str(raised.value), str(raised.value)
+    assert "v0_mps" in str(raised.value) or "at every speed" in str(raised.value), str(raised.value)
 
 
 # ------------------------------------------------------------------------------ RI
@@ -315,7 +315,7 @@ def test_the_independent_check_catches_broken_plans() -> None:
     route = Route(s, z, source="check")
     vehicle = BASES["atv-resonant"]
     options = {"segment_length_m": 5.0, "model": "sbem_tf", "smoothing": 0.01, "max_jerk_mps3": None,
-               "v0_mps": 0.0, "vend_mps": 0.0, "bands": "all", "method": "auto"}
+               "v0_mps": 0.0, "vend_mps": 0.0, "band": "all", "method": "auto"}
     profile = plan(route, vehicle, **options)
     check_plan(profile, route, vehicle, options)
     force_ratio = profile.force_n[:-1].max() / vehicle.max_transmitted_force_n

@@ -116,7 +116,7 @@ def test_infeasible_exactly_where_a_segment_is_over_the_limit_at_standstill(exam
         vehicle = vehicles[run.vehicle]
         ri = segment_route(routes[run.route], vehicle, study.segment_length_m).ri
         model = get_model(run.model)
-        stuck = bool(np.any(force_n(run.model, 0.0, ri, vehicle) > model.limit_n(vehicle)))
+        stuck = bool(np.any(force_n(0.0, vehicle, ri=ri, model=run.model) > model.limit_n(vehicle)))
         assert (run.outcome == INFEASIBLE) == stuck, (run.route, run.vehicle, run.model)
     assert sum(run.outcome == INFEASIBLE for run in study.runs) == 6
 

@@ -152,7 +152,7 @@ def test_washboard_ri_is_amplitude_over_sqrt2_h():
     # so RI = A / (sqrt(2) h). Sampled 10 times a period over 5 periods the sum is exact.
     s = np.arange(50) * 0.05
     z = washboard(s, amplitude_m=0.04, wavelength_m=0.5)
-    assert roughness_index(z, 0.1, s, detrend=False) == pytest.approx(0.04 / (math.sqrt(2) * 0.1), rel=1e-12)
+    assert roughness_index(z, 0.1, positions_m=s, detrend=False) == pytest.approx(0.04 / (math.sqrt(2) * 0.1), rel=1e-12)
     # With the segment's line removed (the default), part of a sine that starts at zero
     # height goes with the line: over n periods of length L, cov(s, A sin) = -A L / (2 pi n)
     # and var(s) = L^2 / 12, so the line takes 3 A^2 / (pi^2 n^2) of the A^2 / 2 variance:
@@ -160,7 +160,7 @@ def test_washboard_ri_is_amplitude_over_sqrt2_h():
     s = np.arange(100) * 0.05
     z = washboard(s, amplitude_m=0.04, wavelength_m=1.0)
     expected = 0.04 / (math.sqrt(2) * 0.1) * math.sqrt(1.0 - 6.0 / (math.pi**2 * 5**2))
-    assert roughness_index(z, 0.1, s) == pytest.approx(expected, rel=1e-3)
+    assert roughness_index(z, 0.1, positions_m=s) == pytest.approx(expected, rel=1e-3)
 
 
 def test_washboard_window_step_and_ramp():
