@@ -57,6 +57,24 @@ def command(name: str, help_text: str,
     """Register ``run(args) -> int`` as sub-command ``name``.
 
     ``arguments(parser)`` (or an ``arguments`` attribute of ``run``) adds its options.
+
+    Parameters
+    ----------
+    name : str
+        The sub-command's name on the command line (``profileopt <name>``); registering a
+        name again replaces the earlier runner.
+    help_text : str
+        One-line help shown for the sub-command in ``profileopt --help``.
+    arguments : callable, optional
+        ``arguments(parser)`` adds the sub-command's options to its
+        :class:`argparse.ArgumentParser`; stored as ``run.arguments``. If None, ``run``
+        keeps any ``arguments`` attribute it already has.
+
+    Returns
+    -------
+    callable
+        A decorator that registers ``run(args: argparse.Namespace) -> int`` and returns it
+        unchanged.
     """
 
     def decorate(run: Callable[[argparse.Namespace], int]) -> Callable[[argparse.Namespace], int]:
@@ -90,7 +108,20 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit status (0 ok, 1 internal error, 2 bad input)."""
+    """Run the command line; returns the exit status (0 ok, 1 internal error, 2 bad input).
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        The arguments after the program name, e.g. ``["plan", "route.csv"]``; None reads
+        ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        The exit status: 0 success, 1 internal error (or a closed output pipe), 2 bad input
+        (:class:`~profileopt.errors.InputError`, one line on stderr), 130 interrupted.
+    """
     from . import commands  # noqa: F401  (registers the sub-commands)
 
     # IPOPT's linear solver (MUMPS) runs on CasADi's own OpenBLAS, loaded when the first

@@ -123,7 +123,17 @@ class FigureData:
         return np.column_stack([c.values for c in (*self.extra, self.x, *self.curves)])
 
     def curve(self, column: str) -> Curve:
-        """The curve (or x, or extra column) called ``column``; ``KeyError`` otherwise."""
+        """The curve (or x, or extra column) called ``column``; ``KeyError`` otherwise.
+
+        Parameters
+        ----------
+        column : str
+            A CSV column name, with its unit, as in :attr:`columns`.
+
+        Returns
+        -------
+        Curve
+        """
         for c in (*self.extra, self.x, *self.curves):
             if c.column == column:
                 return c
@@ -155,7 +165,19 @@ class SinusoidTerrain:
     ri: np.ndarray
 
     def elevations_m(self, i: int) -> np.ndarray:
-        """The sampled elevations of profile ``i`` (m), shape (K,)."""
+        """The sampled elevations of profile ``i`` (m), shape (K,).
+
+        Parameters
+        ----------
+        i : int
+            Index of the profile, 0 <= i < N (into :attr:`amplitude_m`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (K,)
+            Elevations (m) of the sinusoid of amplitude ``amplitude_m[i]`` at
+            :attr:`positions_m`.
+        """
         return washboard(self.positions_m, float(self.amplitude_m[i]), 1.0 / self.frequency_cpm)
 
 
@@ -348,7 +370,21 @@ def _vehicle_text(vehicle: Vehicle) -> str:
 
 
 def paper_figures(vehicle: Vehicle | None = None, resonant_vehicle: Vehicle | None = None) -> tuple[FigureData, ...]:
-    """Figs. 1, 5 and 6 (defaults: the bundled ``atv`` and ``atv-resonant`` vehicles)."""
+    """Figs. 1, 5 and 6 (defaults: the bundled ``atv`` and ``atv-resonant`` vehicles).
+
+    Parameters
+    ----------
+    vehicle : Vehicle, optional
+        The vehicle of Fig. 5 (see :func:`figure_5`); defaults to the bundled ``atv``.
+    resonant_vehicle : Vehicle, optional
+        The vehicle of Fig. 6 (see :func:`figure_6`); defaults to the bundled
+        ``atv-resonant``.
+
+    Returns
+    -------
+    tuple of FigureData
+        The data of Figs. 1, 5 and 6, in that order.
+    """
     return (figure_1(), figure_5(vehicle), figure_6(resonant_vehicle))
 
 
@@ -360,6 +396,13 @@ def write_figure(data: FigureData, out_dir: str | os.PathLike) -> list[Path]:
     Both files go through :func:`profileopt.io.atomic_path` / ``atomic_write``: a failure
     leaves no half-written file. The CSV has one header line (the column names, with
     units) and one row per point, numbers with 17 significant digits (exact round trip).
+
+    Parameters
+    ----------
+    data : FigureData
+        The figure to write; its ``stem`` names the files.
+    out_dir : str or os.PathLike
+        An existing, writable folder.
 
     Returns
     -------
@@ -383,6 +426,15 @@ def write_paper_figures(
     resonant_vehicle: Vehicle | None = None,
 ) -> list[Path]:
     """Write Figs. 1, 5 and 6 (PNG + CSV each) into ``out_dir`` (which must exist).
+
+    Parameters
+    ----------
+    out_dir : str or os.PathLike
+        An existing, writable folder.
+    vehicle : Vehicle, optional
+        The vehicle of Fig. 5; defaults to the bundled ``atv``.
+    resonant_vehicle : Vehicle, optional
+        The vehicle of Fig. 6; defaults to the bundled ``atv-resonant``.
 
     Returns
     -------

@@ -63,5 +63,14 @@ def jerk_squared_time(v_mid: Any, a_before: Any, a_after: Any, ds_before: Any, d
     With jerk = v da/ds and dt = ds / v, jerk^2 dt = v (da/ds)^2 ds; over the boundary's
     share dsm_j of the route that is v_j da_j^2 / dsm_j. Arguments as
     :func:`boundary_jerk_mps3`.
+
+    Parameters
+    ----------
+    v_mid : array_like or CasADi, shape (N-1,)
+        Speed at the boundary (m/s).
+    a_before, a_after : array_like or CasADi, shape (N-1,)
+        Accelerations of the segments before and after it (m/s^2).
+    ds_before, ds_after : array_like or CasADi, shape (N-1,)
+        Their lengths (m).
     """
     return v_mid * (a_after - a_before) ** 2 / (0.5 * (ds_before + ds_after))

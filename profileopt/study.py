@@ -380,7 +380,22 @@ class SafetyStudy:
     segment_length_m: float
 
     def total(self, model: str) -> ModelTotals:
-        """The pooled totals of one model (by key)."""
+        """The pooled totals of one model (by key).
+
+        Parameters
+        ----------
+        model : str
+            A force model key of this study, one of :attr:`models` (e.g. ``"sbem_ef"``).
+
+        Returns
+        -------
+        ModelTotals
+
+        Raises
+        ------
+        KeyError
+            ``model`` is not one of the study's models.
+        """
         for row in self.totals:
             if row.model == model:
                 return row
@@ -429,6 +444,17 @@ class SafetyStudy:
 
         ``every_pair=False`` lists only the pairs where some model has a segment over the
         limit. A cell reads ``over / segments (worst ratio)``, or ``not drivable``.
+
+        Parameters
+        ----------
+        every_pair : bool, optional
+            List every (route, vehicle) pair, not only those with a segment over the limit.
+            Default False.
+
+        Returns
+        -------
+        str
+            The table: a header row of model labels, then one row per pair listed.
         """
         labels = [get_model(m).label for m in self.models]
         lines = ["| route | vehicle | " + " | ".join(labels) + " |",

@@ -27,7 +27,17 @@ __all__ = ["elementwise", "is_symbolic", "scalar_function", "numpy_evaluator", "
 
 
 def is_symbolic(*args: Any) -> bool:
-    """True if any argument is a CasADi symbolic matrix (``SX`` or ``MX``)."""
+    """True if any argument is a CasADi symbolic matrix (``SX`` or ``MX``).
+
+    Parameters
+    ----------
+    *args : Any
+        The values to test: numbers, numpy arrays or CasADi matrices.
+
+    Returns
+    -------
+    bool
+    """
     return any(isinstance(a, (ca.SX, ca.MX)) for a in args)
 
 
@@ -76,6 +86,19 @@ def elementwise(builder: Callable) -> Callable:
     ``casadi.MX`` for ``x1 ... xn`` and returns a result of the same kind. ``vehicle`` (or
     whatever hashable constants object the builder takes last) is folded in as numbers.
     The symbolic builder itself stays available as ``.symbolic``.
+
+    Parameters
+    ----------
+    builder : callable
+        ``builder(x1, ..., xn, constants)``: builds a CasADi expression from scalar
+        symbols ``x1 ... xn`` and a hashable constants object, its last parameter.
+
+    Returns
+    -------
+    callable
+        A function with the signature of ``builder``: symbolic inputs are passed to
+        ``builder`` directly, numeric ones evaluated elementwise through a cached
+        ``casadi.Function`` (arrays broadcast against each other).
     """
     signature = inspect.signature(builder)
     names = list(signature.parameters)

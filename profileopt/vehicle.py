@@ -124,7 +124,24 @@ class Vehicle:
         return 2.0 * self.damping_ratio * self.quarter_mass_kg * self.natural_frequency_radps
 
     def replace(self, **changes: float) -> "Vehicle":
-        """A copy with some values changed (validated again); unknown keys raise ``TypeError``."""
+        """A copy with some values changed (validated again); unknown keys raise ``TypeError``.
+
+        Parameters
+        ----------
+        **changes : float
+            New values of fields, by name (e.g. ``max_jerk_mps3=2.0``), in the units of the
+            field.
+
+        Returns
+        -------
+        Vehicle
+            A new vehicle; this one is unchanged.
+
+        Raises
+        ------
+        InputError
+            A new value is not valid (see :class:`Vehicle`).
+        """
         return dataclasses.replace(self, **changes)
 
 
@@ -155,6 +172,17 @@ def vehicle_reference(vehicle: Vehicle) -> str:
 
     Written into a profile's settings line so that ``profileopt verify`` checks a plan with
     the vehicle it was planned for.
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        A vehicle, usually from :func:`load_vehicle`.
+
+    Returns
+    -------
+    str
+        The bundled name (e.g. ``"atv"``) if ``vehicle`` was loaded from a bundled file,
+        else the path of its file; ``""`` for a vehicle not loaded from a file.
     """
     if not vehicle.name:
         return ""

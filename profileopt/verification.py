@@ -169,6 +169,17 @@ class Verification:
 
         ``timings=False`` leaves out the wall-clock times, so that the same inputs give
         the same summary on every run.
+
+        Parameters
+        ----------
+        timings : bool, optional
+            Include ``"timings_s"``, the wall-clock time of each stage (s). Default True.
+
+        Returns
+        -------
+        dict
+            Route, vehicle, model, the worst segment and counts over the limit, the
+            simulation's step, the notes (and the timings).
         """
         i = self.worst_segment
         return {
@@ -215,6 +226,11 @@ class Verification:
         """Write one row per segment (:data:`VERIFICATION_COLUMNS`) atomically.
 
         Numbers carry 10 significant digits; the same inputs give the same bytes.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The CSV file to create or replace; its folder must exist.
         """
         cols = self.columns()
         with atomic_write(path) as handle:
@@ -226,7 +242,17 @@ class Verification:
                                       for v in row) + "\n")
 
     def to_json(self, timings: bool = True) -> str:
-        """:meth:`summary` as indented JSON (with ``timings=False``, the same on every run)."""
+        """:meth:`summary` as indented JSON (with ``timings=False``, the same on every run).
+
+        Parameters
+        ----------
+        timings : bool, optional
+            Include the wall-clock times (see :meth:`summary`). Default True.
+
+        Returns
+        -------
+        str
+        """
         return json.dumps(self.summary(timings), indent=2)
 
 

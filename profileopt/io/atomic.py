@@ -25,6 +25,17 @@ def check_output_path(path: str | os.PathLike) -> Path:
     Commands call it for every output first, so that a run that would fail at its second
     output never writes its first one.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to be written; its folder must exist and be writable, and it must not
+        itself be a folder.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path`` as a :class:`~pathlib.Path`.
+
     Raises
     ------
     InputError
@@ -43,7 +54,18 @@ def check_output_path(path: str | os.PathLike) -> Path:
 
 
 def check_output_paths(*paths: str | os.PathLike | None) -> None:
-    """:func:`check_output_path` for every path given (``None``: that output is not wanted)."""
+    """:func:`check_output_path` for every path given (``None``: that output is not wanted).
+
+    Parameters
+    ----------
+    *paths : str or os.PathLike or None
+        The output paths to check; None (or an empty string) is skipped.
+
+    Raises
+    ------
+    InputError
+        At the first path that cannot be written.
+    """
     for path in paths:
         if path:
             check_output_path(path)
@@ -56,6 +78,21 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     If the block raises, the temporary file is removed and ``path`` (and any good earlier
     file there) is left untouched. Use it for writers that want a file name (matplotlib's
     ``savefig``, C code generators); :func:`atomic_write` for text.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to create or replace; checked first with :func:`check_output_path`.
+
+    Yields
+    ------
+    pathlib.Path
+        A temporary file in the same folder as ``path``, to be written by the block.
+
+    Raises
+    ------
+    InputError
+        ``path`` cannot be written, or no temporary file can be made in its folder.
     """
     target = check_output_path(path)
     directory = target.parent
@@ -76,7 +113,20 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
 
 @contextlib.contextmanager
 def atomic_write(path: str | os.PathLike, newline: str = "\n") -> Iterator[IO[str]]:
-    """Open a text file for writing that appears at ``path`` only if the block succeeds."""
+    """Open a text file for writing that appears at ``path`` only if the block succeeds.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to create or replace (see :func:`atomic_path`).
+    newline : str, optional
+        Line ending written for each ``"\\n"`` (passed to :func:`open`); default ``"\\n"``.
+
+    Yields
+    ------
+    file object
+        A UTF-8 text file open for writing.
+    """
     with atomic_path(path) as tmp:
         with open(tmp, "w", encoding="utf-8", newline=newline) as handle:
             yield handle

@@ -140,7 +140,18 @@ class PointCloud:
     def xyz_m(self, classes: int | tuple[int, ...] | None = None) -> np.ndarray:
         """Rows (x, y, z) in metres, shape (M, 3), of the points of the given class code(s)
         (all points if ``classes`` is None); the form :func:`~profileopt.roughness_index`
-        takes."""
+        takes.
+
+        Parameters
+        ----------
+        classes : int or tuple of int, optional
+            LAS classification code(s) to keep (e.g. 2, ground); None keeps every point.
+
+        Returns
+        -------
+        numpy.ndarray, shape (M, 3)
+            Coordinates x, y, z (m) of the M points kept, in file order.
+        """
         keep = slice(None) if classes is None else np.isin(self.classification, np.atleast_1d(classes))
         return np.column_stack([self.x_m[keep], self.y_m[keep], self.z_m[keep]])
 

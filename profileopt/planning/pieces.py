@@ -169,6 +169,20 @@ def replace_cuts(score: np.ndarray, cuts: np.ndarray, wrong: np.ndarray, piece_s
     the cuts after the one before it are chosen again as :func:`choose_cuts` does, and if
     that finds none either, all the cuts (without the excluded ones).
 
+    Parameters
+    ----------
+    score : numpy.ndarray, shape (N,)
+        :func:`cut_scores` of the route.
+    cuts : numpy.ndarray of int, shape (K,)
+        The current cuts (segment indices, increasing, as :func:`choose_cuts` returns);
+        not modified.
+    wrong : numpy.ndarray of int
+        Indices into ``cuts`` of the cuts to replace, increasing.
+    piece_segments : int
+        Most segments in one piece.
+    excluded : set of int
+        Segment indices that may not be cuts (those already tried, the wrong ones among them).
+
     Returns
     -------
     numpy.ndarray of int
@@ -218,7 +232,21 @@ def wrong_cuts(lam_x: np.ndarray, scale: np.ndarray, free: np.ndarray, row_inact
 
 def piece_bounds(cuts: np.ndarray, n: int) -> list[tuple[int, int]]:
     """The pieces (first boundary, last boundary) of a route of ``n`` segments cut at
-    ``cuts`` (see :func:`choose_cuts`): consecutive pieces share the fixed pair k, k+1."""
+    ``cuts`` (see :func:`choose_cuts`): consecutive pieces share the fixed pair k, k+1.
+
+    Parameters
+    ----------
+    cuts : numpy.ndarray of int, shape (K,)
+        Increasing segment indices of the cuts.
+    n : int
+        Number of segments of the route.
+
+    Returns
+    -------
+    list of tuple of (int, int)
+        K + 1 pairs (first, last) of boundary indices: the first piece starts at 0, piece p
+        ends at ``cuts[p] + 1`` and the next starts at ``cuts[p]``, the last ends at ``n``.
+    """
     starts = [0] + [int(k) for k in cuts]
     ends = [int(k) + 1 for k in cuts] + [n]
     return list(zip(starts, ends))
