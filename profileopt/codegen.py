@@ -231,7 +231,7 @@ def export_c(
     A positional ``models`` still works for one release, with a ``DeprecationWarning``.
     """
     if not (isinstance(n_stages, int) and not isinstance(n_stages, bool) and n_stages >= 1):
-        raise InputError(f"--stages {n_stages!r}: must be an integer >= 1")
+        raise InputError(f"n_stages = {n_stages!r}: must be an integer >= 1")
     slug = vehicle_slug(vehicle)
     base = basename or f"profileopt_{slug}"
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", base):

@@ -264,11 +264,7 @@ def check_ri(ri: Any) -> None:
     InputError
         A NaN or negative value.
     """
-    if is_symbolic(ri):
-        return
-    values = np.asarray(ri.full() if isinstance(ri, ca.DM) else ri, dtype=float)
-    if np.any(np.isnan(values)) or np.any(values < 0):
-        raise InputError("RI must be a number >= 0 (NaN or a negative RI was given)")
+    _check_not_negative(ri, "RI must be a number >= 0 (NaN or a negative RI was given)")
 
 
 def check_e_max(e_max_m: Any) -> None:
@@ -284,11 +280,16 @@ def check_e_max(e_max_m: Any) -> None:
     InputError
         A NaN or negative value.
     """
-    if is_symbolic(e_max_m):
+    _check_not_negative(e_max_m, "e_max_m must be a number >= 0 in metres (NaN or a negative value was given)")
+
+
+def _check_not_negative(value: Any, message: str) -> None:
+    """Raise InputError(message) if a numeric ``value`` holds a NaN or a negative entry."""
+    if is_symbolic(value):
         return
-    values = np.asarray(e_max_m.full() if isinstance(e_max_m, ca.DM) else e_max_m, dtype=float)
+    values = np.asarray(value.full() if isinstance(value, ca.DM) else value, dtype=float)
     if np.any(np.isnan(values)) or np.any(values < 0):
-        raise InputError("e_max_m must be a number >= 0 in metres (NaN or a negative value was given)")
+        raise InputError(message)
 
 
 def worst_case_elevation(ri: Any, vehicle: "Vehicle") -> Any:

@@ -295,10 +295,7 @@ def verify(
     """
     t_start = time.perf_counter()
     key = profile.model if model is None else model
-    try:
-        force_model = get_model(key)
-    except ValueError as exc:
-        raise InputError(f"--model: {exc}") from None
+    force_model = get_model(key)
     s = np.asarray(profile.s_m, dtype=float)
     span = max(abs(route.s_m[0]), abs(route.s_m[-1]), 1.0) * 1e-9
     if s[0] < route.s_m[0] - span or s[-1] > route.s_m[-1] + span:

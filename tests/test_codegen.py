@@ -118,7 +118,7 @@ def test_command_line_export_with_stages_and_example_program(tmp_path: Path, cap
     "argv, message",
     [
         (["--vehicle", "no-such-car"], "no bundled vehicle"),
-        (["--vehicle", "atv", "--stages", "0"], "--stages 0"),
+        (["--vehicle", "atv", "--stages", "0"], "--stages = 0"),
     ],
 )
 def test_bad_input_is_one_line_and_writes_nothing(tmp_path: Path, capsys, argv, message) -> None:

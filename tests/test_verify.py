@@ -139,7 +139,7 @@ def test_a_limit_that_differs_from_the_vehicle_is_noted() -> None:
 
 
 def test_unknown_model_is_an_input_error() -> None:
-    with pytest.raises(InputError, match="--model"):
+    with pytest.raises(InputError, match="model .magic. is unknown"):
         verify(sinusoid_route(), constant_speed_profile(0.0, 5000.0, "sbem_tf"), ATV, model="magic")
 
 

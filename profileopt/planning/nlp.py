@@ -32,7 +32,7 @@ import numpy as np
 
 from ..kinematics import boundary_jerk_mps3, jerk_squared_time, segment_accel_mps2, segment_time_s
 from ..symbolic import mx_replay
-from .options import DEFAULT_IPOPT_OPTIONS
+from .options import DEFAULT_IPOPT_OPTIONS, SolverOptions
 
 __all__ = ["SPEED_EPS_MPS", "PARAMETERS", "build_nlp", "cached_nlp", "Scaling", "IpoptResult", "solve_ipopt",
            "row_bounds", "objective_s"]
@@ -256,8 +256,7 @@ def _column(v: ca.MX | None, count: int) -> ca.MX:
 
 
 @functools.lru_cache(maxsize=8)
-def cached_nlp(n: int, with_jerk: bool, ipopt_key: tuple = tuple(sorted(DEFAULT_IPOPT_OPTIONS.items()))
-               ) -> ca.Function:
+def cached_nlp(n: int, with_jerk: bool, ipopt_key: tuple = SolverOptions().ipopt_key()) -> ca.Function:
     """:func:`build_nlp` for N = n segments, built once per size and options and cached.
 
     Variables y = b / b_ref (b = v^2) at the N+1 boundaries; parameters: segment lengths /

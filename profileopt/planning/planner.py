@@ -142,7 +142,7 @@ def plan(
         warnings.warn("plan(bands=...) is deprecated; use plan(band=...)", DeprecationWarning, stacklevel=2)
         band = bands
     jerk = vehicle.max_jerk_mps3 if max_jerk_mps3 is None else float(max_jerk_mps3)
-    get_model(model)
+    limits = (*default_limits(vehicle, model=model, max_jerk_mps3=jerk), *extra_limits)  # refuses a bad model
     _validate_options(vehicle, smoothing, jerk, v0_mps, vend_mps, method, band)
     options = SolverOptions() if solver_options is None else solver_options
     timings: dict[str, float] = {}
@@ -150,7 +150,6 @@ def plan(
     timings["segment"] = time.perf_counter() - t_start
 
     t = time.perf_counter()
-    limits = (*default_limits(vehicle, model=model, max_jerk_mps3=jerk), *extra_limits)
     context = PlanContext(route=route, vehicle=vehicle, segments=seg)
     speed_sets, band_source = _speed_bands(limits, context)
     cap, cap_source = _speed_caps(limits, context)
