@@ -13,12 +13,15 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["Route", "validate_route_arrays", "MAX_ABS_ELEVATION_M", "MAX_ELEVATION_STEP_M"]
+__all__ = ["Route", "validate_route_arrays", "MAX_ABS_ELEVATION_M", "MAX_ELEVATION_STEP_M", "MIN_SPEED_LIMIT_MPS"]
 
 #: Elevations beyond this (m) are not on the Earth's surface: almost surely a unit mistake.
 MAX_ABS_ELEVATION_M = 10_000.0
 #: A jump between consecutive samples larger than this (m) is not terrain a vehicle drives.
 MAX_ELEVATION_STEP_M = 100.0
+#: A speed limit below this (m/s) is slower than any vehicle drives (the smallest top speed a
+#: vehicle file may give): almost surely a unit mistake.
+MIN_SPEED_LIMIT_MPS = 0.01
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -105,6 +108,11 @@ def validate_route_arrays(source: str, s: np.ndarray, z: np.ndarray, limit: np.n
     if bad.size:
         i = bad[0] + 1
         kind = "repeats" if ds[i - 1] == 0 else "decreases"
+        step = float(np.spacing(abs(s[i])))
+        if step >= 1e-4:  # the numbers, not the file, lose the steps: 1e15 keeps only 0.125 m
+            raise InputError(f"{source}: {what} {where[i]}: s = {s[i]:g} m {kind}: numbers this large keep "
+                             f"distances only to {step:g} m in double precision; give s from the start of the "
+                             "route (subtract the first value)")
         raise InputError(f"{source}: {what} {where[i]}: s = {s[i]:g} m {kind} (previous {s[i - 1]:g} m); "
                          "s must increase strictly, so sort the rows or drop duplicates")
     bad = np.flatnonzero(np.abs(z) > MAX_ABS_ELEVATION_M)
@@ -124,6 +132,12 @@ def validate_route_arrays(source: str, s: np.ndarray, z: np.ndarray, limit: np.n
             i = bad[0]
             raise InputError(f"{source}: {what} {where[i]}: speed_limit = {limit[i]:g} m/s must be > 0; "
                              "give a positive limit in m/s")
+        bad = np.flatnonzero(limit < MIN_SPEED_LIMIT_MPS)
+        if bad.size:
+            i = bad[0]
+            raise InputError(f"{source}: {what} {where[i]}: speed_limit = {limit[i]:g} m/s is below "
+                             f"{MIN_SPEED_LIMIT_MPS:g} m/s, slower than any vehicle drives; give the limit in m/s "
+                             "(was it given in another unit?)")
 
 
 def __getattr__(name: str) -> object:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from .errors import InputError
 
-__all__ = ["Vehicle", "load_vehicle", "bundled_vehicles", "vehicle_reference"]
+__all__ = ["Vehicle", "load_vehicle", "bundled_vehicles", "vehicle_reference", "PLAUSIBLE_RANGES"]
 
 # key -> (unit, what it is). Order is the order of the dataclass fields and of the files.
 _UNITS: dict[str, tuple[str, str]] = {
@@ -34,13 +34,34 @@ _UNITS: dict[str, tuple[str, str]] = {
     "max_jerk_mps3": ("m/s^3", "largest jerk"),
 }
 
+#: key -> (smallest, largest) value a ground vehicle can physically have, in the key's unit.
+#: Wide on purpose (a 1 kg robot corner to a 400 t mining truck's, walking pace to beyond any
+#: off-road vehicle); a value outside is a unit mistake or a typo, and would make the force
+#: models overflow or divide by almost nothing (issue 13). The lower force limit stays below
+#: the 1 N the tests use for "a very weak frame".
+PLAUSIBLE_RANGES: dict[str, tuple[float, float]] = {
+    "quarter_mass_kg": (0.1, 1e5),
+    "ground_clearance_m": (1e-3, 5.0),
+    "wheel_radius_m": (1e-3, 5.0),
+    "natural_frequency_radps": (0.1, 1e3),
+    "damping_ratio": (1e-3, 10.0),
+    "confidence": (0.5, 1.0),  # open interval, checked separately
+    "max_excitation_force_n": (1e-3, 1e8),
+    "max_transmitted_force_n": (1e-3, 1e8),
+    "max_speed_mps": (0.01, 200.0),
+    "terrain_frequency_cpm": (1e-3, 100.0),
+    "max_accel_mps2": (1e-3, 100.0),
+    "max_decel_mps2": (1e-3, 100.0),
+    "max_jerk_mps3": (1e-3, 1e4),
+}
+
 
 @dataclasses.dataclass(frozen=True)
 class Vehicle:
     """One quarter-car corner of a vehicle and its planning limits (SI units).
 
-    Attributes are the keys of a vehicle file. Every value must be a finite number > 0;
-    ``confidence`` must lie in (0.5, 1). Construction validates and raises
+    Attributes are the keys of a vehicle file. Every value must be a finite number within
+    :data:`PLAUSIBLE_RANGES` (a ground vehicle's); ``confidence`` must lie in (0.5, 1). Construction validates and raises
     :class:`~profileopt.errors.InputError` (a ``ValueError``) otherwise.
 
     Attributes
@@ -96,7 +117,14 @@ class Vehicle:
                     f"{where}: key '{key}' = {value!r} is not a number; "
                     f"give the {what} as a number in {unit}"
                 )
-            value = float(value)
+            lo, hi = PLAUSIBLE_RANGES[key]
+            try:
+                value = float(value)
+            except OverflowError:  # an integer too large for a float
+                raise InputError(
+                    f"{where}: key '{key}' = a {len(str(abs(value)))}-digit integer is outside {lo:g} to {hi:g} "
+                    f"{unit}, the range of a ground vehicle's {what}; check the value and its unit"
+                ) from None
             object.__setattr__(self, key, value)
             # Only the jerk limit may be switched off (inf), and only from code or the command
             # line: load_vehicle refuses non-finite values in a file.
@@ -105,6 +133,11 @@ class Vehicle:
                 raise InputError(
                     f"{where}: key '{key}' = {value!r} is not allowed; "
                     f"the {what} must be a finite number > 0 in {unit}"
+                )
+            if key != "confidence" and not infinite_ok and not lo <= value <= hi:
+                raise InputError(
+                    f"{where}: key '{key}' = {value:g} {unit} is outside {lo:g} to {hi:g} {unit}, the range of "
+                    f"a ground vehicle's {what}; check the value and its unit"
                 )
         if not 0.5 < self.confidence < 1.0:
             raise InputError(

@@ -19,7 +19,13 @@ import numpy as np
 
 from ..errors import InfeasibleError
 
-__all__ = ["BandChoice", "boundary_bounds", "choose_bands", "greatest_profile"]
+__all__ = ["BandChoice", "boundary_bounds", "choose_bands", "greatest_profile", "snap_to_band",
+           "BOUNDARY_SNAP_RTOL"]
+
+#: A boundary speed (v0_mps, vend_mps) this close to an admissible band, relative to the
+#: band edge (or 1e-9 m/s near rest), is taken as that edge: a speed copied from a band
+#: edge that another plan printed, or rounded in the last digits, must not fail on rounding.
+BOUNDARY_SNAP_RTOL = 1e-6
 
 
 def greatest_profile(
@@ -182,7 +188,9 @@ def choose_bands(
         b = greatest_profile(lower, upper, length_m, accel_mps2, decel_mps2)
         short = b < lower - tol
         if not short.any():
-            standstill = np.flatnonzero((b[:-1] <= tol) & (b[1:] <= tol))
+            # v = 0 at both ends (to within 1e-6 m/s, an absolute speed: a slow segment is not
+            # a standstill, whatever the top speed of the route)
+            standstill = np.flatnonzero((b[:-1] <= 1e-12) & (b[1:] <= 1e-12))
             if standstill.size:  # v = 0 at both ends: constant acceleration never moves
                 i = standstill[0]
                 raise InfeasibleError(
@@ -246,3 +254,38 @@ def _infeasible_message(j: int, b: np.ndarray, lower: np.ndarray, where: np.ndar
     return (f"at s = {where[j]:g} m the speed must be at least {math.sqrt(lower[j]):.3g} m/s but the "
             f"acceleration bounds allow only {reach:.3g} m/s; relax v0_mps/vend_mps or the vehicle's "
             "acceleration limits")
+
+
+def snap_to_band(speed_mps: float, lower_mps: np.ndarray, upper_mps: np.ndarray, count: int, name: str
+                 ) -> tuple[float, str | None]:
+    """A boundary speed moved onto the nearest admissible band when it lies just outside it.
+
+    Parameters
+    ----------
+    speed_mps : float
+        The requested speed (m/s), e.g. ``v0_mps``.
+    lower_mps, upper_mps : numpy.ndarray, shape (B,)
+        Band edges of the segment at that boundary (m/s), NaN-padded.
+    count : int
+        Number of bands.
+    name : str
+        The parameter's name, for the note.
+
+    Returns
+    -------
+    (speed_mps, note) : tuple
+        The speed to plan with and a note saying it was moved (None when it was not). A
+        speed inside a band, or farther than :data:`BOUNDARY_SNAP_RTOL` from every band, is
+        returned unchanged (the band choice then names the bands).
+    """
+    lo, hi = lower_mps[:count], upper_mps[:count]
+    if count == 0 or np.any((lo <= speed_mps) & (speed_mps <= hi)):
+        return speed_mps, None
+    edges = np.concatenate([lo, hi])
+    k = int(np.argmin(np.abs(edges - speed_mps)))
+    edge = float(edges[k])
+    if abs(edge - speed_mps) > max(BOUNDARY_SNAP_RTOL * edge, 1e-9):
+        return speed_mps, None
+    band = k % count
+    return edge, (f"{name} = {float(speed_mps)!r} m/s lies {abs(edge - speed_mps):.2g} m/s outside the admissible band "
+                  f"[{lo[band]:.6g}, {hi[band]:.6g}] m/s; planned with {name} = {edge!r} m/s, its edge")

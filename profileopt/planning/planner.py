@@ -26,8 +26,8 @@ from ..errors import InfeasibleError, InputError, PlanningError
 from ..forces import DEFAULT_MODEL, get_model
 from ..kinematics import segment_accel_mps2, segment_time_s
 from ..speeds import SpeedBands
-from ..vehicle import vehicle_reference
-from .bands import BandChoice, choose_bands
+from ..vehicle import PLAUSIBLE_RANGES, vehicle_reference
+from .bands import BandChoice, choose_bands, snap_to_band
 from .fallback import fallback_choice
 from .limits import Limit, PlanContext, default_limits
 from .limits.force import max_force_over_segments
@@ -41,10 +41,14 @@ if TYPE_CHECKING:
     from ..route import Route
     from ..vehicle import Vehicle
 
-__all__ = ["plan", "DEFAULT_SMOOTHING", "PLAN_BANDS"]
+__all__ = ["plan", "DEFAULT_SMOOTHING", "PLAN_BANDS", "MIN_JERK_MPS3"]
 
 #: Weight of the jerk term: objective = time + w * integral (jerk / (1 m/s^3))^2 dt, both in s.
 DEFAULT_SMOOTHING = 0.01
+#: The smallest jerk bound (m/s^3) a plan accepts: the smallest a vehicle file may give
+#: (:data:`profileopt.vehicle.PLAUSIBLE_RANGES`). Below it the jerk-limited profile crawls (a
+#: bound of 1e-13 left no usable profile at all, 1e-50 one standing still for ever).
+MIN_JERK_MPS3 = PLAUSIBLE_RANGES["max_jerk_mps3"][0]
 #: The values of :func:`plan`'s ``band``: every band of each segment (chosen over the whole
 #: route), only the band from rest, or only the highest band.
 PLAN_BANDS = ("all", "first", "largest")
@@ -56,6 +60,9 @@ def _validate_options(vehicle: "Vehicle", smoothing: float, max_jerk_mps3: float
         raise InputError(f"smoothing = {smoothing!r}: must be a finite number >= 0 (0 is pure minimum time)")
     if math.isnan(max_jerk_mps3) or not max_jerk_mps3 > 0:
         raise InputError(f"max_jerk_mps3 = {max_jerk_mps3!r} m/s^3: must be > 0 ('inf' turns the jerk limit off)")
+    if max_jerk_mps3 < MIN_JERK_MPS3:
+        raise InputError(f"max_jerk_mps3 = {max_jerk_mps3:g} m/s^3 is too small to move the vehicle in a useful time; "
+                         f"give at least {MIN_JERK_MPS3:g} m/s^3 ('inf' turns the jerk limit off)")
     for name, value in (("v0_mps", v0_mps), ("vend_mps", vend_mps)):
         if not (math.isfinite(value) and value >= 0):
             raise InputError(f"{name} = {value!r} m/s: must be a finite speed >= 0")
@@ -165,6 +172,11 @@ def plan(
     t = time.perf_counter()
     decel, accel = _accel_bounds(limits, context)
     jerk_bound = min(limit.jerk_bound_mps3(context) for limit in limits)
+    notes = list(seg.notes)
+    v0_mps, note_v0 = snap_to_band(v0_mps, usable.lower_mps[0], usable.upper_mps[0], int(usable.count[0]), "v0_mps")
+    vend_mps, note_vend = snap_to_band(vend_mps, usable.lower_mps[-1], usable.upper_mps[-1], int(usable.count[-1]),
+                                       "vend_mps")
+    notes += [note for note in (note_v0, note_vend) if note]
     try:
         chosen = choose_bands(usable.lower_mps, usable.upper_mps, usable.count, seg.length_m, accel, decel,
                               v0_mps, vend_mps, seg.boundaries_m)
@@ -172,7 +184,6 @@ def plan(
         raise InfeasibleError(f"{route.source}: {exc}") from None
     timings["choose"] = time.perf_counter() - t
 
-    notes = list(seg.notes)
     iterations = pieces = 0
     if method == "auto" and smoothing == 0 and not math.isfinite(jerk_bound):
         b, status, success = chosen.greatest_b, "exact", True
