@@ -147,3 +147,33 @@ def test_distances_beyond_double_precision_are_named_as_such(tmp_path):
     path = _route_file(tmp_path, s, 0.01 * np.sin(np.arange(s.size)))
     line = one_line(run(["plan", str(path)], tmp_path), "route.csv", "double precision", "subtract the first value")
     assert "drop duplicates" not in line
+
+
+# --------------------------------------------------------------------------------------
+# Silent misreading: lines end at \n only; a byte-order mark is accepted in every file
+
+
+@pytest.mark.parametrize("separator", ["\u2028", "\u2029", "\x0c", "\x0b", "\x85", "\x1c"])
+def test_a_line_separator_inside_a_comment_stays_in_the_comment(tmp_path, separator):
+    s = np.round(np.arange(0.0, 10.05, 0.1), 6)
+    rows = "".join(f"{a:.6g},{0.01 * math.sin(3 * a):.6g}\n" for a in s)
+    clean = tmp_path / "clean.csv"
+    clean.write_text("# a comment\ns,z\n" + rows, encoding="utf-8")
+    # before: str.splitlines split the comment, "5,3" became a data row and changed the RI
+    tricky = tmp_path / "tricky.csv"
+    tricky.write_text(f"# a comment{separator}5,3\ns,z\n" + rows, encoding="utf-8")
+    a, b = read_route(clean), read_route(tricky)
+    np.testing.assert_array_equal(a.s_m, b.s_m)
+    np.testing.assert_array_equal(a.z_m, b.z_m)
+
+
+def test_a_byte_order_mark_is_accepted_in_route_and_profile_files(tmp_path, atv):
+    route = read_route(ROUTES / "curb.csv")
+    profile = plan(route, atv)
+    profile.to_csv(tmp_path / "profile.csv")
+    (tmp_path / "bom.csv").write_bytes(b"\xef\xbb\xbf" + (tmp_path / "profile.csv").read_bytes())
+    from profileopt import read_profile
+
+    np.testing.assert_array_equal(read_profile(tmp_path / "bom.csv").speed_mps, profile.speed_mps)
+    (tmp_path / "route.csv").write_bytes(b"\xef\xbb\xbf" + (ROUTES / "curb.csv").read_bytes())
+    np.testing.assert_array_equal(read_route(tmp_path / "route.csv").z_m, route.z_m)
