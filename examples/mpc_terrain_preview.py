@@ -37,13 +37,14 @@ from profileopt.stations import segment_index  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-parser.add_argument("--route", default=str(HERE / "routes" / "trail.csv"), help="route CSV (s,z)")
-parser.add_argument("--vehicle", default="atv", help="bundled vehicle name or .toml file")
-parser.add_argument("--model", default="sbem_tf", choices=["iecm", "sbem_ef", "sbem_tf"])
-parser.add_argument("--cruise", type=float, default=12.0, help="desired cruise speed (m/s)")
-parser.add_argument("--from-m", type=float, default=0.0, help="start (from rest) this far along the route (m)")
-parser.add_argument("--until-m", type=float, default=None, help="stop after driving this distance (m)")
-parser.add_argument("--out", default="mpc_out", help="folder for the plot")
+parser.add_argument("--route", default=str(HERE / "routes" / "trail.csv"), help="route CSV (s,z) (default: %(default)s)")
+parser.add_argument("--vehicle", default="atv", help="bundled vehicle name or .toml file (default: %(default)s)")
+parser.add_argument("--model", default="sbem_tf", choices=["iecm", "sbem_ef", "sbem_tf"],
+                    help="force model (default: %(default)s)")
+parser.add_argument("--cruise", type=float, default=12.0, help="desired cruise speed in m/s (default: %(default)s)")
+parser.add_argument("--from-m", type=float, default=0.0, help="start (from rest) this far along the route, m (default: %(default)s)")
+parser.add_argument("--until-m", type=float, default=None, help="stop after driving this distance, m (default: to the end of the route)")
+parser.add_argument("--out", default="mpc_out", help="folder for the plot (default: %(default)s)")
 args = parser.parse_args()
 
 route = read_route(args.route)
