@@ -247,7 +247,7 @@ def export_c(
         cg.add(jac)
     with tempfile.TemporaryDirectory() as tmp:
         cg.generate(str(Path(tmp)) + "/")
-        source_text = (Path(tmp) / f"{base}.c").read_text(encoding="utf-8")
+        source_text = _mark_unused_parameters((Path(tmp) / f"{base}.c").read_text(encoding="utf-8"))
         header_text = (Path(tmp) / f"{base}.h").read_text(encoding="utf-8")
 
     exported = tuple(t[0] for t in triples)
@@ -274,6 +274,48 @@ def export_c(
         functions=exported,
         n_stages=n_stages,
     )
+
+
+#: A function definition as CasADi writes it: on one line at column 0, ending with "{".
+_DEFINITION = re.compile(r"^(?![#/ \t])[^;()]*\b\w+\((?P<params>[^()]*)\)\s*\{\s*$")
+
+
+def _mark_unused_parameters(source: str) -> str:
+    """``source`` with ``(void)name;`` for each parameter a function body does not use.
+
+    CasADi gives every generated function the full signature ``(arg, res, iw, w, mem)``
+    whether or not the body needs the work arrays, and has no option to mark the unused
+    ones (casadi/casadi#1741, #1875), so ``-Wextra`` warns about each (112 warnings for the
+    default export). The casts go just before the body's last ``return`` (or its closing
+    brace), after every declaration, so the code stays valid C89 as well.
+    """
+    lines = source.split("\n")
+    out: list[str] = []
+    i = 0
+    while i < len(lines):
+        match = _DEFINITION.match(lines[i])
+        if not match:
+            out.append(lines[i])
+            i += 1
+            continue
+        end = i + 1
+        while end < len(lines) and lines[end] != "}":
+            end += 1
+        if end == len(lines):  # not a body CasADi writes: leave it alone
+            out.append(lines[i])
+            i += 1
+            continue
+        body = lines[i + 1:end]
+        names = []
+        for param in match.group("params").split(","):
+            words = re.findall(r"\w+", param)
+            if words and words != ["void"] and not re.search(rf"\b{words[-1]}\b", "\n".join(body)):
+                names.append(words[-1])
+        at = len(body) - 1 if body and re.match(r"^  return\b", body[-1]) else len(body)
+        casts = [f"  (void){name};" for name in names]
+        out.extend([lines[i], *body[:at], *casts, *body[at:], lines[end]])
+        i = end + 1
+    return "\n".join(out)
 
 
 def _example_model(exported: Sequence[ExportedFunction]) -> str:
