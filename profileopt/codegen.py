@@ -35,7 +35,7 @@ import casadi as ca
 
 from ._deprecation import old_forms
 from .io.atomic import atomic_write
-from .constraints import constraint_function, force_function, force_limit_n
+from .constraints import constraint_function, force_function, force_limit_n, jacobian_function
 from .errors import InputError
 from .forces import DEFAULT_MODEL, FORCE_OF_E_MAX, MODELS, get_model
 
@@ -106,38 +106,6 @@ def vehicle_slug(vehicle: "Vehicle") -> str:
     if not slug or slug[0].isdigit():
         slug = "v_" + slug
     return slug
-
-
-def jacobian_function(fn: ca.Function, name: str | None = None) -> ca.Function:
-    """The Jacobian of a one-output Function with the same inputs as ``fn``.
-
-    ``fn.jacobian()`` takes the nominal output as an extra (structurally empty) input; this
-    wrapper drops it, so that the C function takes exactly the inputs of ``fn``.
-
-    Parameters
-    ----------
-    fn : casadi.Function
-        A Function with one output.
-    name : str, optional
-        Name of the Jacobian Function; default ``fn.name() + "_jac"``.
-
-    Returns
-    -------
-    casadi.Function
-        ``name`` (default ``fn.name() + "_jac"``): inputs as ``fn``, outputs
-        ``jac_<out>_<in>`` for each input, (n_out x n_in) matrices.
-    """
-    jac = fn.jacobian()
-    inputs = [ca.SX.sym(fn.name_in(i), fn.sparsity_in(i)) for i in range(fn.n_in())]
-    values = jac.call({fn.name_in(i): inputs[i] for i in range(fn.n_in())})
-    names = [jac.name_out(i) for i in range(jac.n_out())]
-    return ca.Function(
-        name or fn.name() + "_jac",
-        inputs,
-        [values[n] for n in names],
-        [fn.name_in(i) for i in range(fn.n_in())],
-        names,
-    )
 
 
 def _check_models(models: Sequence[str] | None) -> list[str]:
