@@ -174,11 +174,13 @@ def test_function_docs_hold_no_absolute_path(atv, tmp_path: Path) -> None:
 def _readme_outputs() -> set[str]:
     """Output paths named in the README's commands (-o, --plot, --out), placeholders aside."""
     names = set()
-    for match in re.finditer(r"(?:-o|--plot|--out)\s+([\w./-]+)", README):
-        name = match.group(1)
-        if name.isupper() or name.split(".")[0].isupper() or name.startswith("/") or name == "-":
-            continue
-        names.add(name)
+    for line in README.splitlines():
+        folder = re.search(r"\bcd (\S+) &&", line)  # a command run inside a folder writes there
+        for match in re.finditer(r"(?:-o|--plot|--out)\s+([\w./-]+)", line):
+            name = match.group(1)
+            if name.isupper() or name.split(".")[0].isupper() or name.startswith("/") or name == "-":
+                continue
+            names.add(folder.group(1).rstrip("/") + "/" + name if folder else name)
     return names
 
 
