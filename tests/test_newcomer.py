@@ -190,7 +190,8 @@ def test_gitignore_covers_what_the_readme_commands_write() -> None:
     names = _readme_outputs() | {"mpc_out/"}  # mpc_terrain_preview.py's default folder
     assert {"profile.csv", "verify.csv", "verify.png", "forces_c/"} <= names, names
     for name in sorted(names):
-        probe = name + "x.c" if name.endswith("/") else name
+        folder = name.endswith("/") or "." not in Path(name).name  # --out figures: a folder
+        probe = name.rstrip("/") + "/x.c" if folder else name
         result = subprocess.run(["git", "check-ignore", "-q", "--no-index", probe], cwd=ROOT)
         assert result.returncode == 0, f"{name} is written by a README command and not in .gitignore"
 
