@@ -4,7 +4,7 @@ Run by hand, never by the test suite (it takes minutes and its numbers depend on
 machine)::
 
     pip install -e '.[bench]'          # TOPP-RA, the independent reference solver
-    python benchmarks/bench_plan.py    # sizes 1000 10000 100000, 3 repeats
+    python benchmarks/bench_plan.py    # sizes 1000 10000 100000, 3 repeats; table on stdout
     python benchmarks/bench_plan.py --sizes 1000 10000 --repeats 5 --out /tmp/results.md
 
 For every size N (segments of 5 m) it generates a seeded synthetic route (an ISO 8608
@@ -573,8 +573,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--sizes", nargs="+", default=["1000", "10000", "100000"],
                         help="numbers of 5 m segments (space- or comma-separated; default 1000 10000 100000)")
     parser.add_argument("--repeats", type=int, default=3, help="timed runs of each method per size (default 3)")
-    parser.add_argument("--out", type=Path, default=REPO / "benchmarks" / "results.md",
-                        help="Markdown file for the table (default benchmarks/results.md)")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="also write the table to this Markdown file (default: stdout only; the "
+                             "committed table is benchmarks/results.md, written only when named)")
     parser.add_argument("--spacing", type=float, default=0.5, help="route sample spacing in m (default 0.5)")
     parser.add_argument("--seed", type=int, default=8608, help="seed of the synthetic routes (default 8608)")
     parser.add_argument("--no-cli", action="store_true", help="skip the command-line process row")
@@ -609,9 +610,10 @@ def main(argv: list[str] | None = None) -> int:
             "(medians, s; `read + write` is everything outside `plan`, i.e. `read_route` and `to_csv`):\n\n"
             + stages_table(rows) + "\n")
     print(text)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(text, encoding="utf-8")
-    print(f"wrote {args.out}", file=sys.stderr)
+    if args.out is not None:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(text, encoding="utf-8")
+        print(f"wrote {args.out}", file=sys.stderr)
     return 0
 
 

@@ -60,9 +60,9 @@ def tile_points(xyz_m: np.ndarray, tile_m: float) -> tuple[np.ndarray, np.ndarra
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("las", nargs="?", type=Path, default=DEFAULT_LAS, help="LAS point cloud (default: %(default)s)")
-    parser.add_argument("--out", type=Path, default=Path("figures") / "lidar_roughness.png", help="PNG to write")
-    parser.add_argument("--tile-m", type=float, default=TILE_M, help="side of a square patch (m)")
-    parser.add_argument("--vehicle", default="atv", help="bundled vehicle name or .toml file")
+    parser.add_argument("--out", type=Path, default=Path("figures") / "lidar_roughness.png", help="PNG to write (default: %(default)s)")
+    parser.add_argument("--tile-m", type=float, default=TILE_M, help="side of a square patch in m (default: %(default)s)")
+    parser.add_argument("--vehicle", default="atv", help="bundled vehicle name or .toml file (default: %(default)s)")
     args = parser.parse_args(argv)
     if not args.las.is_file():
         print(f"{args.las}: LiDAR data not found; pass the path of hexbin-crop.las "

@@ -37,13 +37,14 @@ from profileopt.stations import segment_index  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-parser.add_argument("--route", default=str(HERE / "routes" / "trail.csv"), help="route CSV (s,z)")
-parser.add_argument("--vehicle", default="atv", help="bundled vehicle name or .toml file")
-parser.add_argument("--model", default="sbem_tf", choices=["iecm", "sbem_ef", "sbem_tf"])
-parser.add_argument("--cruise", type=float, default=12.0, help="desired cruise speed (m/s)")
-parser.add_argument("--from-m", type=float, default=0.0, help="start (from rest) this far along the route (m)")
-parser.add_argument("--until-m", type=float, default=None, help="stop after driving this distance (m)")
-parser.add_argument("--out", default="mpc_out", help="folder for the plot")
+parser.add_argument("--route", default=str(HERE / "routes" / "trail.csv"), help="route CSV (s,z) (default: %(default)s)")
+parser.add_argument("--vehicle", default="atv", help="bundled vehicle name or .toml file (default: %(default)s)")
+parser.add_argument("--model", default="sbem_tf", choices=["iecm", "sbem_ef", "sbem_tf"],
+                    help="force model (default: %(default)s)")
+parser.add_argument("--cruise", type=float, default=12.0, help="desired cruise speed in m/s (default: %(default)s)")
+parser.add_argument("--from-m", type=float, default=0.0, help="start (from rest) this far along the route, m (default: %(default)s)")
+parser.add_argument("--until-m", type=float, default=None, help="stop after driving this distance, m (default: to the end of the route)")
+parser.add_argument("--out", default="mpc_out", help="folder for the plot (default: %(default)s)")
 args = parser.parse_args()
 
 route = read_route(args.route)
@@ -228,21 +229,23 @@ print(f"worst force ratio met: {worst:.9f} ({label}, limit {limit_n:g} N) at s =
 # --- Plot ----------------------------------------------------------------------------------
 out = Path(args.out)
 out.mkdir(parents=True, exist_ok=True)
-fig, (ax_v, ax_r) = plt.subplots(2, 1, sharex=True, figsize=(9, 6))
-ax_v.plot(profile.s_m, profile.speed_mps, color="0.6", label="offline plan (minimum time)")
+fig, (ax_v, ax_r) = plt.subplots(2, 1, sharex=True, figsize=(11, 6))
+ax_v.plot(profile.s_m, profile.speed_mps, color="0.45", lw=1.5, zorder=2, label="offline plan (minimum time)")
 ax_v.plot(log["s"], log["v"], color="C0", label=f"closed-loop MPC (cruise {args.cruise:g} m/s)")
 first_seg = np.minimum(cap_seg, bands.first())
-ax_v.stairs(first_seg, bounds_m, color="C3", lw=0.8, label="allowable speed per segment ('first')")
+# wide and underneath: the offline plan rides it wherever the force limit holds it back
+ax_v.stairs(first_seg, bounds_m, baseline=None, color="C3", lw=4.0, alpha=0.4, zorder=1,
+            label="allowable speed per segment ('first')")
 ax_v.set_ylabel("speed (m/s)")
 ax_v.set_ylim(0, v_max * 1.05)
-ax_v.legend(loc="lower right", fontsize=8)
+ax_v.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)  # outside: it hid data
 ax_r.plot(profile.s_m, profile.force_n / profile.force_limit_n, color="0.6", label="offline plan, per segment")
 ax_r.plot(log["s"][:-1], log["ratio"], color="C0", label="MPC: largest F / F_limit per step")
-ax_r.axhline(1.0, color="C3", lw=0.8)
+ax_r.axhline(1.0, color="C3", lw=0.8, label="limit")
 ax_r.set_ylabel("force / limit (-)")
 ax_r.set_xlabel("distance along the route s (m)")
 ax_r.set_xlim(s_start, s_stop)
-ax_r.legend(loc="lower right", fontsize=8)
+ax_r.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
 fig.tight_layout()
 csv = out / "mpc_closed_loop.csv"  # one row per control step: the state, then the input applied
 with atomic_path(csv) as tmp:

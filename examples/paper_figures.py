@@ -1,19 +1,22 @@
 """Reproduce the paper's Figs. 1, 5 and 6 (Wilson et al., Velocity Selection for High-Speed
 UGVs in Rough Unknown Terrains using Force Prediction).
 
-Run:  python examples/paper_figures.py [OUT_DIR]      (default: figures/)
+Run:  python examples/paper_figures.py [OUT_DIR]      (default: figures/; --help for the options)
 
 It writes fig1_ri_vs_amplitude, fig5_allowable_speed and fig6_resonance, each as a PNG and
 as a CSV of the plotted curves (column names carry their units).
 """
 
-import sys
+import argparse
 from pathlib import Path
 
 from profileopt import load_vehicle
 from profileopt.figures import figure_1, figure_5, figure_6, write_figure
 
-out = Path(sys.argv[1] if len(sys.argv) > 1 else "figures")
+parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+parser.add_argument("out", nargs="?", type=Path, default=Path("figures"), metavar="OUT_DIR",
+                    help="folder for the PNG and CSV files, created if missing (default: %(default)s)")
+out = parser.parse_args().out
 out.mkdir(parents=True, exist_ok=True)
 
 # The terrain, as in the paper's Section 4: 100 sinusoidal profiles with amplitudes evenly

@@ -94,7 +94,7 @@ def _same_segments(study: SafetyStudy) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--out", type=Path, help="also write the Markdown to this file")
+    parser.add_argument("--out", type=Path, help="also write the Markdown to this file (default: print it only)")
     args = parser.parse_args(argv)
     started = time.perf_counter()
     study = run_study()

@@ -15,6 +15,7 @@ import sys
 import traceback
 from typing import Callable, NoReturn, Sequence
 
+from . import __version__
 from .errors import InputError
 
 __all__ = ["main", "build_parser", "command", "flags_for_parameters"]
@@ -100,6 +101,8 @@ def build_parser() -> argparse.ArgumentParser:
         description="Terrain-force-limited, minimum-time speed profiles for ground vehicles.",
     )
     parser.add_argument("--debug", action="store_true", help="show a traceback on any error")
+    parser.add_argument("--version", action="version", version=f"profileopt {__version__}",
+                        help="print the version and exit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name, (help_text, run) in _COMMANDS.items():
         p = sub.add_parser(name, help=help_text, description=help_text)

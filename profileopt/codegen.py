@@ -35,7 +35,7 @@ import casadi as ca
 
 from ._deprecation import old_forms
 from .io.atomic import atomic_write
-from .constraints import constraint_function, force_function, force_limit_n
+from .constraints import constraint_function, force_function, force_limit_n, jacobian_function
 from .errors import InputError
 from .forces import DEFAULT_MODEL, FORCE_OF_E_MAX, MODELS, get_model
 
@@ -106,38 +106,6 @@ def vehicle_slug(vehicle: "Vehicle") -> str:
     if not slug or slug[0].isdigit():
         slug = "v_" + slug
     return slug
-
-
-def jacobian_function(fn: ca.Function, name: str | None = None) -> ca.Function:
-    """The Jacobian of a one-output Function with the same inputs as ``fn``.
-
-    ``fn.jacobian()`` takes the nominal output as an extra (structurally empty) input; this
-    wrapper drops it, so that the C function takes exactly the inputs of ``fn``.
-
-    Parameters
-    ----------
-    fn : casadi.Function
-        A Function with one output.
-    name : str, optional
-        Name of the Jacobian Function; default ``fn.name() + "_jac"``.
-
-    Returns
-    -------
-    casadi.Function
-        ``name`` (default ``fn.name() + "_jac"``): inputs as ``fn``, outputs
-        ``jac_<out>_<in>`` for each input, (n_out x n_in) matrices.
-    """
-    jac = fn.jacobian()
-    inputs = [ca.SX.sym(fn.name_in(i), fn.sparsity_in(i)) for i in range(fn.n_in())]
-    values = jac.call({fn.name_in(i): inputs[i] for i in range(fn.n_in())})
-    names = [jac.name_out(i) for i in range(jac.n_out())]
-    return ca.Function(
-        name or fn.name() + "_jac",
-        inputs,
-        [values[n] for n in names],
-        [fn.name_in(i) for i in range(fn.n_in())],
-        names,
-    )
 
 
 def _check_models(models: Sequence[str] | None) -> list[str]:
@@ -247,7 +215,7 @@ def export_c(
         cg.add(jac)
     with tempfile.TemporaryDirectory() as tmp:
         cg.generate(str(Path(tmp)) + "/")
-        source_text = (Path(tmp) / f"{base}.c").read_text(encoding="utf-8")
+        source_text = _mark_unused_parameters((Path(tmp) / f"{base}.c").read_text(encoding="utf-8"))
         header_text = (Path(tmp) / f"{base}.h").read_text(encoding="utf-8")
 
     exported = tuple(t[0] for t in triples)
@@ -274,6 +242,48 @@ def export_c(
         functions=exported,
         n_stages=n_stages,
     )
+
+
+#: A function definition as CasADi writes it: on one line at column 0, ending with "{".
+_DEFINITION = re.compile(r"^(?![#/ \t])[^;()]*\b\w+\((?P<params>[^()]*)\)\s*\{\s*$")
+
+
+def _mark_unused_parameters(source: str) -> str:
+    """``source`` with ``(void)name;`` for each parameter a function body does not use.
+
+    CasADi gives every generated function the full signature ``(arg, res, iw, w, mem)``
+    whether or not the body needs the work arrays, and has no option to mark the unused
+    ones (casadi/casadi#1741, #1875), so ``-Wextra`` warns about each (112 warnings for the
+    default export). The casts go just before the body's last ``return`` (or its closing
+    brace), after every declaration, so the code stays valid C89 as well.
+    """
+    lines = source.split("\n")
+    out: list[str] = []
+    i = 0
+    while i < len(lines):
+        match = _DEFINITION.match(lines[i])
+        if not match:
+            out.append(lines[i])
+            i += 1
+            continue
+        end = i + 1
+        while end < len(lines) and lines[end] != "}":
+            end += 1
+        if end == len(lines):  # not a body CasADi writes: leave it alone
+            out.append(lines[i])
+            i += 1
+            continue
+        body = lines[i + 1:end]
+        names = []
+        for param in match.group("params").split(","):
+            words = re.findall(r"\w+", param)
+            if words and words != ["void"] and not re.search(rf"\b{words[-1]}\b", "\n".join(body)):
+                names.append(words[-1])
+        at = len(body) - 1 if body and re.match(r"^  return\b", body[-1]) else len(body)
+        casts = [f"  (void){name};" for name in names]
+        out.extend([lines[i], *body[:at], *casts, *body[at:], lines[end]])
+        i = end + 1
+    return "\n".join(out)
 
 
 def _example_model(exported: Sequence[ExportedFunction]) -> str:

@@ -30,7 +30,9 @@ Constraints over a horizon
     of order one, which IPOPT prefers to forces of thousands of newtons.
 Named ``casadi.Function`` objects
     :func:`force_function` and :func:`constraint_function`, with named inputs and outputs,
-    for ``map``, ``jacobian()`` and code generation (:mod:`profileopt.codegen`).
+    for ``map``, differentiation and code generation (:mod:`profileopt.codegen`);
+    :func:`jacobian_function` gives their Jacobian with the same two inputs (CasADi's own
+    ``fn.jacobian()`` wants the nominal output as a third).
 Resonance
     :func:`band_edges` (one band per terrain value, as speed bounds) and, re-exported,
     :func:`~profileopt.speeds.speed_bands` (every band) and
@@ -106,6 +108,7 @@ import dataclasses
 import math
 import re
 import warnings
+from pathlib import Path
 from typing import Any, Iterator, Literal
 
 import casadi as ca
@@ -146,6 +149,7 @@ __all__ = [
     "add_force_constraints",
     "force_function",
     "constraint_function",
+    "jacobian_function",
     "BandEdges",
     "band_edges",
     "SpeedBands",
@@ -247,7 +251,8 @@ class ForceConstraints:
     """Force-limit (and optional acceleration) constraints lbg <= g <= ubg.
 
     Unpacks as the triple ``g, lbg, ubg = force_constraints(...)`` that
-    ``casadi.nlpsol`` takes (``{"g": g}`` and ``lbg=lbg, ubg=ubg`` at the call).
+    ``casadi.nlpsol`` takes (``{"g": g}`` and ``lbg=lbg, ubg=ubg`` at the call), and
+    converts to the dict of the same three: ``dict(cons)``, ``{**cons}``.
 
     Attributes
     ----------
@@ -281,6 +286,16 @@ class ForceConstraints:
 
     def __iter__(self) -> Iterator[Any]:
         return iter((self.g, self.lbg, self.ubg))
+
+    def keys(self) -> tuple[str, str, str]:
+        """``("g", "lbg", "ubg")``: with :meth:`__getitem__`, ``dict(cons)`` and ``**cons``
+        give the same three as unpacking."""
+        return ("g", "lbg", "ubg")
+
+    def __getitem__(self, key: str) -> Any:
+        if key not in self.keys():
+            raise KeyError(f"{key!r}: a ForceConstraints maps 'g', 'lbg' and 'ubg' (attributes hold the rest)")
+        return getattr(self, key)
 
 
 def _column(x: Any) -> Any:
@@ -487,6 +502,12 @@ _TERRAIN_INPUT = {"ri": "ri", "e_max": "e_max_m"}
 _TERRAIN_DOC = {"ri": "ri: roughness index RI (dimensionless, >= 0)", "e_max": "e_max_m: worst-case elevation e_max (m, >= 0, Eq. 8)"}
 
 
+def _vehicle_label(vehicle: Vehicle) -> str:
+    """The vehicle's file name without its folder (a Function's doc travels to other
+    machines, in pickles and generated code)."""
+    return Path(vehicle.name).name if vehicle.name else "(unnamed)"
+
+
 def _function_name(name: str | None, default: str) -> str:
     out = default if name is None else name
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", out):
@@ -524,7 +545,7 @@ def force_function(
     -------
     casadi.Function
         Inputs ``speed_mps`` (n_stages x 1, m/s) and ``ri`` (dimensionless) or ``e_max_m``
-        (m), output ``force_n`` (n_stages x 1, N). ``fn.jacobian()`` gives
+        (m), output ``force_n`` (n_stages x 1, N). :func:`jacobian_function` gives
         ``jac_force_n_speed_mps`` (N per m/s) and ``jac_force_n_ri`` (N) or
         ``jac_force_n_e_max_m`` (N/m), diagonal. At terrain 0 (smooth ground) the force is 0.
 
@@ -542,7 +563,7 @@ def force_function(
     force = _force(model, terrain, v, t, vehicle)
     fname = _function_name(name, f"{model}_force_of_{terrain}")
     doc = (
-        f"{spec.label} force (N) of vehicle {vehicle.name or '(unnamed)'}; inputs speed_mps: "
+        f"{spec.label} force (N) of vehicle {_vehicle_label(vehicle)}; inputs speed_mps: "
         f"speed (m/s), {_TERRAIN_DOC[terrain]}; output force_n: force (N); "
         f"limit {spec.limit_n(vehicle):g} N ({spec.limit_key})."
     )
@@ -581,7 +602,7 @@ def constraint_function(
     -------
     casadi.Function
         Inputs ``speed_mps`` (n_stages x 1, m/s) and ``ri`` or ``e_max_m`` (m), output ``g``
-        (n_stages x 1) with g <= 0 admissible. ``fn.jacobian()`` gives ``jac_g_speed_mps``
+        (n_stages x 1) with g <= 0 admissible. :func:`jacobian_function` gives ``jac_g_speed_mps``
         and ``jac_g_ri`` / ``jac_g_e_max_m``.
 
     Notes
@@ -600,11 +621,45 @@ def constraint_function(
     fn = ca.Function(fname, [v, t], [g], ["speed_mps", _TERRAIN_INPUT[terrain]], ["g"])
     unit = "dimensionless, F / F_limit - 1" if normalised else "N, F - F_limit"
     fn.__doc__ = (
-        f"{spec.label} force constraint g <= 0 of vehicle {vehicle.name or '(unnamed)'}; inputs "
+        f"{spec.label} force constraint g <= 0 of vehicle {_vehicle_label(vehicle)}; inputs "
         f"speed_mps: speed (m/s), {_TERRAIN_DOC[terrain]}; output g ({unit}); "
         f"F_limit = {limit:g} N."
     )
     return fn
+
+
+def jacobian_function(fn: ca.Function, name: str | None = None) -> ca.Function:
+    """The Jacobian of a one-output Function with the same inputs as ``fn``.
+
+    ``fn.jacobian()`` takes the nominal output as an extra (structurally empty) third
+    input, which every call must then pass (``fn.jacobian()(v, ri, 0)``); this Function
+    takes exactly the inputs of ``fn`` (``jacobian_function(fn)(v, ri)``), and is what
+    :func:`profileopt.codegen.export_c` generates as the ``_jac`` companions.
+
+    Parameters
+    ----------
+    fn : casadi.Function
+        A Function with one output.
+    name : str, optional
+        Name of the Jacobian Function; default ``fn.name() + "_jac"``.
+
+    Returns
+    -------
+    casadi.Function
+        ``name`` (default ``fn.name() + "_jac"``): inputs as ``fn``, outputs
+        ``jac_<out>_<in>`` for each input, (n_out x n_in) matrices.
+    """
+    jac = fn.jacobian()
+    inputs = [ca.SX.sym(fn.name_in(i), fn.sparsity_in(i)) for i in range(fn.n_in())]
+    values = jac.call({fn.name_in(i): inputs[i] for i in range(fn.n_in())})
+    names = [jac.name_out(i) for i in range(jac.n_out())]
+    return ca.Function(
+        name or fn.name() + "_jac",
+        inputs,
+        [values[n] for n in names],
+        [fn.name_in(i) for i in range(fn.n_in())],
+        names,
+    )
 
 
 # ---------------------------------------------------------------------------------------

@@ -292,7 +292,7 @@ def figure_5(vehicle: Vehicle | None = None, amplitudes_m: np.ndarray = PAPER_AM
     terrain = sinusoid_terrain(amplitudes_m, TERRAIN_FREQUENCY_CPM, vehicle.ground_clearance_m)
     curves = []
     for key, model in MODELS.items():
-        label = model.label + (" (reconstruction of [11], docs/paper-notes.md)" if key == "prev_bem" else "")
+        label = model.label + (" (the project's reconstruction of the paper's ref. [11])" if key == "prev_bem" else "")
         if key == "sbem_tf":
             label += ' ("first"; = "largest" here, force monotone in speed)'
         speed = allowable_speed(terrain.ri, vehicle, model=key, band="first")

@@ -18,20 +18,96 @@ from .io.atomic import atomic_path
 from .stations import segment_index
 
 if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
     from .figures import FigureData
     from .planning.result import Profile
     from .verification import Verification
 
-__all__ = ["plot_profile", "plot_verification", "plot_figure"]
+__all__ = ["profile_figure", "plot_profile", "verification_figure", "plot_verification", "plot_figure"]
 
 
-def plot_profile(profile: "Profile", path: str | Path, title: str | None = None) -> None:
+def profile_figure(profile: "Profile", *, title: str | None = None, route: str | None = None,
+                   vehicle: str | None = None) -> "Figure":
+    """The picture of :func:`plot_profile` as a matplotlib ``Figure`` (nothing written).
+
+    Parameters
+    ----------
+    profile : Profile
+        A profile returned by :func:`profileopt.plan`.
+    title : str, optional
+        Replaces the whole title.
+    route : str, optional
+        The route's name for the title (e.g. its file name).
+    vehicle : str, optional
+        The vehicle's name for the title; default the one the profile records.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.figure import Figure
+
+    s = profile.s_m
+    fig = Figure(figsize=(10, 7), layout="constrained")
+    ax_v, ax_ri = fig.subplots(2, 1, sharex=True, height_ratios=[3, 1])
+    label = get_model(profile.model).label
+    cap = profile.speed_cap_mps
+    top_speed = profile.settings.get("max_speed_mps") if profile.settings else None
+
+    def model_only(values: np.ndarray) -> np.ndarray:
+        """The allowable speed where the force model holds it below the speed cap, NaN (a
+        gap) where the cap holds it: the cap has its own line."""
+        if cap is None:
+            return values
+        return np.where(values < cap * (1 - 1e-9), values, np.nan)
+
+    # Lines that can coincide are drawn widest at the bottom, so that each one stays visible
+    # around the one on top: the speed cap (wide grey dashes), "largest" (wide, translucent),
+    # "first" (red dashes), the planned speed (narrow, on top). No baseline: a gap in a line
+    # is a gap, not a drop to 0.
+    if cap is not None:
+        held = top_speed is not None and bool(np.any(cap < top_speed * (1 - 1e-9)))
+        cap_label = (f"speed cap: top speed {top_speed:g} m/s" if top_speed is not None else "speed cap: top speed")
+        ax_v.stairs(cap, s, baseline=None, color="0.55", linewidth=3.5, linestyle=(0, (5, 2)), zorder=2,
+                    label=cap_label + (", route's speed_limit" if held else ""))
+    if profile.allowable_largest_mps is not None:
+        ax_v.stairs(model_only(profile.allowable_largest_mps), s, baseline=None, color="tab:orange", linewidth=6.0, alpha=0.45,
+                    zorder=3, label=f'allowable, {label} "largest" (may be above resonance)')
+    if profile.allowable_first_mps is not None:
+        ax_v.stairs(model_only(profile.allowable_first_mps), s, baseline=None, color="tab:red", linewidth=2.6,
+                    linestyle=(0, (4, 2)), zorder=4, label=f'allowable, {label} "first" (safe from rest)')
+    ax_v.plot(s, profile.speed_mps, color="tab:blue", linewidth=1.6, zorder=5, label="planned speed")
+    ax_v.set_ylabel("speed (m/s)")
+    highest = max(float(np.max(profile.speed_mps)), float(np.nanmax(cap)) if cap is not None else 0.0)
+    ax_v.set_ylim(0, 1.06 * max(highest, 1e-3))
+    ax_v.grid(True, alpha=0.3)
+    fig.legend(*ax_v.get_legend_handles_labels(), loc="outside lower center", ncols=2, fontsize="small")
+    if title is None:
+        vehicle = vehicle or (Path(str(profile.settings.get("vehicle", ""))).stem if profile.settings else "")
+        where = f"{route}: " if route else ""
+        who = f" for {vehicle}" if vehicle else ""
+        title = (f"{where}{label} plan{who}, {profile.distance_m:.0f} m in {profile.travel_time_s:.1f} s "
+                 f"(status {profile.status})")
+    ax_v.set_title(title)
+    ax_ri.stairs(profile.ri[:-1], s, color="tab:green", fill=True, alpha=0.5)
+    ax_ri.set_ylabel("segment RI (-)")
+    ax_ri.set_xlabel("distance along the route s (m)")
+    ax_ri.grid(True, alpha=0.3)
+    ax_ri.set_xlim(s[0], s[-1])
+    return fig
+
+
+def plot_profile(profile: "Profile", path: str | Path, title: str | None = None, *, route: str | None = None,
+                 vehicle: str | None = None) -> None:
     """Draw a profile's speed, the per-segment allowable speeds and RI against distance.
 
     Top: planned speed (m/s) beside each segment's allowable speed under both semantics of
     docs/paper-notes.md ("first": every speed from rest up to it is admissible; "largest": the fastest
-    admissible speed, possibly above resonance) and the speed cap. Bottom: segment RI.
-    Written atomically as PNG.
+    admissible speed, possibly above resonance), drawn where the force model holds the speed
+    below the speed cap, and the speed cap (the vehicle's top speed and the route's
+    ``speed_limit``) as its own line. Bottom: segment RI. The title names the route and the
+    vehicle. Written atomically as PNG.
 
     Parameters
     ----------
@@ -41,36 +117,11 @@ def plot_profile(profile: "Profile", path: str | Path, title: str | None = None)
     path : str or pathlib.Path
         Output PNG file.
     title : str, optional
+        Replaces the whole title.
+    route, vehicle : str, optional
+        Names for the title (:func:`profile_figure`).
     """
-    from matplotlib.figure import Figure
-
-    s = profile.s_m
-    fig = Figure(figsize=(10, 6.5), layout="constrained")
-    ax_v, ax_ri = fig.subplots(2, 1, sharex=True, height_ratios=[3, 1])
-    label = get_model(profile.model).label
-    if profile.allowable_largest_mps is not None:
-        ax_v.stairs(profile.allowable_largest_mps, s, color="tab:orange", linewidth=1.2, zorder=4,
-                    label=f'allowable, {label} "largest" (may be above resonance)')
-    if profile.allowable_first_mps is not None:
-        ax_v.stairs(profile.allowable_first_mps, s, color="tab:red", linewidth=1.2, linestyle="--", zorder=5,
-                    label=f'allowable, {label} "first" (safe from rest)')
-    if profile.speed_cap_mps is not None:
-        ax_v.stairs(profile.speed_cap_mps, s, color="0.5", linewidth=0.8, linestyle=":",
-                    label="speed cap (top speed, speed_limit)")
-    ax_v.plot(s, profile.speed_mps, color="tab:blue", linewidth=2.0, label="planned speed")
-    ax_v.set_ylabel("speed (m/s)")
-    top = max(float(np.max(profile.speed_mps)), float(np.nanmax(profile.speed_cap_mps))
-              if profile.speed_cap_mps is not None else 0.0)
-    ax_v.set_ylim(0, 1.3 * max(top, 1e-3))  # room for the legend above the curves
-    ax_v.grid(True, alpha=0.3)
-    ax_v.legend(loc="upper center", ncols=2, fontsize="small")
-    ax_v.set_title(title or f"{label} plan: {profile.distance_m:.0f} m in {profile.travel_time_s:.1f} s "
-                   f"(status {profile.status})")
-    ax_ri.stairs(profile.ri[:-1], s, color="tab:green", fill=True, alpha=0.5)
-    ax_ri.set_ylabel("segment RI (-)")
-    ax_ri.set_xlabel("distance along the route s (m)")
-    ax_ri.grid(True, alpha=0.3)
-    ax_ri.set_xlim(s[0], s[-1])
+    fig = profile_figure(profile, title=title, route=route, vehicle=vehicle)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=110, format="png")
 
@@ -88,6 +139,62 @@ def _envelope_trace(x: np.ndarray, values: np.ndarray, bins: int) -> tuple[np.nd
 
 def _step(boundaries: np.ndarray, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.repeat(boundaries, 2)[1:-1], np.repeat(values, 2)
+
+
+def verification_figure(verification: "Verification") -> "Figure":
+    """The picture of :func:`plot_verification` as a matplotlib ``Figure`` (nothing written).
+
+    Parameters
+    ----------
+    verification : Verification
+        The result of :func:`profileopt.verify` (it holds the simulated run).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.figure import Figure
+
+    v = verification
+    run = v.run
+    series = run.transmitted_n if v.quantity == "transmitted" else run.excitation_n
+    label = "transmitted force F_T" if v.quantity == "transmitted" else "excitation force k y + c y'"
+    fig = Figure(figsize=(10, 8), layout="constrained")
+    top, bottom = fig.subplots(2, 1, height_ratios=[3, 2])
+    xs, lo, hi = _envelope_trace(run.s_m, series, 3000)
+    top.fill_between(xs, lo, hi, color="0.6", lw=0, label=f"simulated {label}")
+    top.plot(*_step(v.s_m, v.simulated_n), color="C0", lw=1.2, label="simulated peak |F| per segment")
+    top.plot(*_step(v.s_m, v.predicted_n), color="C2", lw=1.2, label=f"predicted ({get_model(v.model).label})")
+    top.plot(*_step(v.s_m, v.limit_n), color="C3", ls="--", lw=2.6, alpha=0.6, zorder=1.5,
+             label="limit")  # wide, under the prediction that reaches it
+    top.axhline(-v.weight_n, color="C4", ls=":", lw=1, label="-m g (wheel lifts off below)")
+    top.set_xlabel("s (m)")
+    top.set_ylabel("force (N)")
+    top.set_xlim(v.s_m[0], v.s_m[-1])
+    speed_axis = top.twinx()
+    speed_axis.plot(v.s_m, v.speed_mps, color="C1", lw=1, alpha=0.8, label="planned speed (right axis)")
+    speed_axis.set_ylabel("planned speed (m/s)", color="C1")
+    # the legends sit outside the axes: inside, they covered the points that matter (at the
+    # limit, where a plan drives)
+    handles, labels = top.get_legend_handles_labels()
+    more = speed_axis.get_legend_handles_labels()
+    top.legend(handles + more[0], labels + more[1], loc="lower left", bbox_to_anchor=(0.0, 1.01), ncols=3,
+               fontsize=8, borderaxespad=0.0)
+    fig.suptitle(f"{Path(v.route).name}: {get_model(v.model).label} plan, {Path(v.vehicle).stem}; "
+                  f"{v.over_count}/{v.ratio.size} segments over the limit, worst {v.worst_ratio:.2f} x limit")
+
+    over = v.over
+    bottom.scatter(v.predicted_n[~over], v.simulated_n[~over], s=12, color="C0", label="within the limit")
+    bottom.scatter(v.predicted_n[over], v.simulated_n[over], s=16, color="C3", label="over the limit")
+    top_value = max(float(np.max(v.simulated_n)), float(np.max(v.predicted_n)), float(v.limit_n.max())) * 1.05
+    bottom.plot([0, top_value], [0, top_value], color="0.3", lw=1, label="simulated = predicted")
+    bottom.axhline(float(v.limit_n.max()), color="C3", ls="--", lw=1, label="limit")
+    bottom.set_xlim(0, top_value)
+    bottom.set_ylim(0, top_value)
+    bottom.set_xlabel("predicted peak force per segment (N)")
+    bottom.set_ylabel("simulated peak force (N)")
+    bottom.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
+    return fig
 
 
 def plot_verification(verification: "Verification", path: str | Path) -> None:
@@ -108,41 +215,7 @@ def plot_verification(verification: "Verification", path: str | Path) -> None:
     path : str or pathlib.Path
         Output PNG file.
     """
-    from matplotlib.figure import Figure
-
-    v = verification
-    run = v.run
-    series = run.transmitted_n if v.quantity == "transmitted" else run.excitation_n
-    label = "transmitted force F_T" if v.quantity == "transmitted" else "excitation force k y + c y'"
-    fig = Figure(figsize=(10, 8), layout="constrained")
-    top, bottom = fig.subplots(2, 1, height_ratios=[3, 2])
-    xs, lo, hi = _envelope_trace(run.s_m, series, 3000)
-    top.fill_between(xs, lo, hi, color="0.6", lw=0, label=f"simulated {label}")
-    top.plot(*_step(v.s_m, v.simulated_n), color="C0", lw=1.2, label="simulated peak |F| per segment")
-    top.plot(*_step(v.s_m, v.predicted_n), color="C2", lw=1.2, label=f"predicted ({get_model(v.model).label})")
-    top.plot(*_step(v.s_m, v.limit_n), color="C3", ls="--", lw=1.2, label="limit")
-    top.axhline(-v.weight_n, color="C4", ls=":", lw=1, label="-m g (wheel lifts off below)")
-    top.set_xlabel("s (m)")
-    top.set_ylabel("force (N)")
-    top.set_xlim(v.s_m[0], v.s_m[-1])
-    top.legend(loc="upper left", fontsize=8)
-    speed_axis = top.twinx()
-    speed_axis.plot(v.s_m, v.speed_mps, color="C1", lw=1, alpha=0.8)
-    speed_axis.set_ylabel("planned speed (m/s)", color="C1")
-    top.set_title(f"{Path(v.route).name}: {get_model(v.model).label} plan, {Path(v.vehicle).stem}; "
-                  f"{v.over_count}/{v.ratio.size} segments over the limit, worst {v.worst_ratio:.2f} x limit")
-
-    over = v.over
-    bottom.scatter(v.predicted_n[~over], v.simulated_n[~over], s=12, color="C0", label="within the limit")
-    bottom.scatter(v.predicted_n[over], v.simulated_n[over], s=16, color="C3", label="over the limit")
-    top_value = max(float(np.max(v.simulated_n)), float(np.max(v.predicted_n)), float(v.limit_n.max())) * 1.05
-    bottom.plot([0, top_value], [0, top_value], color="0.3", lw=1, label="simulated = predicted")
-    bottom.axhline(float(v.limit_n.max()), color="C3", ls="--", lw=1, label="limit")
-    bottom.set_xlim(0, top_value)
-    bottom.set_ylim(0, top_value)
-    bottom.set_xlabel("predicted peak force per segment (N)")
-    bottom.set_ylabel("simulated peak force (N)")
-    bottom.legend(loc="lower right", fontsize=8)
+    fig = verification_figure(verification)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=110)
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 
 from ..cli import command
 from ..forces import MODELS
@@ -75,7 +76,7 @@ def _run(args: argparse.Namespace) -> int:
     if args.plot:
         from ..plots import plot_profile
 
-        plot_profile(profile, args.plot)
+        plot_profile(profile, args.plot, route=Path(args.route).name, vehicle=Path(vehicle.name).stem if vehicle.name else None)
     for note in profile.notes:
         print(f"profileopt plan: note: {note}", file=sys.stderr)
     summary = profile.summary()
