@@ -131,7 +131,7 @@ def _report_unsimulated(args: argparse.Namespace, check, header: str, reason: st
     status, verdict = _verdict(check, None, check.predicted_n.size)
     unwritten = [name for name in (args.output, args.plot) if name]
     if args.json:
-        print(json.dumps({"model": check.model, "segments": int(check.predicted_n.size), "keeps_limits": False,
+        print(json.dumps({"route": str(args.route), "vehicle": str(args.vehicle), "model": check.model, "segments": int(check.predicted_n.size), "keeps_limits": False,
                           "breaches": [b.to_dict() for b in check.breaches], "simulated": False,
                           "not_simulated": reason, "notes": list(check.notes), "exit_status": status}, indent=2))
         return status
