@@ -165,7 +165,8 @@ class Verification:
     ri : numpy.ndarray, shape (N,)
         Each segment's RI (dimensionless), from the profile.
     predicted_n : numpy.ndarray, shape (N,)
-        The model's largest predicted force over the speeds driven in the segment (N).
+        The model's largest predicted force over the speeds driven in the segment (N),
+        recomputed from the profile's speeds (:func:`check_limits`).
     limit_n : numpy.ndarray, shape (N,)
         The vehicle's limit for the model's force (N).
     transmitted_peak_n : numpy.ndarray, shape (N,)
