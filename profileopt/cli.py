@@ -4,6 +4,13 @@ formats its output.
 Every user mistake surfaces as :class:`~profileopt.errors.InputError`: one line on stderr,
 exit status 2, no traceback (``--debug`` shows one). Anything else is an internal error:
 one line, exit status 1.
+
+Exit statuses: 0 success, 1 internal error, 2 bad input, 130 interrupted. ``profileopt
+verify`` is a gate and adds two: 3 when the profile breaks one of the vehicle's own limits
+(speed, acceleration, jerk, predicted force) and 4 when the limits hold on paper but the
+simulation puts a segment over the force limit; its 0 means the plan keeps every limit and
+no simulated force exceeds the limit
+(:data:`profileopt.commands.verify.VERIFY_EXIT_STATUSES`). ``compare`` is a report: 0.
 """
 
 from __future__ import annotations
@@ -123,7 +130,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     -------
     int
         The exit status: 0 success, 1 internal error (or a closed output pipe), 2 bad input
-        (:class:`~profileopt.errors.InputError`, one line on stderr), 130 interrupted.
+        (:class:`~profileopt.errors.InputError`, one line on stderr), 130 interrupted;
+        ``verify`` also 3 (the profile breaks the vehicle's limits) and 4 (over the force
+        limit in simulation only).
     """
     from . import commands  # noqa: F401  (registers the sub-commands)
 

@@ -512,6 +512,14 @@ def simulate_quarter_car(
             f"speed profile: it covers {b[0]:g} to {b[-1]:g} m but the route only {s[0]:g} to {s[-1]:g} m; "
             "use the profile planned for this route"
         )
+    with np.errstate(over="ignore"):
+        too_fast = np.flatnonzero(np.isfinite(v) & np.isinf(v * v))  # NaN, inf: boundary_times_s
+    if too_fast.size:
+        i = too_fast[0]
+        raise InputError(
+            f"speed profile: the speed at s = {b[i]:g} m, {v[i]:g} m/s, is too large to simulate (its square "
+            "overflows a float); no ground vehicle drives at it"
+        )
 
     y_samples = wheel_envelope_m(s, z, vehicle.wheel_radius_m) if envelope else z.copy()
     t_envelope = time.perf_counter()

@@ -1,7 +1,9 @@
 """``profileopt verify`` and ``profileopt compare``: check plans against a simulated vehicle.
 
-``verify`` drives the vehicle's quarter car over the route at a profile's speeds and reports
-the simulated peak forces per segment beside the model's prediction and the limit.
+``verify`` checks a profile against the vehicle's own limits, drives the vehicle's quarter
+car over the route at its speeds and reports the simulated peak forces per segment beside the
+model's prediction (recomputed from the speeds) and the limit. Its exit status is a verdict a
+script or CI can gate on (:data:`VERIFY_EXIT_STATUSES`).
 ``compare`` plans the route with each of the four force models, verifies each plan and
 prints one table: the paper's claim (Prev:BEM is aggressive, the SBEM models are safe) put
 to a test on real terrain.
@@ -37,29 +39,73 @@ def _vehicle_of(args: argparse.Namespace, profile) -> str:
     return args.vehicle
 
 
+#: The exit status of ``profileopt verify``: the plan keeps every limit of the vehicle and no
+#: segment's simulated force exceeds the limit.
+EXIT_PASSES = 0
+#: The profile breaks one of the vehicle's own limits (speed, acceleration, jerk, predicted force).
+EXIT_BREAKS_LIMITS = 3
+#: The limits hold on paper, but the simulation puts a segment over the force limit.
+EXIT_OVER_IN_SIMULATION = 4
+#: Every exit status of ``profileopt verify`` and its meaning (also in its ``--help``).
+VERIFY_EXIT_STATUSES = {
+    EXIT_PASSES: "the plan keeps every limit of the vehicle (speed, acceleration, jerk, predicted force) and no "
+                 "segment's simulated force exceeds the force limit",
+    1: "internal error",
+    2: "bad input (one line on stderr), e.g. a profile that does not cover its route exactly",
+    EXIT_BREAKS_LIMITS: "the profile breaks one of the vehicle's own limits (speed, acceleration, jerk or "
+                        "predicted force); the simulation is still reported when it can be run",
+    EXIT_OVER_IN_SIMULATION: "the limits hold on paper, but the simulation puts a segment over the force limit",
+}
+
+
+def _verdict(check, over_count: int | None, segments: int) -> tuple[int, str]:
+    """The exit status and the verdict line (``over_count`` None: not simulated)."""
+    if check.breaches:
+        kinds = ", ".join(dict.fromkeys(b.quantity for b in check.breaches))
+        return EXIT_BREAKS_LIMITS, (f"  verdict: the profile breaks the vehicle's limits ({kinds}); "
+                                    f"exit {EXIT_BREAKS_LIMITS}")
+    if over_count:
+        return EXIT_OVER_IN_SIMULATION, (
+            f"  verdict: the profile keeps the vehicle's limits on paper, but in simulation {over_count} of "
+            f"{segments} segments exceed the force limit; exit {EXIT_OVER_IN_SIMULATION}")
+    return EXIT_PASSES, ("  verdict: the profile keeps every limit of the vehicle (speed, acceleration, jerk, "
+                         f"predicted force) and no segment exceeds the force limit in simulation; exit {EXIT_PASSES}")
+
+
 def _verify(args: argparse.Namespace) -> int:
-    """Run ``profileopt verify``; returns 0 (also when segments are over the limit)."""
+    """Run ``profileopt verify``; returns the verdict's status (:data:`VERIFY_EXIT_STATUSES`)."""
     from ..io import read_profile, read_route
     from ..plots import plot_verification
-    from ..verification import verify
+    from ..verification import check_limits, verify
 
     check_output_paths(args.output, args.plot)  # first: a bad --plot must not leave an -o behind
     route = read_route(args.route)
     profile = read_profile(args.profile)
     vehicle = load_vehicle(_vehicle_of(args, profile))
-    result = verify(route, profile, vehicle, model=args.model)
+    check = check_limits(route, profile, vehicle, model=args.model)
+    model = get_model(check.model)
+    header = (f"verified {args.profile} on {args.route} with vehicle {args.vehicle}, "
+              f"model {model.label} ({model.quantity} force, limit {check.limit_n:g} N)")
+    try:
+        result = verify(route, profile, vehicle, model=args.model, check=check)
+    except InputError as exc:
+        if not check.breaches:
+            raise
+        # a profile so far beyond the vehicle's limits that it cannot be simulated (1e155 m/s)
+        return _report_unsimulated(args, check, header, str(exc))
     if args.output:
         result.to_csv(args.output)
     if args.plot:
         plot_verification(result, args.plot)
+    status, verdict = _verdict(check, result.over_count, result.ratio.size)
     if args.json:
-        print(result.to_json(timings=False))
-        return 0
-    model = get_model(result.model)
+        print(json.dumps(result.summary(timings=False) | {"exit_status": status}, indent=2))
+        return status
     i = result.worst_segment
     lines = [
-        f"verified {args.profile} on {args.route} with vehicle {args.vehicle}, "
-        f"model {model.label} ({result.quantity} force, limit {result.limit_n[i]:g} N)",
+        header,
+        verdict,
+        *(f"  {breach.describe()}" for breach in check.breaches),
         f"  segments over the limit: {result.over_count} of {result.ratio.size} "
         f"({100 * result.over_fraction:.1f} %, {result.over_length_m:g} m)",
         f"  worst simulated / limit: {result.worst_ratio:.3f} in the segment from s = {result.s_m[i]:g} m "
@@ -77,10 +123,30 @@ def _verify(args: argparse.Namespace) -> int:
     if args.plot:
         lines.append(f"wrote {args.plot}")
     print("\n".join(lines))
-    return 0
+    return status
+
+
+def _report_unsimulated(args: argparse.Namespace, check, header: str, reason: str) -> int:
+    """The verdict of a profile that breaks the limits and cannot be simulated; nothing is written."""
+    status, verdict = _verdict(check, None, check.predicted_n.size)
+    unwritten = [name for name in (args.output, args.plot) if name]
+    if args.json:
+        print(json.dumps({"route": str(args.route), "vehicle": str(args.vehicle), "model": check.model, "segments": int(check.predicted_n.size), "keeps_limits": False,
+                          "breaches": [b.to_dict() for b in check.breaches], "simulated": False,
+                          "not_simulated": reason, "notes": list(check.notes), "exit_status": status}, indent=2))
+        return status
+    lines = [header, verdict, *(f"  {breach.describe()}" for breach in check.breaches),
+             f"  not simulated: {reason}"]
+    lines += [f"  note: {note}" for note in check.notes]
+    if unwritten:
+        lines.append(f"not written (there is no simulation to write): {', '.join(unwritten)}")
+    print("\n".join(lines))
+    return status
 
 
 def _verify_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.epilog = "exit status: " + "; ".join(f"{code}: {text}" for code, text in
+                                                sorted(VERIFY_EXIT_STATUSES.items())) + "."
     parser.add_argument("route", help="route CSV (the terrain the profile was planned on)")
     parser.add_argument("profile", help="profile CSV written by 'profileopt plan -o'")
     parser.add_argument("--vehicle", default=None, metavar="NAME_OR_TOML",
