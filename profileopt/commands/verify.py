@@ -108,7 +108,7 @@ def _verify(args: argparse.Namespace) -> int:
         *(f"  {breach.describe()}" for breach in check.breaches),
         f"  segments over the limit: {result.over_count} of {result.ratio.size} "
         f"({100 * result.over_fraction:.1f} %, {result.over_length_m:g} m)",
-        f"  worst simulated / limit: {result.worst_ratio:.3f} in the segment from s = {result.s_m[i]:g} m "
+        f"  worst simulated / limit: {_ratio_text(result.worst_ratio)} in the segment from s = {result.s_m[i]:g} m "
         f"({result.simulated_n[i]:.0f} N simulated, {result.predicted_n[i]:.0f} N predicted)",
         f"  segments where the simulation exceeds the prediction by > 1 % of the limit: "
         f"{int(result.underpredicted.sum())}",
@@ -222,3 +222,7 @@ def _compare_arguments(parser: argparse.ArgumentParser) -> None:
 _compare.arguments = _compare_arguments  # type: ignore[attr-defined]
 command("compare", "plan a route with each of the four force models and check each plan in simulation")(_compare)
 
+
+def _ratio_text(ratio: float) -> str:
+    """A force ratio with 3 decimals, or 3 significant digits when it is absurdly large."""
+    return f"{ratio:.3f}" if ratio < 1e6 else f"{ratio:.3g}"
