@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import signal
 import sys
 import traceback
 from typing import Callable, NoReturn, Sequence
@@ -130,7 +131,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     -------
     int
         The exit status: 0 success, 1 internal error (or a closed output pipe), 2 bad input
-        (:class:`~profileopt.errors.InputError`, one line on stderr), 130 interrupted;
+        (:class:`~profileopt.errors.InputError`, one line on stderr), 130 interrupted (Ctrl-C),
+        143 terminated (SIGTERM); an interrupted or terminated run leaves no temporary file.
         ``verify`` also 3 (the profile breaks the vehicle's limits) and 4 (over the force
         limit in simulation only).
     """
@@ -144,8 +146,12 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     parser = build_parser()
     args = parser.parse_args(argv)
+    previous = _catch_sigterm()
     try:
         return _COMMANDS[args.command][1](args)
+    except Terminated:  # SIGTERM: the same clean-up as Ctrl-C (no temporary file is left)
+        print(f"profileopt {args.command}: terminated", file=sys.stderr)
+        return 128 + signal.SIGTERM
     except InputError as exc:
         if args.debug:
             traceback.print_exc()
@@ -167,6 +173,30 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 1
+    finally:
+        if previous is not _NO_HANDLER:
+            signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the program is, like Ctrl-C's KeyboardInterrupt: every
+    ``finally`` and context manager runs (the atomic writers remove their temporary files)."""
+
+
+def _terminate(signum: int, frame: object) -> None:
+    raise Terminated
+
+
+_NO_HANDLER = object()
+
+
+def _catch_sigterm():  # noqa: ANN202
+    """Turn SIGTERM into :class:`Terminated` while a command runs; returns the previous
+    handler, or ``_NO_HANDLER`` when none can be set (not the main thread)."""
+    try:
+        return signal.signal(signal.SIGTERM, _terminate)
+    except (ValueError, OSError):  # not the main thread of the main interpreter
+        return _NO_HANDLER
 
 
 if __name__ == "__main__":  # pragma: no cover

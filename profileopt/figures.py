@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .forces import MODELS
-from .io.atomic import atomic_path, atomic_write
+from .io.atomic import OutputSet, atomic_path, atomic_write
 from .plots import plot_figure
 from .speeds import allowable_speed
 from .synthetic import washboard
@@ -41,11 +41,16 @@ __all__ = [
     "paper_figures",
     "write_figure",
     "write_paper_figures",
+    "paper_figure_paths",
+    "PAPER_FIGURE_STEMS",
     "PAPER_AMPLITUDES_M",
     "FIG1_FREQUENCY_CPM",
     "FIG1_CLEARANCE_M",
     "TERRAIN_FREQUENCY_CPM",
 ]
+
+#: The file stems of Figs. 1, 5 and 6 (each written as .png and .csv).
+PAPER_FIGURE_STEMS = ("fig1_ri_vs_amplitude", "fig5_allowable_speed", "fig6_resonance")
 
 #: The paper's 100 terrain amplitudes, evenly spaced from 0 to 0.1 m (Section 4, Table 1).
 PAPER_AMPLITUDES_M: np.ndarray = np.linspace(0.0, 0.1, 100)
@@ -441,7 +446,24 @@ def write_paper_figures(
     list of pathlib.Path
         The six files written, in order.
     """
-    written: list[Path] = []
-    for data in paper_figures(vehicle, resonant_vehicle):
-        written += write_figure(data, out_dir)
+    figures = paper_figures(vehicle, resonant_vehicle)
+    written = [Path(out_dir) / f"{data.stem}.{ext}" for data in figures for ext in ("png", "csv")]
+    with OutputSet([("", path) for path in written]):  # checked first; all six files or none
+        for data in figures:
+            write_figure(data, out_dir)
     return written
+
+
+def paper_figure_paths(out_dir: str | os.PathLike) -> list[Path]:
+    """The six files :func:`write_paper_figures` writes into ``out_dir``, in order.
+
+    Parameters
+    ----------
+    out_dir : str or os.PathLike
+        The folder.
+
+    Returns
+    -------
+    list of pathlib.Path
+    """
+    return [Path(out_dir) / f"{stem}.{ext}" for stem in PAPER_FIGURE_STEMS for ext in ("png", "csv")]

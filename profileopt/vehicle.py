@@ -278,15 +278,22 @@ def _read_vehicle_text(name_or_path: str | Path) -> tuple[str, str]:
         for d in _bundled_dirs():
             entry = d / f"{raw}.toml"
             if entry.is_file():
-                return entry.read_text(encoding="utf-8"), str(entry)
+                return _read_vehicle_file(entry), str(entry)
         raise InputError(
             f"vehicle '{raw}': no bundled vehicle of that name; use one of "
             f"{', '.join(bundled_vehicles())} or the path of a .toml file"
         )
     path = Path(raw)
+    return _read_vehicle_file(path), str(path)
+
+
+def _read_vehicle_file(path: Path) -> str:
+    # a regular file of at most MAX_VEHICLE_BYTES (not /dev/zero, not a FIFO), as text mode reads it
+    from .io import inputs
+
+    data = inputs.read_input(path, "vehicle file", inputs.MAX_VEHICLE_BYTES)
     try:
-        return path.read_text(encoding="utf-8"), str(path)
-    except FileNotFoundError:
-        raise InputError(f"{path}: vehicle file not found; check the path") from None
-    except (OSError, UnicodeDecodeError) as exc:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
         raise InputError(f"{path}: cannot read the vehicle file ({exc})") from None
+    return text.replace("\r\n", "\n").replace("\r", "\n") if "\r" in text else text

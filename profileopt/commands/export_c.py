@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 
 from ..cli import command
-from ..codegen import export_c
+from ..codegen import MAX_C_BYTES, export_c, export_c_paths
 from ..forces import MODELS
 from ..vehicle import load_vehicle
+from ._paths import check_folder, folder_outputs, vehicle_input
 
 
 def _arguments(parser: argparse.ArgumentParser) -> None:
@@ -21,13 +23,19 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--stages", type=int, default=1, metavar="N",
-        help="length of every input and output vector, one horizon at once (default 1)",
+        help="length of every input and output vector, one horizon at once (default 1; the code grows "
+             f"with it, about 24 kB per stage for all four models; at most {MAX_C_BYTES // 1_000_000} MB is "
+             "written)",
     )
 
 
 def run(args: argparse.Namespace) -> int:
+    out = check_folder("-o", args.output)
     vehicle = load_vehicle(args.vehicle)
-    result = export_c(vehicle, args.output, models=args.model, n_stages=args.stages)
+    # the four files checked before any work (none may be the vehicle file), written all or none
+    outputs = folder_outputs("-o", export_c_paths(vehicle, out), [vehicle_input(args.vehicle)])
+    with outputs or contextlib.nullcontext():
+        result = export_c(vehicle, out, models=args.model, n_stages=args.stages)
     for path in (result.source, result.header, result.example, result.readme):
         print(path)
     print(f"{len(result.functions)} functions, each with its Jacobian (*_jac); see README.md there")

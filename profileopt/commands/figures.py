@@ -3,27 +3,33 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 from ..cli import command
 from ..errors import InputError
 from ..vehicle import load_vehicle
+from ._paths import check_folder, folder_outputs, vehicle_input
 
 
 def run(args: argparse.Namespace) -> int:
     """Write the figures into ``args.out`` (created if missing); print each file written."""
-    from ..figures import write_paper_figures  # matplotlib: imported only when drawing (0.3 s)
+    from ..figures import paper_figure_paths, write_paper_figures  # matplotlib: only when drawing (0.3 s)
 
+    out = check_folder("--out", args.out)
+    inputs = [vehicle_input(args.vehicle), vehicle_input(args.resonant_vehicle)]
+    # every file checked before any work (a fig6 path that is a folder must not let fig5 be
+    # replaced); the six are then written together, all or none
+    outputs = folder_outputs("--out", paper_figure_paths(out), inputs)
     vehicle = load_vehicle(args.vehicle)
     resonant = load_vehicle(args.resonant_vehicle)
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"--out {out}: exists and is not a folder; give a folder path")
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise InputError(f"--out {out}: cannot create the folder ({exc.strerror}); choose another path") from None
-    for path in write_paper_figures(out, vehicle, resonant):
+    if outputs is None:
+        outputs = folder_outputs("--out", paper_figure_paths(out), inputs)
+    with outputs:
+        written = write_paper_figures(out, vehicle, resonant)
+    for path in written:
         print(path)
     return 0
 

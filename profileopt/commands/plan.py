@@ -9,10 +9,11 @@ from pathlib import Path
 
 from ..cli import command
 from ..forces import MODELS
-from ..io.atomic import check_output_paths
+from ..io.atomic import STDOUT, OutputSet
 from ..io.routes import read_route
 from ..planning import DEFAULT_SMOOTHING, PLAN_BANDS, plan
 from ..vehicle import load_vehicle
+from ._paths import vehicle_input
 
 
 class _DeprecatedAlias(argparse.Action):
@@ -35,7 +36,8 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("route", help="route CSV: columns s,z or x,y,z (m), optional speed_limit (m/s)")
     parser.add_argument("--vehicle", default="atv", metavar="NAME_OR_TOML",
                         help="bundled vehicle name or .toml file (default: atv)")
-    parser.add_argument("-o", "--output", metavar="CSV", help="write the profile CSV here")
+    parser.add_argument("-o", "--output", metavar="CSV",
+                        help="write the profile CSV here ('-': standard output, the summary then goes to stderr)")
     parser.add_argument("--segment-length", type=_float, default=5.0, metavar="M",
                         help="segment length in m (default: 5)")
     parser.add_argument("--model", default="sbem_tf", choices=list(MODELS),
@@ -61,7 +63,10 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    check_output_paths(args.output, args.plot)  # first: a bad --plot must not leave an -o behind
+    # first, before any work: every output checked (none may be an input, nor both the same
+    # file); then written together, all or none
+    outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot)],
+                        inputs=[args.route, vehicle_input(args.vehicle)])
     vehicle = load_vehicle(args.vehicle)
     route = read_route(args.route)
     for note in route.notes:
@@ -71,19 +76,22 @@ def _run(args: argparse.Namespace) -> int:
         max_jerk_mps3=args.max_jerk, v0_mps=args.v0, vend_mps=args.vend, method=args.method,
         band=args.band,
     )
-    if args.output:
-        profile.to_csv(args.output)
-    if args.plot:
-        from ..plots import plot_profile
+    with outputs:
+        if args.output is not None:
+            profile.to_csv(args.output)
+        if args.plot is not None:
+            from ..plots import plot_profile
 
-        plot_profile(profile, args.plot, route=Path(args.route).name, vehicle=Path(vehicle.name).stem if vehicle.name else None)
+            plot_profile(profile, args.plot, route=Path(args.route).name,
+                         vehicle=Path(vehicle.name).stem if vehicle.name else None)
     for note in profile.notes:
         print(f"profileopt plan: note: {note}", file=sys.stderr)
     summary = profile.summary()
+    out = sys.stderr if outputs.uses_stdout else sys.stdout  # standard output holds the profile
     if args.json:
-        print(json.dumps(summary, indent=2))
+        print(json.dumps(summary, indent=2), file=out)
     else:
-        print(_human(summary, args))
+        print(_human(summary, args), file=out)
     return 0
 
 
@@ -109,9 +117,9 @@ def _human(summary: dict, args: argparse.Namespace) -> str:
         + (f" over {solver['pieces']} pieces" if solver["pieces"] > 1 else "")
         + f"), planned in {solver['time_s']:.3f} s",
     ]
-    if args.output:
-        lines.append(f"wrote {args.output}")
-    if args.plot:
+    if args.output is not None:
+        lines.append("wrote the profile to standard output" if args.output == STDOUT else f"wrote {args.output}")
+    if args.plot is not None:
         lines.append(f"wrote {args.plot}")
     return "\n".join(lines)
 

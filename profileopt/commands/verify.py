@@ -16,13 +16,15 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
-from ..io.atomic import check_output_paths
+from ..io.atomic import STDOUT, OutputSet
 from ..cli import command
 from ..errors import InputError
 from ..forces import MODELS, get_model
 from ..vehicle import load_vehicle
+from ._paths import vehicle_input
 
 
 def _vehicle_of(args: argparse.Namespace, profile) -> str:
@@ -78,7 +80,10 @@ def _verify(args: argparse.Namespace) -> int:
     from ..plots import plot_verification
     from ..verification import check_limits, verify
 
-    check_output_paths(args.output, args.plot)  # first: a bad --plot must not leave an -o behind
+    # first, before any work: every output checked (none may be an input, nor both the same
+    # file); then written together, all or none
+    outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot)],
+                        inputs=[args.route, args.profile, vehicle_input(args.vehicle)])
     route = read_route(args.route)
     profile = read_profile(args.profile)
     vehicle = load_vehicle(_vehicle_of(args, profile))
@@ -93,13 +98,15 @@ def _verify(args: argparse.Namespace) -> int:
             raise
         # a profile so far beyond the vehicle's limits that it cannot be simulated (1e155 m/s)
         return _report_unsimulated(args, check, header, str(exc))
-    if args.output:
-        result.to_csv(args.output)
-    if args.plot:
-        plot_verification(result, args.plot)
+    with outputs:
+        if args.output is not None:
+            result.to_csv(args.output)
+        if args.plot is not None:
+            plot_verification(result, args.plot)
+    out = sys.stderr if outputs.uses_stdout else sys.stdout  # standard output holds the table
     status, verdict = _verdict(check, result.over_count, result.ratio.size)
     if args.json:
-        print(json.dumps(result.summary(timings=False) | {"exit_status": status}, indent=2))
+        print(json.dumps(result.summary(timings=False) | {"exit_status": status}, indent=2), file=out)
         return status
     i = result.worst_segment
     lines = [
@@ -118,11 +125,11 @@ def _verify(args: argparse.Namespace) -> int:
         f"{1e3 * result.run.time_step_s:.4f} ms",
     ]
     lines += [f"  note: {note}" for note in result.notes]
-    if args.output:
-        lines.append(f"wrote {args.output}")
-    if args.plot:
+    if args.output is not None:
+        lines.append("wrote the table to standard output" if args.output == STDOUT else f"wrote {args.output}")
+    if args.plot is not None:
         lines.append(f"wrote {args.plot}")
-    print("\n".join(lines))
+    print("\n".join(lines), file=out)
     return status
 
 
@@ -131,7 +138,8 @@ def _report_unsimulated(args: argparse.Namespace, check, header: str, reason: st
     status, verdict = _verdict(check, None, check.predicted_n.size)
     unwritten = [name for name in (args.output, args.plot) if name]
     if args.json:
-        print(json.dumps({"route": str(args.route), "vehicle": str(args.vehicle), "model": check.model, "segments": int(check.predicted_n.size), "keeps_limits": False,
+        print(json.dumps({"route": str(args.route), "vehicle": str(args.vehicle), "model": check.model,
+                          "segments": int(check.predicted_n.size), "keeps_limits": False,
                           "breaches": [b.to_dict() for b in check.breaches], "simulated": False,
                           "not_simulated": reason, "notes": list(check.notes), "exit_status": status}, indent=2))
         return status
@@ -154,7 +162,9 @@ def _verify_arguments(parser: argparse.ArgumentParser) -> None:
                              "records; a different one is refused)")
     parser.add_argument("--model", default=None, choices=list(MODELS),
                         help="force model to check against (default: the model the profile records)")
-    parser.add_argument("-o", "--output", metavar="CSV", help="write one row per segment to this CSV")
+    parser.add_argument("-o", "--output", metavar="CSV",
+                        help="write one row per segment to this CSV ('-': standard output, the summary then "
+                             "goes to stderr)")
     parser.add_argument("--plot", metavar="PNG", help="write forces along s and simulated vs predicted")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
 

@@ -10,7 +10,7 @@
   :func:`read_xy_profile`).
 """
 
-from .atomic import atomic_path, atomic_write, check_output_path, check_output_paths
+from .atomic import OutputSet, atomic_path, atomic_write, check_output_path, check_output_paths
 from .elevation import read_opencrg, read_xy_profile
 from .las import LAS_GROUND, LasHeader, PointCloud, read_las
 from .profiles import PROFILE_COLUMNS, read_profile, write_profile
@@ -18,7 +18,7 @@ from .routes import read_route
 from .table import Table, read_table, split_lines
 
 __all__ = [
-    "atomic_path", "atomic_write", "check_output_path", "check_output_paths",
+    "atomic_path", "atomic_write", "check_output_path", "check_output_paths", "OutputSet",
     "read_opencrg", "read_xy_profile",
     "LAS_GROUND", "LasHeader", "PointCloud", "read_las",
     "PROFILE_COLUMNS", "read_profile", "write_profile",

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from . import inputs
 from ..synthetic import ElevationProfile
 from .table import split_lines
 
@@ -65,10 +66,7 @@ def read_opencrg(path: str | os.PathLike, track: int | None = None) -> Elevation
         (no data) on the chosen track.
     """
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read the OpenCRG file ({exc.strerror}); check the path") from None
+    raw = inputs.read_input(path, "OpenCRG file", inputs.MAX_BINARY_BYTES)
     end = _HEADER_END.search(raw)
     if end is None:
         raise InputError(f"{path}: no line of '$' characters ends the header; is this an OpenCRG file?")
@@ -165,9 +163,10 @@ def read_xy_profile(path: str | os.PathLike) -> ElevationProfile:
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read the profile ({exc.strerror}); check the path") from None
+        text = inputs.read_input(path, "profile", inputs.MAX_TABLE_BYTES).decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{path}: cannot read the profile ({exc})") from None
+    text = text.replace("\r\n", "\n").replace("\r", "\n")  # as text mode reads it
     s: list[float] = []
     z: list[float] = []
     for number, line in enumerate(split_lines(text), start=1):

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from . import inputs
 
 __all__ = ["LasHeader", "PointCloud", "read_las", "LAS_GROUND", "LINEAR_UNITS_M"]
 
@@ -215,6 +216,10 @@ def read_las(path: str | os.PathLike, units_m: float | tuple[float, float] | Non
 
 
 def _read_las(path: Path, units_m: float | tuple[float, float] | None) -> PointCloud:
+    # a regular file only (not /dev/zero, not a FIFO); its size is checked against its header
+    # below, and the point records are read in one piece: memory is proportional to the file
+    if os.path.exists(path):  # (a missing file is said below, as before)
+        inputs.check_regular_input(path, "LAS file")
     try:
         size = path.stat().st_size
         with open(path, "rb") as handle:

@@ -14,12 +14,12 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
 from ..errors import InputError
+from . import inputs
 
 __all__ = ["Table", "read_table", "split_lines", "read_text"]
 
@@ -63,16 +63,16 @@ def read_text(path: str | os.PathLike, what: str) -> str:
     Raises
     ------
     InputError
-        The file is missing, a folder, unreadable or not UTF-8.
+        The file is missing, a folder, not a regular file, larger than
+        :data:`~profileopt.io.inputs.MAX_TABLE_BYTES`, unreadable or not UTF-8.
     """
+    data = inputs.read_input(path, what, inputs.MAX_TABLE_BYTES)
     try:
-        return Path(path).read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise InputError(f"{path}: {what} not found; check the path") from None
-    except IsADirectoryError:
-        raise InputError(f"{path}: is a folder, not a {what}") from None
-    except (OSError, UnicodeDecodeError) as exc:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
         raise InputError(f"{path}: cannot read the {what} ({exc})") from None
+    # as a file opened in text mode reads it (universal newlines): \r\n and a lone \r end a line
+    return text.replace("\r\n", "\n").replace("\r", "\n") if "\r" in text else text
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

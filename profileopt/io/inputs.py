@@ -1,0 +1,135 @@
+"""The one guard in front of every file the package reads.
+
+:func:`read_input` refuses, with one line, a path that is not a regular file (``/dev/zero``,
+``/dev/urandom`` and a terminal would be read until memory runs out, a FIFO without a writer
+would block for ever: it is opened without blocking and refused) and a file above a stated
+size, before reading it.
+
+The size caps
+-------------
+Reading and planning a route takes about 15 to 20 bytes of memory per byte of the route
+file (measured with ``s,z`` rows of 22 bytes: an 11 MB route peaks at 200 MB reading it and
+planning it, a 45 MB route at 650 MB reading it), most of it Python's per-line strings. The
+cap :data:`MAX_TABLE_BYTES` (50 MB, about 2 million rows, 200 km at 0.1 m spacing) keeps a
+route's peak near 1 GB, which leaves room for the system and the solver on a small vehicle
+computer with 2 GB of memory. On a machine with M GB of memory, routes up to about
+M x 25 MB fit; split a longer route, or raise the cap (``profileopt.io.inputs.MAX_TABLE_BYTES``)
+from Python on a larger machine. A vehicle file is a dozen lines: 1 MB is generous. A LAS
+point cloud is checked against its own header and read in one piece (memory about the file's
+size); an OpenCRG file is read whole up to :data:`MAX_BINARY_BYTES`.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+
+from ..errors import InputError
+
+__all__ = ["read_input", "check_regular_input", "MAX_TABLE_BYTES", "MAX_BINARY_BYTES", "MAX_VEHICLE_BYTES"]
+
+#: Largest route or profile file read (bytes); see the module's notes for the memory it needs.
+MAX_TABLE_BYTES = 50_000_000
+#: Largest binary terrain file read whole (OpenCRG; bytes): numbers, not lines, about 3 bytes
+#: of memory per byte of file.
+MAX_BINARY_BYTES = 500_000_000
+#: Largest vehicle file read (bytes).
+MAX_VEHICLE_BYTES = 1_000_000
+
+
+def _kind(mode: int) -> str:
+    if stat.S_ISCHR(mode):
+        return "a character device"
+    if stat.S_ISFIFO(mode):
+        return "a FIFO (named pipe)"
+    if stat.S_ISBLK(mode):
+        return "a block device"
+    if stat.S_ISSOCK(mode):
+        return "a socket"
+    return "not a regular file"
+
+
+def _megabytes(n: int) -> str:
+    return f"{n / 1e6:.3g} MB"
+
+
+def _open_regular(path: str | os.PathLike, what: str) -> int:
+    """Open ``path`` for reading without blocking (a FIFO) and check that it is a regular file."""
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+    except FileNotFoundError:
+        raise InputError(f"{path}: {what} not found; check the path") from None
+    except IsADirectoryError:
+        raise InputError(f"{path}: is a folder, not a {what}") from None
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read the {what} ({exc})") from None
+    try:
+        mode = os.fstat(fd).st_mode
+    except OSError as exc:  # pragma: no cover - fstat of an open descriptor
+        os.close(fd)
+        raise InputError(f"{path}: cannot read the {what} ({exc})") from None
+    if stat.S_ISDIR(mode):
+        os.close(fd)
+        raise InputError(f"{path}: is a folder, not a {what}")
+    if not stat.S_ISREG(mode):
+        os.close(fd)
+        raise InputError(f"{path}: is {_kind(mode)}, not a regular file; give the path of a {what}")
+    return fd
+
+
+def check_regular_input(path: str | os.PathLike, what: str) -> None:
+    """Refuse ``path`` unless it is an existing regular file (for readers of large binary files).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    what : str
+        What the file is, for messages ("LAS file").
+
+    Raises
+    ------
+    InputError
+        Missing, a folder, unreadable, or not a regular file (a device, FIFO or socket).
+    """
+    os.close(_open_regular(path, what))
+
+
+def read_input(path: str | os.PathLike, what: str, max_bytes: int | None = None) -> bytes:
+    """The bytes of a regular file of at most ``max_bytes``, or one line saying why not.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    what : str
+        What the file is, for messages ("route file", "vehicle file").
+    max_bytes : int, optional
+        The largest size read (default: :data:`MAX_TABLE_BYTES` as it is when called).
+
+    Returns
+    -------
+    bytes
+
+    Raises
+    ------
+    InputError
+        Missing, a folder, unreadable, not a regular file (a device, FIFO or socket), or
+        larger than ``max_bytes``.
+    """
+    if max_bytes is None:
+        max_bytes = MAX_TABLE_BYTES
+    fd = _open_regular(path, what)
+    with os.fdopen(fd, "rb") as handle:
+        size = os.fstat(fd).st_size
+        if size <= max_bytes:
+            try:
+                data = handle.read(max_bytes + 1)
+            except OSError as exc:
+                raise InputError(f"{path}: cannot read the {what} ({exc})") from None
+            size = max(size, len(data))
+    if size > max_bytes:
+        raise InputError(f"{path}: the {what} is {_megabytes(size)}, larger than the {_megabytes(max_bytes)} a "
+                         f"{what} may have here (see profileopt.io.inputs for the memory it needs); split it "
+                         "into shorter files")
+    return data
