@@ -293,7 +293,7 @@ def _read_vehicle_file(path: Path) -> str:
 
     data = inputs.read_input(path, "vehicle file", inputs.MAX_VEHICLE_BYTES)
     try:
-        text = data.decode("utf-8")
+        text = data.decode("utf-8-sig")  # a byte-order mark is accepted, as in route and profile files
     except UnicodeDecodeError as exc:
         raise InputError(f"{path}: cannot read the vehicle file ({exc})") from None
     return text.replace("\r\n", "\n").replace("\r", "\n") if "\r" in text else text

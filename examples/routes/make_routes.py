@@ -75,7 +75,7 @@ from typing import Sequence
 
 import numpy as np
 
-from profileopt import load_vehicle, speed_bands
+from profileopt import InputError, load_vehicle, speed_bands
 from profileopt.io import atomic_write, read_opencrg, read_xy_profile
 from profileopt.synthetic import iso8608_profile, iso8608_sections, step, washboard
 from profileopt.stations import segment_samples
@@ -316,6 +316,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--quiet", action="store_true", help="do not print the per-section summaries")
     args = parser.parse_args(argv)
 
+    if not args.out.is_dir():  # before any work: one line, not a traceback after it
+        print(f"error: --out {args.out} is not a folder; create it or choose another", file=sys.stderr)
+        return 2
     routes = synthetic_routes()
     if args.no_real:
         pass
@@ -326,7 +329,11 @@ def main(argv: Sequence[str] | None = None) -> int:
               "pass --no-real to write the synthetic routes only", file=sys.stderr)
         return 2
     for route in routes:
-        path = write(route, args.out)
+        try:
+            path = write(route, args.out)
+        except InputError as exc:  # e.g. a folder that cannot be written
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
         if not args.quiet:
             s, _ = rounded(route)
             print(f"{path} ({s[-1]:g} m, {s.size} samples, {path.stat().st_size / 1e3:.0f} kB, for {route.vehicle})")
