@@ -17,7 +17,8 @@ from .vehicle import Vehicle, bundled_vehicles, load_vehicle
 from .route import Route
 from .io import read_profile, read_route
 from .planning import Profile, SolverOptions, plan, summarize
-from .simulate import QuarterCarRun, simulate_quarter_car, wheel_envelope_m
+from .simulate import QuarterCarRun, simulate_quarter_car
+from .wheel import wheel_envelope_m
 from .verification import Verification, verify
 from .plots import plot_verification
 from .study import ModelRun, SafetyStudy, compare_models, safety_study

@@ -34,7 +34,8 @@ import casadi as ca
 
 from ._deprecation import old_forms
 from .io.atomic import OutputSet, atomic_write
-from .constraints import constraint_function, force_function, force_limit_n, jacobian_function
+from .casadi_functions import constraint_function, force_function, jacobian_function
+from .constraints import force_limit_n
 from .errors import InputError
 from .forces import DEFAULT_MODEL, FORCE_OF_E_MAX, MODELS, get_model
 

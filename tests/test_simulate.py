@@ -33,12 +33,8 @@ import scipy.interpolate
 
 from profileopt.errors import InputError
 from profileopt.forces import sbem_ef_force_n, sbem_tf_force_n
-from profileopt.simulate import (
-    boundary_times_s,
-    position_at_time,
-    simulate_quarter_car,
-    wheel_envelope_m,
-)
+from profileopt.simulate import boundary_times_s, position_at_time, simulate_quarter_car
+from profileopt.wheel import wheel_envelope_m
 from profileopt.terrain import step_width
 from profileopt.vehicle import load_vehicle
 

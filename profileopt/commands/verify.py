@@ -78,7 +78,8 @@ def _verify(args: argparse.Namespace) -> int:
     """Run ``profileopt verify``; returns the verdict's status (:data:`VERIFY_EXIT_STATUSES`)."""
     from ..io import read_profile, read_route
     from ..plots import plot_verification
-    from ..verification import check_limits, verify
+    from ..limit_check import check_limits
+    from ..verification import verify
 
     # first, before any work: every output checked (none may be an input, nor both the same
     # file); then written together, all or none

@@ -1,0 +1,289 @@
+"""A speed profile checked on paper against the vehicle's own limits, before any simulation.
+
+:func:`check_limits` checks that a profile covers its route, recomputes each segment's
+predicted force from the profile's speeds (the file's ``force_n`` column is not trusted) and
+finds where the profile first breaks each limit every plan keeps
+(:func:`profileopt.planning.default_limits`): top speed and the route's speed limits,
+acceleration, deceleration, jerk and predicted force. :func:`profileopt.verify` calls it
+before it simulates; ``profileopt verify`` turns its breaches into exit status 3.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .errors import InputError
+from .forces import get_model
+from .kinematics import boundary_jerk_mps3, segment_accel_mps2
+from .planning.limits import default_limits
+from .planning.limits.base import PlanContext
+from .planning.limits.force import max_force_over_segments
+from .planning.options import SolverOptions
+from .planning.segments import Segments
+from .stations import segment_samples
+from .terrain import segment_roughness_index, worst_case_elevation
+
+if TYPE_CHECKING:
+    from .planning.result import Profile
+    from .route import Route
+    from .vehicle import Vehicle
+
+__all__ = ["check_limits", "LimitCheck", "LimitBreach", "LIMIT_RTOL", "STALE_FORCE_RTOL"]
+
+#: A profile keeps a limit when it exceeds it by at most this share of it: the planner's own
+#: check (:attr:`profileopt.planning.SolverOptions.check_rtol`), so a planned profile passes.
+LIMIT_RTOL = SolverOptions.check_rtol
+#: The profile's force_n column counts as stale when it differs from the forces its speeds
+#: give by more than this share of the limit (the file's 17 digits give them back exactly).
+STALE_FORCE_RTOL = 1e-9
+
+
+@dataclasses.dataclass(frozen=True)
+class LimitBreach:
+    """Where a profile first breaks one of the vehicle's limits, and how often.
+
+    Attributes
+    ----------
+    quantity : str
+        ``"speed"``, ``"acceleration"``, ``"deceleration"``, ``"jerk"`` or ``"force"``.
+    limit_name : str
+        The limit broken, in words (``"the vehicle's top speed"``).
+    segment : int
+        The first segment that breaks it (for jerk: the segment after the boundary).
+    s_m : float
+        Where (m): the segment's start, or the boundary for jerk.
+    value : float
+        The profile's value there (m/s, m/s^2, m/s^3 or N; deceleration as a positive number).
+    limit : float
+        The limit there, in the same unit.
+    unit : str
+        The unit of ``value`` and ``limit``.
+    count : int
+        How many segments (boundaries, for jerk) break it.
+    of : int
+        How many there are.
+    worst_ratio : float
+        The largest value / limit anywhere.
+    """
+
+    quantity: str
+    limit_name: str
+    segment: int
+    s_m: float
+    value: float
+    limit: float
+    unit: str
+    count: int
+    of: int
+    worst_ratio: float
+
+    def describe(self) -> str:
+        """One line: which limit, where first, by how much, how often."""
+        where = "at the boundary" if self.quantity == "jerk" else "in the segment from"
+        places = "boundaries" if self.quantity == "jerk" else "segments"
+        value = f"{self.value:.4g} {self.unit}" if math.isfinite(self.value) else "too large to compute"
+        worst = f"{self.worst_ratio:.4g} times the limit" if math.isfinite(self.worst_ratio) else "beyond any number"
+        return (f"breaks {self.limit_name} ({self.limit:.4g} {self.unit}) first {where} s = {self.s_m:g} m "
+                f"(segment {self.segment}): {self.quantity} {value}; {self.count} of {self.of} {places}, "
+                f"worst {worst}")
+
+    def to_dict(self) -> dict:
+        """The fields, JSON-ready (a value that is not a finite number is None)."""
+        return {key: None if isinstance(value, float) and not math.isfinite(value) else value
+                for key, value in dataclasses.asdict(self).items()}
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class LimitCheck:
+    """A profile checked against the vehicle's own limits, on paper (:func:`check_limits`).
+
+    Attributes
+    ----------
+    model : str
+        Force model key.
+    ri : numpy.ndarray, shape (N,)
+        Each segment's RI, measured on the route.
+    predicted_n : numpy.ndarray, shape (N,)
+        The model's largest force over the speeds between each segment's two boundary
+        speeds (resonance peaks included), from the profile's speeds (N).
+    limit_n : float
+        The vehicle's limit for the model's force (N).
+    breaches : tuple of LimitBreach
+        The limits the profile breaks, in the order speed, acceleration, deceleration,
+        jerk, force; empty when it keeps them all.
+    notes : tuple of str
+        Remarks (a stale force column, a force limit in the file that is not the vehicle's).
+    """
+
+    model: str
+    ri: np.ndarray
+    predicted_n: np.ndarray
+    limit_n: float
+    breaches: tuple[LimitBreach, ...]
+    notes: tuple[str, ...]
+
+
+def _check_coverage(route: "Route", s: np.ndarray) -> None:
+    """Refuse a profile whose first or last boundary is not the route's first or last sample."""
+    span = max(abs(route.s_m[0]), abs(route.s_m[-1]), 1.0) * 1e-9
+    for end, mine, theirs in (("start", s[0], route.s_m[0]), ("end", s[-1], route.s_m[-1])):
+        gap = float(mine - theirs)
+        if abs(gap) > span:
+            side = "after" if gap > 0 else "before"
+            raise InputError(
+                f"{route.source}: the profile covers s = {s[0]:g} to {s[-1]:g} m but the route {route.s_m[0]:g} to "
+                f"{route.s_m[-1]:g} m: the profile's {end} lies {abs(gap):g} m {side} the route's {end}; a profile "
+                "must cover its route exactly, so verify the whole profile planned on this route"
+            )
+
+
+def _jerk_bound_mps3(profile: "Profile", vehicle: "Vehicle") -> tuple[float, str]:
+    """The jerk bound the profile records in its settings (else the vehicle's), and its name."""
+    recorded = profile.settings.get("max_jerk_mps3")
+    if recorded is None:
+        return vehicle.max_jerk_mps3, "the vehicle's jerk limit"
+    try:
+        bound = float(recorded)
+    except (TypeError, ValueError):
+        bound = math.nan
+    if not bound > 0:
+        raise InputError(f"profile: max_jerk_mps3={recorded} in its settings line is not a number > 0; write "
+                         "the profile with 'profileopt plan -o'")
+    return bound, "the jerk bound the profile was planned with"
+
+
+def _first_breach(quantity: str, limit_name: str, values: np.ndarray, limit: np.ndarray, where_m: np.ndarray,
+                  segments: np.ndarray, unit: str) -> LimitBreach | None:
+    """The first place where ``values`` exceed ``limit`` by more than :data:`LIMIT_RTOL`
+    (a value that is not a number counts as beyond), or None."""
+    limit = np.broadcast_to(np.asarray(limit, dtype=float), values.shape)
+    broken = ~(values <= limit * (1.0 + LIMIT_RTOL))
+    if not np.any(broken):
+        return None
+    k = int(np.flatnonzero(broken)[0])
+    ratio = values / limit
+    worst = float(np.max(np.where(np.isnan(ratio), np.inf, ratio)))
+    return LimitBreach(quantity=quantity, limit_name=limit_name, segment=int(segments[k]), s_m=float(where_m[k]),
+                       value=float(values[k]), limit=float(limit[k]), unit=unit,
+                       count=int(np.count_nonzero(broken)), of=int(values.size), worst_ratio=worst)
+
+
+def check_limits(
+    route: "Route",
+    profile: "Profile",
+    vehicle: "Vehicle",
+    *,
+    model: str | None = None,
+) -> LimitCheck:
+    """Check a profile against the vehicle's own limits, on paper, from its speeds alone.
+
+    The profile must cover the route exactly (its first and last boundaries are the route's
+    first and last samples) and its RI column must be the route's own. The limits are the
+    ones every plan keeps (:func:`profileopt.planning.default_limits`): the speed caps (the
+    vehicle's top speed and the route's ``speed_limit``), the acceleration and deceleration
+    bounds, the jerk bound the profile records in its settings (else the vehicle's), and the
+    model's force limit. The predicted force of each segment is recomputed from the speeds:
+    the largest force over every speed between its two boundary speeds, resonance peaks
+    included (:func:`profileopt.planning.limits.force.max_force_over_segments`). The file's
+    ``force_n`` column is not used (a note says so when it differs). A limit counts as kept
+    within :data:`LIMIT_RTOL` of it, the planner's own tolerance.
+
+    Parameters
+    ----------
+    route : Route
+        The terrain the profile was planned on.
+    profile : Profile
+        The speeds at the segment boundaries (m/s) and the RI of each segment.
+    vehicle : Vehicle
+        The vehicle and its limits.
+    model : str, optional
+        Force model key; default ``profile.model``.
+
+    Returns
+    -------
+    LimitCheck
+
+    Raises
+    ------
+    InputError
+        The profile does not cover the route exactly, its RI column does not match the
+        route's segments, its recorded jerk bound is not a number > 0, or the model is
+        unknown.
+    """
+    key = profile.model if model is None else model
+    force_model = get_model(key)
+    s = np.asarray(profile.s_m, dtype=float)
+    v = np.asarray(profile.speed_mps, dtype=float)
+    _check_coverage(route, s)
+    starts, stops = segment_samples(route.s_m, s)
+    ri_here = segment_roughness_index(route.s_m, route.z_m, starts, vehicle.ground_clearance_m)
+    mismatch = np.flatnonzero(~np.isclose(np.asarray(profile.ri, dtype=float)[:-1], ri_here, rtol=1e-6, atol=1e-9))
+    if mismatch.size:
+        i = mismatch[0]
+        raise InputError(
+            f"{route.source}: segment {i} ({s[i]:g} to {s[i + 1]:g} m) has RI {ri_here[i]:.4g} on this route "
+            f"but {profile.ri[i]:.4g} in the profile; verify a profile on the route and vehicle (ground "
+            "clearance) it was planned for"
+        )
+    notes: list[str] = []
+    limit = force_model.limit_n(vehicle)
+    profile_limit = np.asarray(profile.force_limit_n, dtype=float)[:-1]
+    if np.any(np.abs(profile_limit - limit) > 1e-9 * limit):
+        notes.append(
+            f"the profile's force_limit_n ({profile_limit.min():g} to {profile_limit.max():g} N) differs from "
+            f"{vehicle.name or 'the vehicle'}'s {force_model.limit_key} = {limit:g} N: was it planned with "
+            "another vehicle or model? The vehicle's limit is used"
+        )
+    jerk_bound, jerk_name = _jerk_bound_mps3(profile, vehicle)
+    length = np.diff(s)
+    segments = Segments(boundaries_m=s, length_m=length, ri=ri_here, e_max_m=worst_case_elevation(ri_here, vehicle),
+                        first_sample=starts, samples=stops - starts)
+    context = PlanContext(route=route, vehicle=vehicle, segments=segments)
+    limits = default_limits(vehicle, model=force_model.key, max_jerk_mps3=jerk_bound)
+    caps = [c for c in (lim.speed_cap_mps(context) for lim in limits) if c is not None]
+    accel_bounds = [b for b in (lim.accel_bounds_mps2(context) for lim in limits) if b is not None]
+    jerk_limit = min(lim.jerk_bound_mps3(context) for lim in limits)
+    bands = next(b for b in (lim.speed_bands(context) for lim in limits) if b is not None)
+    n = s.size - 1
+    index = np.arange(n)
+    breaches: list[LimitBreach | None] = []
+    # numbers as large as 1e155 m/s overflow on squaring: they break the limits, silently
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        # the vehicle's top speed first, then the route's speed_limit where it is lower
+        cap = np.minimum.reduce(caps)
+        top = np.maximum(v[:-1], v[1:])
+        breaches.append(_first_breach("speed", "the vehicle's top speed", top, np.array(vehicle.max_speed_mps),
+                                      s[:-1], index, "m/s"))
+        lower = cap < vehicle.max_speed_mps
+        breaches.append(_first_breach("speed", "the route's speed_limit", top[lower], cap[lower], s[:-1][lower],
+                                      index[lower], "m/s"))
+        b = v * v
+        accel = segment_accel_mps2(b[:-1], b[1:], length)
+        decel_bound = np.minimum.reduce([d for d, _ in accel_bounds])
+        accel_bound = np.minimum.reduce([a for _, a in accel_bounds])
+        breaches.append(_first_breach("acceleration", "the vehicle's acceleration limit", accel, accel_bound,
+                                      s[:-1], index, "m/s^2"))
+        breaches.append(_first_breach("deceleration", "the vehicle's deceleration limit", -accel, decel_bound,
+                                      s[:-1], index, "m/s^2"))
+        if n >= 2 and math.isfinite(jerk_limit):
+            jerk = boundary_jerk_mps3(v[1:-1], accel[:-1], accel[1:], length[:-1], length[1:])
+            breaches.append(_first_breach("jerk", jerk_name, np.abs(jerk), np.array(jerk_limit), s[1:-1],
+                                          index[1:], "m/s^3"))
+        predicted = max_force_over_segments(force_model.key, vehicle, ri_here, v, bands.peaks_mps)
+        breaches.append(_first_breach("force", f"the {force_model.label} force limit", predicted, np.array(limit),
+                                      s[:-1], index, "N"))
+        recorded = np.asarray(profile.force_n, dtype=float)[:-1]
+        stale = np.flatnonzero(~(np.abs(recorded - predicted) <= STALE_FORCE_RTOL * limit))
+    if stale.size:
+        i = stale[0]
+        notes.append(
+            f"the profile's force_n column is stale in {stale.size} of {n} segments (first at s = {s[i]:g} m: "
+            f"{recorded[i]:.6g} N recorded, {predicted[i]:.6g} N from its speeds): the predicted forces were "
+            "recomputed from the speeds"
+        )
+    return LimitCheck(model=force_model.key, ri=ri_here, predicted_n=predicted, limit_n=float(limit),
+                      breaches=tuple(b for b in breaches if b is not None), notes=tuple(notes))
