@@ -9,19 +9,40 @@ planner solved with IPOPT, and a quarter-car simulation that checks every plan.
     >>> profile = profileopt.plan(route, profileopt.load_vehicle("atv"))  # doctest: +SKIP
 """
 
+import importlib
+from typing import Any
+
 from .errors import InfeasibleError, InputError, PlanningError
-from .forces import MODELS, force_n, get_model
-from .speeds import SpeedBands, allowable_speed, speed_bands
-from .terrain import roughness_index, step_width, worst_case_elevation
-from .vehicle import Vehicle, bundled_vehicles, load_vehicle
-from .route import Route
-from .io import read_profile, read_route
-from .planning import Profile, SolverOptions, plan, summarize
-from .simulate import QuarterCarRun, simulate_quarter_car
-from .wheel import wheel_envelope_m
-from .verification import Verification, verify
-from .plots import plot_verification
-from .study import ModelRun, SafetyStudy, compare_models, safety_study
+
+# Everything else is imported when first used (PEP 562), so that ``profileopt --help`` and
+# commands that need neither CasADi nor SciPy start in a fraction of a second: name -> module.
+_LAZY = {
+    "MODELS": "forces", "force_n": "forces", "get_model": "forces",
+    "SpeedBands": "speeds", "allowable_speed": "speeds", "speed_bands": "speeds",
+    "roughness_index": "terrain", "step_width": "terrain", "worst_case_elevation": "terrain",
+    "Vehicle": "vehicle", "bundled_vehicles": "vehicle", "load_vehicle": "vehicle",
+    "Route": "route",
+    "read_profile": "io", "read_route": "io",
+    "Profile": "planning", "SolverOptions": "planning", "plan": "planning", "summarize": "planning",
+    "QuarterCarRun": "simulate", "simulate_quarter_car": "simulate",
+    "wheel_envelope_m": "wheel",
+    "Verification": "verification", "verify": "verification",
+    "plot_verification": "plots",
+    "ModelRun": "study", "SafetyStudy": "study", "compare_models": "study", "safety_study": "study",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value  # once imported, a plain attribute
+        return value
+    raise AttributeError(f"module 'profileopt' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = [
     "InputError",

@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Sequence
 import casadi as ca
 
 from ._deprecation import old_forms
+from .defaults import MAX_C_BYTES
 from .io.atomic import OutputSet, atomic_write
 from .casadi_functions import constraint_function, force_function, jacobian_function
 from .constraints import force_limit_n
@@ -48,11 +49,6 @@ __all__ = ["ExportedFunction", "CExport", "vehicle_slug", "jacobian_function", "
 #: Bytes of C per stage that each model's two Functions and their Jacobians add (measured
 #: with CasADi 3.6 at 1 and 1000 stages: the code is unrolled, one block per stage).
 C_BYTES_PER_STAGE = {"prev_bem": 1275, "iecm": 4815, "sbem_ef": 6674, "sbem_tf": 10913}
-#: Largest export written (bytes, estimated from :data:`C_BYTES_PER_STAGE` before any work):
-#: 64 MB is about 2700 stages of all four models (11 s to generate), far beyond an MPC
-#: horizon; 100,000 stages would be 2.4 GB written in minutes. Evaluate a longer horizon in
-#: pieces, or the vectorised Python Functions of :mod:`profileopt.constraints`.
-MAX_C_BYTES = 64_000_000
 
 
 @dataclasses.dataclass(frozen=True)

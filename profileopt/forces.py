@@ -42,6 +42,7 @@ import casadi as ca
 
 from .symbolic import elementwise
 from ._deprecation import OldCall, old_forms
+from .defaults import DEFAULT_MODEL, MODEL_KEYS
 from .errors import InputError
 from .terrain import check_e_max, check_ri, step_width, worst_case_elevation
 
@@ -62,10 +63,6 @@ __all__ = [
     "prev_bem_force_n",
     "base_frequency_radps",
 ]
-
-
-#: The force model used wherever none is chosen: SBEM:TF, the force transmitted to the frame.
-DEFAULT_MODEL = "sbem_tf"
 
 
 @elementwise
@@ -241,6 +238,8 @@ MODELS: dict[str, ForceModel] = {
     "sbem_ef": ForceModel("sbem_ef", "SBEM:EF", "max_excitation_force_n", "excitation", elementwise(_of_e_max(sbem_ef_force_n))),
     "sbem_tf": ForceModel("sbem_tf", "SBEM:TF", "max_transmitted_force_n", "transmitted", elementwise(_of_e_max(sbem_tf_force_n))),
 }
+if tuple(MODELS) != MODEL_KEYS:  # pragma: no cover - the command line lists MODEL_KEYS
+    raise RuntimeError("profileopt.defaults.MODEL_KEYS must name the models of MODELS, in order")
 
 
 #: The models defined on the worst-case elevation e_max (m) of Eq. (8), each with its own

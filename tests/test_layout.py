@@ -56,3 +56,19 @@ def test_the_check_finds_a_private_import(tmp_path: Path) -> None:
     bad = tmp_path / "bad.py"
     bad.write_text("from .terrain import _check_ri\nfrom profileopt.forces import _of_e_max\n", encoding="utf-8")
     assert _private_imports(bad) == ["terrain._check_ri", "profileopt.forces._of_e_max"]
+
+
+def test_help_and_version_import_no_numerical_package() -> None:
+    """``profileopt --help`` starts fast (issue 14: under 0.15 s, measured by
+    benchmarks/bench_startup.py, not here): it imports none of CasADi, SciPy, matplotlib or
+    numpy; each command imports them only when it runs."""
+    import subprocess
+    import sys
+
+    probe = ("import sys\nfrom profileopt.cli import main\n"
+             "for argv in (['--help'], ['--version'], ['plan', '--help'], ['verify', '--help'], ['export-c', '--help']):\n"
+             "    try:\n        main(argv)\n    except SystemExit:\n        pass\n"
+             "print(sorted(m for m in ('casadi', 'scipy', 'matplotlib', 'numpy') if m in sys.modules), file=sys.stderr)\n")
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.strip().splitlines()[-1] == "[]"

@@ -6,8 +6,7 @@ import argparse
 import contextlib
 
 from ..cli import command
-from ..codegen import MAX_C_BYTES, export_c, export_c_paths
-from ..forces import MODELS
+from ..defaults import MAX_C_BYTES, MODEL_KEYS
 from ..vehicle import load_vehicle
 from ._paths import check_folder, folder_outputs, vehicle_input
 
@@ -18,7 +17,7 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--model",
         action="append",
-        choices=list(MODELS),
+        choices=list(MODEL_KEYS),
         help="force model to export (repeat for several); default all four",
     )
     parser.add_argument(
@@ -33,6 +32,8 @@ def run(args: argparse.Namespace) -> int:
     out = check_folder("-o", args.output)
     vehicle = load_vehicle(args.vehicle)
     # the four files checked before any work (none may be the vehicle file), written all or none
+    from ..codegen import export_c, export_c_paths  # CasADi: imported only when exporting
+
     outputs = folder_outputs("-o", export_c_paths(vehicle, out), [vehicle_input(args.vehicle)])
     with outputs or contextlib.nullcontext():
         result = export_c(vehicle, out, models=args.model, n_stages=args.stages)

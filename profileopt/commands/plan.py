@@ -8,10 +8,8 @@ import sys
 from pathlib import Path
 
 from ..cli import command
-from ..forces import MODELS
+from ..defaults import DEFAULT_MODEL, DEFAULT_SEGMENT_LENGTH_M, DEFAULT_SMOOTHING, MODEL_KEYS, PLAN_BANDS
 from ..io.atomic import STDOUT, OutputSet
-from ..io.routes import read_route
-from ..planning import DEFAULT_SMOOTHING, PLAN_BANDS, plan
 from ..vehicle import load_vehicle
 from ._paths import vehicle_input
 
@@ -38,9 +36,9 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
                         help="bundled vehicle name or .toml file (default: atv)")
     parser.add_argument("-o", "--output", metavar="CSV",
                         help="write the profile CSV here ('-': standard output, the summary then goes to stderr)")
-    parser.add_argument("--segment-length", type=_float, default=5.0, metavar="M",
+    parser.add_argument("--segment-length", type=_float, default=DEFAULT_SEGMENT_LENGTH_M, metavar="M",
                         help="segment length in m (default: 5)")
-    parser.add_argument("--model", default="sbem_tf", choices=list(MODELS),
+    parser.add_argument("--model", default=DEFAULT_MODEL, choices=list(MODEL_KEYS),
                         help="force model (default: sbem_tf)")
     parser.add_argument("--smoothing", type=_float, default=DEFAULT_SMOOTHING, metavar="W",
                         help="weight of the comfort term: objective = time + W * integral (jerk/(1 m/s^3))^2 dt "
@@ -68,6 +66,9 @@ def _run(args: argparse.Namespace) -> int:
     outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot)],
                         inputs=[args.route, vehicle_input(args.vehicle)])
     vehicle = load_vehicle(args.vehicle)
+    from ..io.routes import read_route  # the numerical packages: imported only when planning
+    from ..planning import plan
+
     route = read_route(args.route)
     for note in route.notes:
         print(f"profileopt plan: note: {note}", file=sys.stderr)
@@ -105,7 +106,7 @@ def _human(summary: dict, args: argparse.Namespace) -> str:
     solver = summary["solver"]
     lines = [
         f"route {args.route}: {summary['distance_m']:.1f} m in {summary['segments']} segments, "
-        f"vehicle {args.vehicle}, model {MODELS[summary['model']].label}",
+        f"vehicle {args.vehicle}, model {_label(summary['model'])}",
         f"  travel time  {summary['travel_time_s']:.2f} s   mean speed {summary['mean_speed_mps']:.2f} m/s",
         f"  slowest      {slow['s_start_m']:g}-{slow['s_end_m']:g} m at {slow['top_speed_mps']:.3g} m/s: "
         f"{slow['reason']}",
@@ -126,3 +127,9 @@ def _human(summary: dict, args: argparse.Namespace) -> str:
 
 command("plan", "plan the fastest speed profile along a route that keeps the terrain forces within limits",
         arguments=_arguments)(_run)
+
+
+def _label(model: str) -> str:
+    from ..forces import get_model
+
+    return get_model(model).label

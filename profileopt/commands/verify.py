@@ -22,7 +22,7 @@ from pathlib import Path
 from ..io.atomic import STDOUT, OutputSet
 from ..cli import command
 from ..errors import InputError
-from ..forces import MODELS, get_model
+from ..defaults import MODEL_KEYS
 from ..vehicle import load_vehicle
 from ._paths import vehicle_input
 
@@ -76,6 +76,7 @@ def _verdict(check, over_count: int | None, segments: int) -> tuple[int, str]:
 
 def _verify(args: argparse.Namespace) -> int:
     """Run ``profileopt verify``; returns the verdict's status (:data:`VERIFY_EXIT_STATUSES`)."""
+    from ..forces import get_model
     from ..io import read_profile, read_route
     from ..plots import plot_verification
     from ..limit_check import check_limits
@@ -161,7 +162,7 @@ def _verify_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--vehicle", default=None, metavar="NAME_OR_TOML",
                         help="bundled vehicle name or .toml file (default: the vehicle the profile "
                              "records; a different one is refused)")
-    parser.add_argument("--model", default=None, choices=list(MODELS),
+    parser.add_argument("--model", default=None, choices=list(MODEL_KEYS),
                         help="force model to check against (default: the model the profile records)")
     parser.add_argument("-o", "--output", metavar="CSV",
                         help="write one row per segment to this CSV ('-': standard output, the summary then "

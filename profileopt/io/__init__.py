@@ -10,12 +10,33 @@
   :func:`read_xy_profile`).
 """
 
-from .atomic import OutputSet, atomic_path, atomic_write, check_output_path, check_output_paths
-from .elevation import read_opencrg, read_xy_profile
-from .las import LAS_GROUND, LasHeader, PointCloud, read_las
-from .profiles import PROFILE_COLUMNS, read_profile, write_profile
-from .routes import read_route
-from .table import Table, read_table, split_lines
+import importlib
+from typing import Any
+
+# Imported when first used (PEP 562): reading a route needs neither SciPy (the elevation
+# readers) nor the planner (profile files); name -> module of this package.
+_LAZY = {
+    "OutputSet": "atomic", "atomic_path": "atomic", "atomic_write": "atomic", "check_output_path": "atomic",
+    "check_output_paths": "atomic",
+    "read_opencrg": "elevation", "read_xy_profile": "elevation",
+    "LAS_GROUND": "las", "LasHeader": "las", "PointCloud": "las", "read_las": "las",
+    "PROFILE_COLUMNS": "profiles", "read_profile": "profiles", "write_profile": "profiles",
+    "read_route": "routes",
+    "Table": "table", "read_table": "table", "split_lines": "table",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'profileopt.io' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = [
     "atomic_path", "atomic_write", "check_output_path", "check_output_paths", "OutputSet",

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
+from ..defaults import DEFAULT_SMOOTHING, PLAN_BANDS
 from ..errors import InfeasibleError, InputError, PlanningError
 from ..forces import DEFAULT_MODEL, get_model
 from ..kinematics import segment_accel_mps2, segment_time_s
@@ -43,15 +44,10 @@ if TYPE_CHECKING:
 
 __all__ = ["plan", "DEFAULT_SMOOTHING", "PLAN_BANDS", "MIN_JERK_MPS3"]
 
-#: Weight of the jerk term: objective = time + w * integral (jerk / (1 m/s^3))^2 dt, both in s.
-DEFAULT_SMOOTHING = 0.01
 #: The smallest jerk bound (m/s^3) a plan accepts: the smallest a vehicle file may give
 #: (:data:`profileopt.vehicle.PLAUSIBLE_RANGES`). Below it the jerk-limited profile crawls (a
 #: bound of 1e-13 left no usable profile at all, 1e-50 one standing still for ever).
 MIN_JERK_MPS3 = PLAUSIBLE_RANGES["max_jerk_mps3"][0]
-#: The values of :func:`plan`'s ``band``: every band of each segment (chosen over the whole
-#: route), only the band from rest, or only the highest band.
-PLAN_BANDS = ("all", "first", "largest")
 
 
 def _validate_options(vehicle: "Vehicle", smoothing: float, max_jerk_mps3: float, v0_mps: float,

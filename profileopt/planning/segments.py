@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..defaults import DEFAULT_SEGMENT_LENGTH_M
 from ..errors import InputError
 from ..stations import segment_samples
 from ..terrain import segment_roughness_index, worst_case_elevation
@@ -26,8 +27,6 @@ __all__ = ["Segments", "segment_route", "MIN_SAMPLES_PER_SEGMENT", "DEFAULT_SEGM
 
 #: A segment's RI is a standard deviation: with fewer samples it means little.
 MIN_SAMPLES_PER_SEGMENT = 8
-#: Segment length (m) when none is given.
-DEFAULT_SEGMENT_LENGTH_M = 5.0
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

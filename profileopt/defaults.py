@@ -1,0 +1,27 @@
+"""The defaults and choices the command line shows, importable without CasADi or SciPy.
+
+They are defined here once; :mod:`profileopt.forces` and :mod:`profileopt.planning` take
+them from here, so ``profileopt --help`` needs none of the numerical packages.
+"""
+
+from __future__ import annotations
+
+__all__ = ["MODEL_KEYS", "DEFAULT_MODEL", "DEFAULT_SMOOTHING", "DEFAULT_SEGMENT_LENGTH_M", "PLAN_BANDS", "MAX_C_BYTES"]
+
+#: The four force models, in the paper's order (keys of :data:`profileopt.forces.MODELS`).
+MODEL_KEYS = ("prev_bem", "iecm", "sbem_ef", "sbem_tf")
+#: The model used when none is named: SBEM:TF, the paper's transmitted-force model.
+DEFAULT_MODEL = "sbem_tf"
+#: Weight of the jerk term: objective = time + w * integral (jerk / (1 m/s^3))^2 dt, both in s.
+DEFAULT_SMOOTHING = 0.01
+#: Segment length (m) when none is given.
+DEFAULT_SEGMENT_LENGTH_M = 5.0
+#: The values of :func:`profileopt.plan`'s ``band``: every band of each segment (chosen over
+#: the whole route), only the band from rest, or only the highest band.
+PLAN_BANDS = ("all", "first", "largest")
+#: Largest C export written (bytes, estimated from
+#: :data:`profileopt.codegen.C_BYTES_PER_STAGE` before any work): 64 MB is about 2700 stages
+#: of all four models (11 s to generate), far beyond an MPC horizon; 100,000 stages would be
+#: 2.4 GB written in minutes. Evaluate a longer horizon in pieces, or the vectorised Python
+#: Functions of :mod:`profileopt.constraints`.
+MAX_C_BYTES = 64_000_000
