@@ -695,7 +695,7 @@ def judge(rows: list[Row]) -> None:
                     no_worse = row.travel <= copp3.travel and row.violation <= 1e-6
                     ok = row.ratio_opt <= JERK_TARGET and no_worse
                     row.met = (f"{'yes' if ok else 'no'} (time: {'yes' if row.ratio_opt <= JERK_TARGET else 'no'}, "
-                               f"travel {row.travel / copp3.travel - 1.0:+.2%}); e2e ≤ {JERK_TARGET:g} × COPP's: "
+                               f"travel time {row.travel / copp3.travel - 1.0:+.2%} vs COPP's); e2e ≤ {JERK_TARGET:g} × COPP's: "
                                f"{'yes' if row.ratio_e2e <= JERK_TARGET else 'no'}")
         elif row.method.startswith("`profileopt plan`"):
             if toppra is not None:
