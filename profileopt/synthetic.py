@@ -27,6 +27,8 @@ import numpy as np
 import scipy.fft
 from numpy.typing import ArrayLike
 
+from .errors import InputError
+
 __all__ = [
     "ElevationProfile",
     "ISO8608_GD0_M3",
@@ -68,16 +70,16 @@ def _finite_positive(name: str, value: float) -> float:
     try:
         x = float(value)
     except (TypeError, ValueError):
-        raise ValueError(f"{name} = {value!r}: must be a number") from None
+        raise InputError(f"{name} = {value!r}: must be a number") from None
     if not (math.isfinite(x) and x > 0):
-        raise ValueError(f"{name} = {value!r}: must be a finite number > 0")
+        raise InputError(f"{name} = {value!r}: must be a finite number > 0")
     return x
 
 
 def _gd0_m3(road_class: str) -> float:
     key = road_class.upper() if isinstance(road_class, str) else road_class
     if key not in ISO8608_GD0_M3:
-        raise ValueError(
+        raise InputError(
             f"road_class = {road_class!r}: not an ISO 8608 class; use one letter of A B C D E F G H"
         )
     return ISO8608_GD0_M3[key]
@@ -87,10 +89,10 @@ def _check_band(spacing_m: float, n_min_cpm: float, n_max_cpm: float) -> tuple[f
     n_min = _finite_positive("n_min_cpm", n_min_cpm)
     n_max = _finite_positive("n_max_cpm", n_max_cpm)
     if n_max <= n_min:
-        raise ValueError(f"n_max_cpm = {n_max_cpm!r} must be greater than n_min_cpm = {n_min_cpm!r}")
+        raise InputError(f"n_max_cpm = {n_max_cpm!r} must be greater than n_min_cpm = {n_min_cpm!r}")
     nyquist = 0.5 / spacing_m
     if n_max >= nyquist:
-        raise ValueError(
+        raise InputError(
             f"n_max_cpm = {n_max_cpm!r} cycles/m is not below the Nyquist frequency "
             f"1 / (2 spacing_m) = {nyquist:g} cycles/m; reduce spacing_m or n_max_cpm"
         )
@@ -99,14 +101,14 @@ def _check_band(spacing_m: float, n_min_cpm: float, n_max_cpm: float) -> tuple[f
 
 def _check_seed(seed: int) -> int:
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed = {seed!r}: must be an integer >= 0 (it makes the profile reproducible)")
+        raise InputError(f"seed = {seed!r}: must be an integer >= 0 (it makes the profile reproducible)")
     return int(seed)
 
 
 def _sample_count(length_m: float, spacing_m: float) -> int:
     """Samples 0, spacing, ..., up to length (inclusive within 1e-9 of a spacing)."""
     if spacing_m >= length_m:
-        raise ValueError(f"spacing_m = {spacing_m!r} must be smaller than length_m = {length_m!r}")
+        raise InputError(f"spacing_m = {spacing_m!r} must be smaller than length_m = {length_m!r}")
     return int(math.floor(length_m / spacing_m + 1e-9)) + 1
 
 
@@ -201,7 +203,7 @@ def iso8608_profile(
 
     Raises
     ------
-    ValueError
+    InputError
         Unknown class, a length, spacing or band edge that is not a finite positive number,
         spacing >= length, n_max <= n_min or n_max at or above Nyquist, a seed that is not
         an integer >= 0.
@@ -252,21 +254,21 @@ def iso8608_sections(
 
     Raises
     ------
-    ValueError
+    InputError
         An empty list, an unknown class, a non-positive length, a transition longer than a
         section it joins, or any problem :func:`iso8608_profile` refuses.
     """
     if len(sections) == 0:
-        raise ValueError("sections is empty; give at least one (class, length_m) pair")
+        raise InputError("sections is empty; give at least one (class, length_m) pair")
     gd0 = np.array([_gd0_m3(c) for c, _ in sections])
     lengths = np.array([_finite_positive(f"length of section {i} ({c!r})", n) for i, (c, n) in enumerate(sections)])
     spacing = _finite_positive("spacing_m", spacing_m)
     width = float(transition_m)
     if not (math.isfinite(width) and width >= 0):
-        raise ValueError(f"transition_m = {transition_m!r}: must be a finite number >= 0")
+        raise InputError(f"transition_m = {transition_m!r}: must be a finite number >= 0")
     shortest_pair = np.minimum(lengths[:-1], lengths[1:])
     if lengths.size > 1 and width > shortest_pair.min():
-        raise ValueError(
+        raise InputError(
             f"transition_m = {transition_m!r} m is longer than a section it joins "
             f"({shortest_pair.min():g} m); shorten transition_m or lengthen that section"
         )
@@ -320,13 +322,13 @@ def washboard(
     s = np.asarray(s_m, dtype=float)
     amplitude = float(amplitude_m)
     if not (math.isfinite(amplitude) and amplitude >= 0):
-        raise ValueError(f"amplitude_m = {amplitude_m!r}: must be a finite number >= 0")
+        raise InputError(f"amplitude_m = {amplitude_m!r}: must be a finite number >= 0")
     wavelength = _finite_positive("wavelength_m", wavelength_m)
     start = 0.0 if start_m is None else float(start_m)
     inside = np.ones(s.shape, dtype=bool) if start_m is None else s >= start
     if end_m is not None:
         if not float(end_m) > start:
-            raise ValueError(f"end_m = {end_m!r} must be greater than start_m = {start_m!r}")
+            raise InputError(f"end_m = {end_m!r} must be greater than start_m = {start_m!r}")
         inside &= s < float(end_m)
     return np.where(inside, amplitude * np.sin(2.0 * np.pi * (s - start) / wavelength), 0.0)
 
@@ -351,7 +353,7 @@ def step(s_m: ArrayLike, position_m: float, height_m: float) -> np.ndarray:
     s = np.asarray(s_m, dtype=float)
     position, height = float(position_m), float(height_m)
     if not (math.isfinite(position) and math.isfinite(height)):
-        raise ValueError(f"position_m = {position_m!r} and height_m = {height_m!r} must be finite numbers")
+        raise InputError(f"position_m = {position_m!r} and height_m = {height_m!r} must be finite numbers")
     return np.where(s >= position, height, 0.0)
 
 
@@ -376,7 +378,7 @@ def ramp(s_m: ArrayLike, start_m: float, end_m: float, rise_m: float) -> np.ndar
     s = np.asarray(s_m, dtype=float)
     start, end, rise = float(start_m), float(end_m), float(rise_m)
     if not all(math.isfinite(x) for x in (start, end, rise)):
-        raise ValueError(f"start_m, end_m and rise_m must be finite numbers, got {start_m!r}, {end_m!r}, {rise_m!r}")
+        raise InputError(f"start_m, end_m and rise_m must be finite numbers, got {start_m!r}, {end_m!r}, {rise_m!r}")
     if not end > start:
-        raise ValueError(f"end_m = {end_m!r} must be greater than start_m = {start_m!r}")
+        raise InputError(f"end_m = {end_m!r} must be greater than start_m = {start_m!r}")
     return rise * np.clip((s - start) / (end - start), 0.0, 1.0)
