@@ -6,7 +6,7 @@ them from here, so ``profileopt --help`` needs none of the numerical packages.
 
 from __future__ import annotations
 
-__all__ = ["MODEL_KEYS", "DEFAULT_MODEL", "DEFAULT_SMOOTHING", "DEFAULT_SEGMENT_LENGTH_M", "PLAN_BANDS", "MAX_C_BYTES"]
+__all__ = ["MODEL_KEYS", "DEFAULT_MODEL", "DEFAULT_SMOOTHING", "DEFAULT_SEGMENT_LENGTH_M", "DEFAULT_ROUGHNESS_WINDOW_M", "PLAN_BANDS", "MAX_C_BYTES"]
 
 #: The four force models, in the paper's order (keys of :data:`profileopt.forces.MODELS`).
 MODEL_KEYS = ("prev_bem", "iecm", "sbem_ef", "sbem_tf")
@@ -14,8 +14,12 @@ MODEL_KEYS = ("prev_bem", "iecm", "sbem_ef", "sbem_tf")
 DEFAULT_MODEL = "sbem_tf"
 #: Weight of the jerk term: objective = time + w * integral (jerk / (1 m/s^3))^2 dt, both in s.
 DEFAULT_SMOOTHING = 0.01
-#: Segment length (m) when none is given.
+#: Segment length (m) when none is given: the planning resolution (README, "Segment length").
 DEFAULT_SEGMENT_LENGTH_M = 5.0
+#: Roughness window length W (m) when none is given: every stretch [a, a + W] of the route
+#: is judged by its own RI (docs/paper-notes.md, "Roughness windows"); 5 m, the segment
+#: length that the RI was measured over before windows.
+DEFAULT_ROUGHNESS_WINDOW_M = 5.0
 #: The values of :func:`profileopt.plan`'s ``band``: every band of each segment (chosen over
 #: the whole route), only the band from rest, or only the highest band.
 PLAN_BANDS = ("all", "first", "largest")

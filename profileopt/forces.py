@@ -40,7 +40,9 @@ from typing import TYPE_CHECKING, Any, Callable
 
 import casadi as ca
 
-from .symbolic import elementwise
+import numpy as np
+
+from .symbolic import elementwise, is_symbolic
 from ._deprecation import OldCall, old_forms
 from .defaults import DEFAULT_MODEL, MODEL_KEYS
 from .errors import InputError
@@ -57,6 +59,9 @@ __all__ = [
     "get_model",
     "check_e_max_model",
     "force_n",
+    "envelope_force_n",
+    "transmissibility_peak_ratio",
+    "sbem_tf_envelope_force_n",
     "iecm_force_n",
     "sbem_ef_force_n",
     "sbem_tf_force_n",
@@ -85,7 +90,8 @@ def base_frequency_radps(speed_mps: Any, e_max_m: Any, vehicle: "Vehicle") -> An
 
 def _smooth_ground_is_zero(e_max_m: Any, force: Any) -> Any:
     # RI = 0 makes every formula 0/0; the limit is no force at all (docs/paper-notes.md).
-    return ca.if_else(e_max_m > 0, force, 0)
+    # A negative or NaN terrain value has no force at all: NaN, never "admissible".
+    return ca.if_else(e_max_m > 0, force, ca.if_else(e_max_m == 0, 0, math.nan))
 
 
 @elementwise
@@ -151,6 +157,69 @@ def sbem_tf_force_n(speed_mps: Any, e_max_m: Any, vehicle: "Vehicle") -> Any:
     return _smooth_ground_is_zero(e_max_m, k * e_max_m * r**2 * ca.sqrt(ratio))
 
 
+def transmissibility_peak_ratio(damping_ratio: float) -> float:
+    """The frequency ratio r_p = sqrt(sqrt(1 + 8 zeta^2) - 1) / (2 zeta) where the force
+    transmissibility T(r) of Eq. (13) is largest (dimensionless).
+
+    With x = r^2 and a = 4 zeta^2, T^2 = (1 + a x) / ((1 - x)^2 + a x); setting its
+    derivative in x to zero gives a x^2 + 2 x - 2 = 0, whose positive root is
+    x = (sqrt(1 + 8 zeta^2) - 1) / (4 zeta^2). T rises on [0, r_p] and falls beyond it.
+
+    Parameters
+    ----------
+    damping_ratio : float
+        Suspension damping ratio zeta (dimensionless), > 0.
+    """
+    zeta = float(damping_ratio)
+    return math.sqrt(math.sqrt(1.0 + 8.0 * zeta * zeta) - 1.0) / (2.0 * zeta)
+
+
+@elementwise
+def sbem_tf_envelope_force_n(speed_mps: Any, e_min_m: Any, e_max_m: Any, vehicle: "Vehicle") -> Any:
+    """The largest SBEM:TF force (Eq. 13) over every elevation e in [e_min, e_max], in N:
+    an upper bound, exact when e_min = e_max and at every speed where the force grows with e.
+
+    SBEM:TF is not monotone in e at a fixed speed: a smaller step is also narrower
+    (X_w of Eq. 2), so it is climbed faster, and near resonance that can raise the force.
+    Write F = k e r^2 T(r) with r = pi V / (2 X_w(e) wn) and T the transmissibility of
+    Eq. (13). The factor e r^2 = (pi V / (2 wn))^2 e / X_w(e)^2 grows with e (it is
+    (pi V / (2 wn))^2 / (2 r_w - e) below the wheel radius r_w, linear in e above it), so it
+    is at most its value at e_max. r falls as e grows, so over the range it lies in
+    [r(e_max), r(e_min)], where T is at most T(clip(r_p, r(e_max), r(e_min))) (T rises up
+    to its peak r_p, :func:`transmissibility_peak_ratio`, and falls beyond). The product
+    of the two maxima bounds the force. Where r(e_max) >= r_p (every speed above
+    2 wn r_w r_p / pi, where even the widest step X_w = r_w is crossed above resonance) the
+    clip picks r(e_max) and the bound is F(V, e_max) exactly; below that speed it is
+    conservative by at most the factor (2 r_w - e) / (2 r_w - e_max) of the worst e.
+
+    Parameters
+    ----------
+    speed_mps : number, array, DM, SX or MX
+        Forward speed V (m/s).
+    e_min_m, e_max_m : number, array, DM, SX or MX
+        The range of elevation amplitudes e (m), 0 <= e_min <= e_max; usually the e_max
+        (Eq. 8) of the least and of the roughest roughness window a stretch of route holds.
+    vehicle : Vehicle
+        Quarter-car constants and the wheel radius.
+
+    Returns
+    -------
+    Same kind as the inputs: force (N). NaN for a negative or NaN elevation.
+    """
+    k, zeta, wn = vehicle.spring_n_per_m, vehicle.damping_ratio, vehicle.natural_frequency_radps
+    x_hi = step_width(e_max_m, vehicle)
+    # e_min = 0 is a step of no width, r = infinity: a tiny floor keeps r finite (then T(r)
+    # is far past its peak and the clip picks r_p anyway) and the derivatives free of NaN.
+    x_lo = ca.fmax(step_width(e_min_m, vehicle), 1e-12 * x_hi)
+    r_hi = base_frequency_radps(speed_mps, e_max_m, vehicle) / wn  # r at e_max, the least
+    r_lo = math.pi * speed_mps / (2.0 * x_lo * wn)  # r at e_min, the largest
+    r = ca.fmax(r_hi, ca.fmin(transmissibility_peak_ratio(zeta), r_lo))
+    damping = (2.0 * zeta * r) ** 2
+    ratio = (1.0 + damping) / ((1.0 - r**2) ** 2 + damping)
+    force = _smooth_ground_is_zero(e_max_m, k * e_max_m * r_hi**2 * ca.sqrt(ratio))
+    return ca.if_else(e_min_m >= 0, force, math.nan)
+
+
 @elementwise
 def prev_bem_force_n(speed_mps: Any, ri: Any, vehicle: "Vehicle") -> Any:
     """Prev:BEM excitation force, the project's reconstruction of reference [11], in N.
@@ -171,7 +240,8 @@ def prev_bem_force_n(speed_mps: Any, ri: Any, vehicle: "Vehicle") -> Any:
     k, zeta, wn = vehicle.spring_n_per_m, vehicle.damping_ratio, vehicle.natural_frequency_radps
     amplitude = math.sqrt(2.0) * ri * vehicle.ground_clearance_m
     w = 2.0 * math.pi * vehicle.terrain_frequency_cpm * speed_mps
-    return k * amplitude * ca.sqrt(1.0 + (2.0 * zeta * w / wn) ** 2)
+    force = k * amplitude * ca.sqrt(1.0 + (2.0 * zeta * w / wn) ** 2)
+    return ca.if_else(ri >= 0, force, math.nan)  # a negative or NaN RI: NaN, never "admissible"
 
 
 def _of_e_max(force_of_e: Callable) -> Callable:
@@ -180,6 +250,24 @@ def _of_e_max(force_of_e: Callable) -> Callable:
 
     builder.__name__ = force_of_e.__name__ + "_of_ri"
     return builder
+
+
+def _monotone_envelope(force_of_ri: Callable) -> Callable:
+    """The largest force over RI in [ri_min, ri_max] of a model whose force grows with the
+    RI at every speed: its force at ri_max (NaN when ri_min is negative or NaN)."""
+    def builder(speed_mps: Any, ri_min: Any, ri_max: Any, vehicle: "Vehicle") -> Any:
+        return ca.if_else(ri_min >= 0, force_of_ri(speed_mps, ri_max, vehicle), math.nan)
+
+    builder.__name__ = force_of_ri.__name__ + "_envelope"
+    return builder
+
+
+def _sbem_tf_envelope_of_ri(speed_mps: Any, ri_min: Any, ri_max: Any, vehicle: "Vehicle") -> Any:
+    return sbem_tf_envelope_force_n.symbolic(speed_mps, worst_case_elevation(ri_min, vehicle),
+                                             worst_case_elevation(ri_max, vehicle), vehicle)
+
+
+_sbem_tf_envelope_of_ri.__name__ = "sbem_tf_envelope_of_ri"  # a CasADi Function name
 
 
 @dataclasses.dataclass(frozen=True)
@@ -199,6 +287,14 @@ class ForceModel:
     of_ri : callable
         ``of_ri(speed_mps, ri, vehicle)``: the force (N) against speed (m/s) and RI, for
         any kind of argument (numbers, arrays, DM, SX, MX).
+    envelope_of_ri : callable
+        ``envelope_of_ri(speed_mps, ri_min, ri_max, vehicle)``: the largest force (N) over
+        every RI in [ri_min, ri_max] (an upper bound for SBEM:TF, see
+        :func:`sbem_tf_envelope_force_n`; the force at ri_max for the models whose force
+        grows with the RI), for any kind of argument.
+    monotone : bool
+        Whether the force grows with the RI at every speed (IECM: e / X_w grows with e;
+        SBEM:EF: e w_b does; Prev:BEM is linear in the RI). SBEM:TF does not.
     """
 
     key: str
@@ -206,6 +302,8 @@ class ForceModel:
     limit_key: str
     quantity: str
     of_ri: Callable
+    envelope_of_ri: Callable
+    monotone: bool
 
     def limit_n(self, vehicle: "Vehicle") -> float:
         """The force limit this model is held to (N).
@@ -231,12 +329,46 @@ class ForceModel:
         check_ri(ri)
         return self.of_ri(speed_mps, ri, vehicle)
 
+    def envelope_force_n(self, speed_mps: Any, ri_min: Any, ri_max: Any, vehicle: "Vehicle") -> Any:
+        """The largest force (N) at speed (m/s) over every RI in [ri_min, ri_max].
+
+        Parameters
+        ----------
+        speed_mps : number, array, DM, SX or MX
+            Forward speed V (m/s); broadcast against the RI range.
+        ri_min, ri_max : number, array, DM, SX or MX
+            The range of roughness indices (dimensionless), 0 <= ri_min <= ri_max.
+        vehicle : Vehicle
+        """
+        check_ri(ri_min)
+        check_ri(ri_max)
+        _check_ordered(ri_min, ri_max, "ri_min", "ri_max")
+        return self.envelope_of_ri(speed_mps, ri_min, ri_max, vehicle)
+
+
+def _check_ordered(low: Any, high: Any, low_name: str, high_name: str) -> None:
+    """Raise InputError if a numeric ``low`` exceeds ``high`` anywhere (symbols pass)."""
+    if is_symbolic(low, high):
+        return
+    lo = np.asarray(low.full() if isinstance(low, ca.DM) else low, dtype=float)
+    hi = np.asarray(high.full() if isinstance(high, ca.DM) else high, dtype=float)
+    if np.any(lo > hi):
+        raise InputError(f"{low_name} must not exceed {high_name} (a range is given as its least and largest value)")
+
+
+def _model(key: str, label: str, limit_key: str, quantity: str, of_ri: Callable) -> ForceModel:
+    monotone = key != "sbem_tf"
+    envelope = _monotone_envelope(of_ri.symbolic) if monotone else _sbem_tf_envelope_of_ri
+    return ForceModel(key, label, limit_key, quantity, of_ri, elementwise(envelope), monotone)
+
 
 MODELS: dict[str, ForceModel] = {
-    "prev_bem": ForceModel("prev_bem", "Prev:BEM", "max_excitation_force_n", "excitation", prev_bem_force_n),
-    "iecm": ForceModel("iecm", "IECM", "max_excitation_force_n", "excitation", elementwise(_of_e_max(iecm_force_n))),
-    "sbem_ef": ForceModel("sbem_ef", "SBEM:EF", "max_excitation_force_n", "excitation", elementwise(_of_e_max(sbem_ef_force_n))),
-    "sbem_tf": ForceModel("sbem_tf", "SBEM:TF", "max_transmitted_force_n", "transmitted", elementwise(_of_e_max(sbem_tf_force_n))),
+    "prev_bem": _model("prev_bem", "Prev:BEM", "max_excitation_force_n", "excitation", prev_bem_force_n),
+    "iecm": _model("iecm", "IECM", "max_excitation_force_n", "excitation", elementwise(_of_e_max(iecm_force_n))),
+    "sbem_ef": _model("sbem_ef", "SBEM:EF", "max_excitation_force_n", "excitation",
+                      elementwise(_of_e_max(sbem_ef_force_n))),
+    "sbem_tf": _model("sbem_tf", "SBEM:TF", "max_transmitted_force_n", "transmitted",
+                      elementwise(_of_e_max(sbem_tf_force_n))),
 }
 if tuple(MODELS) != MODEL_KEYS:  # pragma: no cover - the command line lists MODEL_KEYS
     raise RuntimeError("profileopt.defaults.MODEL_KEYS must name the models of MODELS, in order")
@@ -334,3 +466,52 @@ def force_n(speed_mps: Any, vehicle: "Vehicle", *, ri: Any = None, e_max_m: Any 
     check_e_max_model(model)
     check_e_max(e_max_m)
     return FORCE_OF_E_MAX[model](speed_mps, e_max_m, vehicle)
+
+
+def envelope_force_n(speed_mps: Any, vehicle: "Vehicle", *, ri_range: tuple[Any, Any] | None = None,
+                     e_range_m: tuple[Any, Any] | None = None, model: str = DEFAULT_MODEL) -> Any:
+    """The largest force (N) that ``model`` predicts at ``speed_mps`` over a range of terrain.
+
+    A stretch of route seen through sliding roughness windows holds a range of RI values,
+    not one: its admissible speeds are those admissible for every value of the range. This
+    is the force those speeds are held to. For IECM, SBEM:EF and Prev:BEM, whose force
+    grows with the terrain value, it is the force at the top of the range; for SBEM:TF it
+    is the bound of :func:`sbem_tf_envelope_force_n`, exact at every speed where the force
+    grows with e. With both ends equal it is :func:`force_n`.
+
+    Parameters
+    ----------
+    speed_mps : number, array, DM, SX or MX
+        Forward speed (m/s); broadcast against the range.
+    vehicle : Vehicle
+    ri_range : (ri_min, ri_max), optional
+        Least and largest roughness index (dimensionless), 0 <= ri_min <= ri_max; numbers,
+        arrays, DM, SX or MX.
+    e_range_m : (e_min_m, e_max_m), optional
+        Least and largest worst-case elevation (m) of Eq. (8), for IECM, SBEM:EF, SBEM:TF.
+    model : str, default ``"sbem_tf"`` (:data:`DEFAULT_MODEL`)
+
+    Returns
+    -------
+    Same kind as the inputs: force (N).
+
+    Raises
+    ------
+    InputError
+        Unknown ``model``, both or neither range, ``e_range_m`` with Prev:BEM, a NaN or
+        negative value, or a range whose least value exceeds its largest.
+    """
+    spec = get_model(model)
+    if (ri_range is None) == (e_range_m is None):
+        raise InputError("give exactly one of ri_range (roughness index) and e_range_m (worst-case elevation, m)")
+    if ri_range is not None:
+        ri_min, ri_max = ri_range
+        return spec.envelope_force_n(speed_mps, ri_min, ri_max, vehicle)
+    check_e_max_model(model)
+    e_min, e_max = e_range_m
+    check_e_max(e_min)
+    check_e_max(e_max)
+    _check_ordered(e_min, e_max, "e_min_m", "e_max_m")
+    if model == "sbem_tf":
+        return sbem_tf_envelope_force_n(speed_mps, e_min, e_max, vehicle)
+    return FORCE_OF_E_MAX[model](speed_mps, e_max, vehicle)

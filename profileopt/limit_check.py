@@ -23,9 +23,10 @@ from .planning.limits import default_limits
 from .planning.limits.base import PlanContext
 from .planning.limits.force import max_force_over_segments
 from .planning.options import SolverOptions
-from .planning.segments import Segments
+from .defaults import DEFAULT_ROUGHNESS_WINDOW_M
+from .planning.segments import segments_at
 from .stations import segment_samples
-from .terrain import segment_roughness_index, worst_case_elevation
+from .terrain import roughness_windows
 
 if TYPE_CHECKING:
     from .planning.result import Profile
@@ -141,6 +142,21 @@ def _check_coverage(route: "Route", s: np.ndarray) -> None:
             )
 
 
+def _roughness_window_m(profile: "Profile") -> float:
+    """The roughness window the profile records in its settings (else the default), in m."""
+    recorded = profile.settings.get("roughness_window_m")
+    if recorded is None:
+        return DEFAULT_ROUGHNESS_WINDOW_M
+    try:
+        window = float(recorded)
+    except (TypeError, ValueError):
+        window = math.nan
+    if not (math.isfinite(window) and window > 0):
+        raise InputError(f"profile: roughness_window_m={recorded} in its settings line is not a number > 0; "
+                         "write the profile with 'profileopt plan -o'")
+    return window
+
+
 def _jerk_bound_mps3(profile: "Profile", vehicle: "Vehicle") -> tuple[float, str]:
     """The jerk bound the profile records in its settings (else the vehicle's), and its name."""
     recorded = profile.settings.get("max_jerk_mps3")
@@ -220,14 +236,19 @@ def check_limits(
     v = np.asarray(profile.speed_mps, dtype=float)
     _check_coverage(route, s)
     starts, stops = segment_samples(route.s_m, s)
-    ri_here = segment_roughness_index(route.s_m, route.z_m, starts, vehicle.ground_clearance_m)
+    window_m = _roughness_window_m(profile)
+    windows = roughness_windows(route.s_m, route.z_m, vehicle.ground_clearance_m, window_m=window_m,
+                                source=route.source)
+    segments = segments_at(s, windows, vehicle, starts=starts, stops=stops)
+    ri_here = segments.ri
     mismatch = np.flatnonzero(~np.isclose(np.asarray(profile.ri, dtype=float)[:-1], ri_here, rtol=1e-6, atol=1e-9))
     if mismatch.size:
         i = mismatch[0]
         raise InputError(
             f"{route.source}: segment {i} ({s[i]:g} to {s[i + 1]:g} m) has RI {ri_here[i]:.4g} on this route "
-            f"but {profile.ri[i]:.4g} in the profile; verify a profile on the route and vehicle (ground "
-            "clearance) it was planned for"
+            f"but {profile.ri[i]:.4g} in the profile (largest RI of the {window_m:g} m roughness windows it "
+            "meets); verify a profile on the route and vehicle (ground clearance) it was planned for, or plan "
+            "it again"
         )
     notes: list[str] = []
     limit = force_model.limit_n(vehicle)
@@ -240,8 +261,6 @@ def check_limits(
         )
     jerk_bound, jerk_name = _jerk_bound_mps3(profile, vehicle)
     length = np.diff(s)
-    segments = Segments(boundaries_m=s, length_m=length, ri=ri_here, e_max_m=worst_case_elevation(ri_here, vehicle),
-                        first_sample=starts, samples=stops - starts)
     context = PlanContext(route=route, vehicle=vehicle, segments=segments)
     limits = default_limits(vehicle, model=force_model.key, max_jerk_mps3=jerk_bound)
     caps = [c for c in (lim.speed_cap_mps(context) for lim in limits) if c is not None]
@@ -273,7 +292,8 @@ def check_limits(
             jerk = boundary_jerk_mps3(v[1:-1], accel[:-1], accel[1:], length[:-1], length[1:])
             breaches.append(_first_breach("jerk", jerk_name, np.abs(jerk), np.array(jerk_limit), s[1:-1],
                                           index[1:], "m/s^3"))
-        predicted = max_force_over_segments(force_model.key, vehicle, ri_here, v, bands.peaks_mps)
+        predicted = max_force_over_segments(force_model.key, vehicle, ri_here, v, bands.peaks_mps,
+                                            ri_min=segments.ri_min)
         breaches.append(_first_breach("force", f"the {force_model.label} force limit", predicted, np.array(limit),
                                       s[:-1], index, "N"))
         recorded = np.asarray(profile.force_n, dtype=float)[:-1]

@@ -134,33 +134,46 @@ class SpeedBands:
 
 
 @functools.lru_cache(maxsize=64)
-def _constraint_derivatives(model: str, vehicle: "Vehicle") -> tuple[ca.Function, ca.Function]:
-    """g = F / F_limit - 1 with its speed derivative, and g' with g'' (exact, CasADi)."""
+def _constraint_derivatives(model: str, vehicle: "Vehicle", envelope: bool = False
+                            ) -> tuple[ca.Function, ca.Function]:
+    """g = F / F_limit - 1 with its speed derivative, and g' with g'' (exact, CasADi).
+
+    The terrain inputs are ``ri``, or with ``envelope`` ``ri_min`` and ``ri`` (the force is
+    then the largest over the RI range, :meth:`profileopt.forces.ForceModel.envelope_force_n`).
+    """
     spec = get_model(model)
     v, ri = ca.SX.sym("speed_mps"), ca.SX.sym("ri")
-    g = spec.force_n(v, ri, vehicle) / spec.limit_n(vehicle) - 1.0
+    if envelope:
+        ri_min = ca.SX.sym("ri_min")
+        terrain, names = [ri_min, ri], ["ri_min", "ri"]
+        force = spec.envelope_force_n(v, ri_min, ri, vehicle)
+    else:
+        terrain, names = [ri], ["ri"]
+        force = spec.force_n(v, ri, vehicle)
+    g = force / spec.limit_n(vehicle) - 1.0
     dg = ca.jacobian(g, v)
     d2g = ca.jacobian(dg, v)
+    suffix = "_envelope" if envelope else ""
     return (
-        ca.Function(f"{model}_g", [v, ri], [g, dg], ["speed_mps", "ri"], ["g", "dg"]),
-        ca.Function(f"{model}_dg", [v, ri], [dg, d2g], ["speed_mps", "ri"], ["dg", "d2g"]),
+        ca.Function(f"{model}{suffix}_g", [v, *terrain], [g, dg], ["speed_mps", *names], ["g", "dg"]),
+        ca.Function(f"{model}{suffix}_dg", [v, *terrain], [dg, d2g], ["speed_mps", *names], ["dg", "d2g"]),
     )
 
 
 @functools.lru_cache(maxsize=64)
-def _constraint_evaluators(model: str, vehicle: "Vehicle") -> tuple[Callable, Callable]:
+def _constraint_evaluators(model: str, vehicle: "Vehicle", envelope: bool = False) -> tuple[Callable, Callable]:
     """numpy evaluators of the two Functions of :func:`_constraint_derivatives`.
 
     They run those Functions' own instruction lists on whole arrays
     (:func:`profileopt.symbolic.numpy_evaluator`), bitwise equal to CasADi's evaluation.
     """
-    return tuple(numpy_evaluator(fun) for fun in _constraint_derivatives(model, vehicle))
+    return tuple(numpy_evaluator(fun) for fun in _constraint_derivatives(model, vehicle, envelope))
 
 
-def _mapped(evaluate: Callable, x: np.ndarray, ri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Evaluate a two-output scalar Function at many points; ``x`` and ``ri`` broadcast
-    together, and both outputs have their broadcast shape."""
-    a, b = evaluate(x, ri)
+def _mapped(evaluate: Callable, x: np.ndarray, terrain: tuple[np.ndarray, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Evaluate a two-output scalar Function at many points; ``x`` and the ``terrain``
+    arrays broadcast together, and both outputs have their broadcast shape."""
+    a, b = evaluate(x, *terrain)
     return a, b
 
 
@@ -221,17 +234,24 @@ def safeguarded_newton(
 
 
 @old_forms(lambda call: call.move(2, ("model",)))
-def speed_bands(ri: ArrayLike, vehicle: "Vehicle", *, model: str = DEFAULT_MODEL) -> SpeedBands:
-    """Every band of admissible speeds of ``model`` for each RI value.
+def speed_bands(ri: ArrayLike, vehicle: "Vehicle", *, model: str = DEFAULT_MODEL,
+                ri_min: ArrayLike | None = None) -> SpeedBands:
+    """Every band of admissible speeds of ``model`` for each RI value (or range of values).
 
     Parameters
     ----------
     ri : array_like, shape (N,) or scalar
-        Roughness index of each terrain patch (dimensionless), >= 0.
+        Roughness index of each terrain patch (dimensionless), >= 0; with ``ri_min`` the
+        largest RI of each patch.
     vehicle : Vehicle
         Quarter car, force limits and top speed v_max.
     model : str, default ``"sbem_tf"`` (:data:`~profileopt.forces.DEFAULT_MODEL`)
         ``"prev_bem"``, ``"iecm"``, ``"sbem_ef"`` or ``"sbem_tf"``.
+    ri_min : array_like, shape (N,) or scalar, optional
+        The least RI of each patch, 0 <= ri_min <= ri: the bands are then the speeds
+        admissible for every RI of the range (those of the largest force over the range,
+        :func:`profileopt.forces.envelope_force_n`), as a stretch of route seen through
+        sliding roughness windows needs.
 
     Returns
     -------
@@ -249,12 +269,21 @@ def speed_bands(ri: ArrayLike, vehicle: "Vehicle", *, model: str = DEFAULT_MODEL
     """
     ri = np.atleast_1d(np.asarray(ri, dtype=float))
     check_ri(ri)
-    get_model(model)
+    spec = get_model(model)
+    if ri_min is None or spec.monotone:  # a monotone model's range is its largest value
+        terrain: tuple[np.ndarray, ...] = (ri,)
+    else:
+        low = np.broadcast_to(np.atleast_1d(np.asarray(ri_min, dtype=float)), ri.shape)
+        check_ri(low)
+        if np.any(low > ri):
+            raise InputError("ri_min must not exceed ri (the least and the largest RI of each patch)")
+        terrain = (low, ri)
     if ri.size > _BLOCK_ROWS:  # rows are independent: bound the (rows x grid) temporaries
-        blocks = [_speed_bands(ri[i:i + _BLOCK_ROWS], vehicle, model) for i in range(0, ri.size, _BLOCK_ROWS)]
+        blocks = [_speed_bands(tuple(t[i:i + _BLOCK_ROWS] for t in terrain), vehicle, model)
+                  for i in range(0, ri.size, _BLOCK_ROWS)]
         return SpeedBands(*(_stack_padded([getattr(b, name) for b in blocks]) for name in
                             ("lower_mps", "upper_mps", "count", "peaks_mps")))
-    return _speed_bands(ri, vehicle, model)
+    return _speed_bands(terrain, vehicle, model)
 
 
 #: RI values whose bands are found together; the work arrays are (rows x 2 grid points).
@@ -269,17 +298,19 @@ def _stack_padded(parts: list[np.ndarray]) -> np.ndarray:
     return np.concatenate([np.pad(p, ((0, 0), (0, width - p.shape[1])), constant_values=np.nan) for p in parts])
 
 
-def _speed_bands(ri: np.ndarray, vehicle: "Vehicle", model: str) -> SpeedBands:
-    """:func:`speed_bands` for validated RI values, shape (N,), all at once."""
-    n = ri.size
+def _speed_bands(terrain: tuple[np.ndarray, ...], vehicle: "Vehicle", model: str) -> SpeedBands:
+    """:func:`speed_bands` for validated terrain values, ``(ri,)`` or ``(ri_min, ri)``, each
+    of shape (N,), all at once."""
+    n = terrain[-1].size
     vmax = vehicle.max_speed_mps
-    value_slope, slope_curvature = _constraint_evaluators(model, vehicle)
+    value_slope, slope_curvature = _constraint_evaluators(model, vehicle, len(terrain) == 2)
+    columns = tuple(t[:, None] for t in terrain)
     xtol = 1e-12 * vmax
 
     grid = np.concatenate([[0.0], vmax * np.logspace(-GRID_DECADES, 0.0, GRID_POINTS)])
     k = grid.size
     v = np.broadcast_to(grid, (n, k))
-    g, dg = _mapped(value_slope, grid[None, :], ri[:, None])  # (n, k) each
+    g, dg = _mapped(value_slope, grid[None, :], columns)  # (n, k) each
 
     # 2. interior extrema: g' changes sign inside a grid interval
     cand = np.empty((n, 2 * k - 1))
@@ -291,10 +322,10 @@ def _speed_bands(ri: np.ndarray, vehicle: "Vehicle", model: str) -> SpeedBands:
     rows, cols = np.nonzero(dg[:, :-1] * dg[:, 1:] < 0)
     if rows.size:
         def slope(x: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            return _mapped(slope_curvature, x, ri[rows[idx]])
+            return _mapped(slope_curvature, x, tuple(t[rows[idx]] for t in terrain))
 
         ext = safeguarded_newton(slope, v[rows, cols], v[rows, cols + 1], dg[rows, cols], xtol=xtol)
-        g_ext = _mapped(value_slope, ext, ri[rows])[0]
+        g_ext = _mapped(value_slope, ext, tuple(t[rows] for t in terrain))[0]
         cand[rows, 2 * cols + 1] = ext
         gc[rows, 2 * cols + 1] = g_ext
         is_peak = dg[rows, cols] > 0
@@ -308,7 +339,7 @@ def _speed_bands(ri: np.ndarray, vehicle: "Vehicle", model: str) -> SpeedBands:
     roots = np.empty(0)
     if change_r.size:
         def value(x: np.ndarray, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            return _mapped(value_slope, x, ri[change_r[idx]])
+            return _mapped(value_slope, x, tuple(t[change_r[idx]] for t in terrain))
 
         roots = safeguarded_newton(
             value, cand[change_r, change_c], cand[change_r, change_c + 1], gc[change_r, change_c], xtol=xtol

@@ -28,6 +28,11 @@ __all__ = [
     "segment_roughness_index",
     "SegmentLineFit",
     "segment_line_fit",
+    "RoughnessWindows",
+    "roughness_windows",
+    "window_line_moments",
+    "range_extremes",
+    "MIN_SAMPLES_PER_WINDOW",
     "elevation_z_score",
     "worst_case_elevation",
     "step_width",
@@ -235,6 +240,234 @@ def segment_line_fit(positions_m: ArrayLike, elevations_m: ArrayLike, starts: Ar
         slope[idx] = b
         variance[idx] = np.maximum(var_z, 0.0)
     return SegmentLineFit(s0_m=s0, level_m=level, slope=slope, residual_variance_m2=variance, count=count)
+
+
+#: A window's RI is a standard deviation: with fewer samples it means little.
+MIN_SAMPLES_PER_WINDOW = 8
+
+
+@dataclasses.dataclass(frozen=True)
+class RoughnessWindows:
+    """Every roughness window of a profile: its place, its samples and its RI (Eq. 1).
+
+    A window of length W is a stretch [a, a + W] of the route. The windows kept are those
+    that start at a sample and those that end at one (so the set is the same driven either
+    way), sorted by start; each holds the samples a <= s <= a + W. Together they are every
+    distinct set of samples that a window sliding continuously along the route covers
+    when it has just taken in or is about to let go of a sample.
+
+    Attributes
+    ----------
+    window_m : float
+        The window length W (m).
+    start_m : numpy.ndarray, shape (K,)
+        Where each window starts (m), non-decreasing; it ends at ``start_m + window_m``.
+    first_sample, stop_sample : numpy.ndarray of int, shape (K,)
+        The window holds the samples ``first_sample[k] <= j < stop_sample[k]``.
+    ri : numpy.ndarray, shape (K,)
+        RI of each window's samples, detrended or not (dimensionless).
+    """
+
+    window_m: float
+    start_m: np.ndarray
+    first_sample: np.ndarray
+    stop_sample: np.ndarray
+    ri: np.ndarray
+
+    @property
+    def count(self) -> int:
+        """Number of windows K."""
+        return int(self.start_m.size)
+
+    def overlapping(self, start_m: ArrayLike, stop_m: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """The windows that share a point with each stretch [start, stop] of the route.
+
+        Parameters
+        ----------
+        start_m, stop_m : array_like, shape (N,)
+            Ends of each stretch (m), start <= stop.
+
+        Returns
+        -------
+        first, stop : numpy.ndarray of int, shape (N,)
+            Stretch i meets the windows ``first[i] <= k < stop[i]`` (a window that only
+            touches it at one end included: the vehicle is in both at that point).
+        """
+        tol = 1e-9 * max(self.window_m, 1.0)
+        lo = np.searchsorted(self.start_m, np.asarray(start_m, dtype=float) - self.window_m - tol, side="left")
+        hi = np.searchsorted(self.start_m, np.asarray(stop_m, dtype=float) + tol, side="right")
+        return lo, hi
+
+
+def window_line_moments(positions_m: np.ndarray, elevations_m: np.ndarray, first: np.ndarray, stop: np.ndarray,
+                        *, block_m: float) -> tuple[np.ndarray, ...]:
+    """Count, centred moments and least-squares slope of the samples of many windows,
+    from prefix sums, in time proportional to the samples.
+
+    Running sums over a whole long route lose the digits that the variance of one window
+    needs (s in kilometres against a window of metres, elevations of hundreds of metres).
+    So the sums restart every ``block_m`` metres, relative to the block's first sample, and
+    each window (at most ``block_m`` long, so within two blocks) moves its parts to its own
+    first sample by the exact binomial shift before the moments are formed.
+
+    Parameters
+    ----------
+    positions_m, elevations_m : numpy.ndarray, shape (M,)
+        Samples, s increasing.
+    first, stop : numpy.ndarray of int, shape (K,)
+        Window k holds samples ``first[k] <= j < stop[k]``, ``stop - first >= 1``, spanning
+        at most ``block_m``.
+    block_m : float
+        Block length (m), at least the longest window's extent.
+
+    Returns
+    -------
+    count, var_s, cov, var_z : numpy.ndarray, shape (K,)
+        Samples per window, population variance of s (m^2), covariance of s and z (m^2) and
+        population variance of z (m^2).
+    """
+    s = np.asarray(positions_m, dtype=float)
+    z = np.asarray(elevations_m, dtype=float)
+    first = np.asarray(first, dtype=np.intp)
+    stop = np.asarray(stop, dtype=np.intp)
+    m = s.size
+    block = np.floor((s - s[0]) / block_m).astype(np.intp)
+    block_first = np.searchsorted(block, np.arange(block[-1] + 1), side="left")
+    origin = block_first[block]
+    u, w = s - s[origin], z - z[origin]
+    pos = np.arange(m) - origin
+    table = np.zeros((block[-1] + 1, int(pos.max()) + 1))
+    # a window (at most block_m long) lies in one block or two: parts lo <= j < hi
+    split = np.where(block[stop - 1] != block[first], block_first[np.minimum(block[first] + 1, block[-1])], stop)
+    parts = []
+    for lo, hi in ((first, split), (split, stop)):
+        lo_c = np.minimum(lo, m - 1)
+        n = (hi - lo).astype(float)
+        ref = origin[lo_c]
+        restart = lo_c == ref  # the part starts at its block's first sample
+        parts.append((lo_c, np.maximum(hi - 1, 0), n, restart, s[ref] - s[first], z[ref] - z[first]))
+
+    def window_sums(q: np.ndarray) -> list[np.ndarray]:
+        """Sums of q over each part, q taken relative to the part's block origin."""
+        table[block, pos] = q  # prefix sums restarting at each block
+        prefix = np.cumsum(table, axis=1)[block, pos]
+        return [np.where(n > 0, prefix[last] - np.where(restart, 0.0, prefix[np.maximum(lo - 1, 0)]), 0.0)
+                for lo, last, n, restart, _, _ in parts]
+
+    su_p, sw_p = window_sums(u), window_sums(w)
+    count = sum(p[2] for p in parts)
+    # each part moved to the window's first sample: sum (u + d)^2 = suu + 2 d su + n d^2, ...
+    su = sum(su_p[i] + p[2] * p[4] for i, p in enumerate(parts))
+    sw = sum(sw_p[i] + p[2] * p[5] for i, p in enumerate(parts))
+    suu = sum(q + 2 * p[4] * su_p[i] + p[2] * p[4] ** 2 for i, (q, p) in enumerate(zip(window_sums(u * u), parts)))
+    suw = sum(q + p[4] * sw_p[i] + p[5] * su_p[i] + p[2] * p[4] * p[5]
+              for i, (q, p) in enumerate(zip(window_sums(u * w), parts)))
+    sww = sum(q + 2 * p[5] * sw_p[i] + p[2] * p[5] ** 2 for i, (q, p) in enumerate(zip(window_sums(w * w), parts)))
+    mu, mw = su / count, sw / count
+    return count, suu / count - mu * mu, suw / count - mu * mw, sww / count - mw * mw
+
+
+def roughness_windows(positions_m: ArrayLike, elevations_m: ArrayLike, clearance_m: float, *, window_m: float,
+                      detrend: bool = True, source: str = "the route") -> RoughnessWindows:
+    """The RI (Eq. 1) of every roughness window of a profile (:class:`RoughnessWindows`).
+
+    Parameters
+    ----------
+    positions_m, elevations_m : array_like, shape (M,)
+        Samples: distance along the route (m), increasing, and elevation (m), finite.
+    clearance_m : float
+        Ground clearance h (m), > 0.
+    window_m : float
+        Window length W (m), > 0 and at most the route's length.
+    detrend : bool, default True
+        Remove each window's least-squares line before taking the STD (else only its mean).
+    source : str, default "the route"
+        Names the profile in messages.
+
+    Returns
+    -------
+    RoughnessWindows
+
+    Raises
+    ------
+    InputError
+        A window length that is not a positive number or is longer than the route, or a
+        window with fewer than :data:`MIN_SAMPLES_PER_WINDOW` samples (the message says what
+        sample spacing is needed).
+    """
+    s = np.asarray(positions_m, dtype=float)
+    z = np.asarray(elevations_m, dtype=float)
+    width = float(window_m)
+    if not (math.isfinite(width) and width > 0):
+        raise InputError(f"roughness_window_m = {window_m!r} m: must be a number > 0")
+    total = float(s[-1] - s[0])
+    tol = 1e-9 * max(width, 1.0)
+    if width > total + tol:
+        raise InputError(f"roughness_window_m = {width:g} m is longer than {source} ({total:g} m); "
+                         "choose a shorter roughness window")
+    from_start = np.flatnonzero(s + width <= s[-1] + tol)  # windows [s_j, s_j + W]
+    to_end = np.flatnonzero(s - width >= s[0] - tol)  # windows [s_k - W, s_k]
+    first = np.concatenate([from_start, np.searchsorted(s, s[to_end] - width - tol, side="left")])
+    stop = np.concatenate([np.searchsorted(s, s[from_start] + width + tol, side="right"), to_end + 1])
+    start = np.concatenate([s[from_start], s[to_end] - width])
+    key = first.astype(np.int64) * (s.size + 1) + stop
+    _, keep = np.unique(key, return_index=True)  # one window per distinct set of samples
+    keep = keep[np.argsort(start[keep], kind="stable")]
+    first, stop, start = first[keep], stop[keep], start[keep]
+    count = stop - first
+    thin = np.flatnonzero(count < MIN_SAMPLES_PER_WINDOW)
+    if thin.size:
+        k = thin[0]
+        raise InputError(
+            f"{source}: the roughness window from {start[k]:g} to {start[k] + width:g} m holds {count[k]} samples; "
+            f"measuring roughness needs at least {MIN_SAMPLES_PER_WINDOW}: sample the route every "
+            f"{width / MIN_SAMPLES_PER_WINDOW:.3g} m or closer, or raise roughness_window_m"
+        )
+    _, var_s, cov, var_z = window_line_moments(s, z, first, stop, block_m=width * (1 + 1e-6) + 2 * tol)
+    if detrend:
+        ok = var_s > 0
+        var_z = var_z - np.where(ok, cov * cov / np.where(ok, var_s, 1.0), 0.0)
+    return RoughnessWindows(window_m=width, start_m=start, first_sample=first, stop_sample=stop,
+                            ri=np.sqrt(np.maximum(var_z, 0.0)) / float(clearance_m))
+
+
+def range_extremes(values: ArrayLike, first: ArrayLike, stop: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """Least and largest of ``values[first[i]:stop[i]]`` for many ranges, in O(K log L).
+
+    A sparse table built one level at a time (level k holds the extremes of runs of 2^k
+    values), answering each range at its own level from two overlapping runs; only one
+    level is kept, so memory stays O(K).
+
+    Parameters
+    ----------
+    values : array_like, shape (K,)
+    first, stop : array_like of int, shape (N,)
+        Non-empty ranges ``first < stop``.
+
+    Returns
+    -------
+    least, largest : numpy.ndarray, shape (N,)
+    """
+    v = np.asarray(values, dtype=float)
+    lo = np.asarray(first, dtype=np.intp)
+    hi = np.asarray(stop, dtype=np.intp)
+    length = hi - lo
+    if np.any(length < 1):
+        raise ValueError("range_extremes: every range must hold at least one value")
+    level = np.floor(np.log2(length)).astype(np.intp)
+    least, largest = np.empty(lo.size), np.empty(lo.size)
+    small, big = v.copy(), v.copy()
+    for k in range(int(level.max()) + 1):
+        if k:
+            half = 1 << (k - 1)
+            small = np.minimum(small[:-half], small[half:])
+            big = np.maximum(big[:-half], big[half:])
+        at = np.flatnonzero(level == k)
+        if at.size:
+            other = hi[at] - (1 << k)
+            least[at] = np.minimum(small[lo[at]], small[other])
+            largest[at] = np.maximum(big[lo[at]], big[other])
+    return least, largest
 
 
 def elevation_z_score(confidence: float) -> float:

@@ -8,7 +8,8 @@ import sys
 from pathlib import Path
 
 from ..cli import command
-from ..defaults import DEFAULT_MODEL, DEFAULT_SEGMENT_LENGTH_M, DEFAULT_SMOOTHING, MODEL_KEYS, PLAN_BANDS
+from ..defaults import (DEFAULT_MODEL, DEFAULT_ROUGHNESS_WINDOW_M, DEFAULT_SEGMENT_LENGTH_M, DEFAULT_SMOOTHING,
+                        MODEL_KEYS, PLAN_BANDS)
 from ..io.atomic import STDOUT, OutputSet
 from ..vehicle import load_vehicle
 from ._paths import vehicle_input
@@ -37,7 +38,10 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--output", metavar="CSV",
                         help="write the profile CSV here ('-': standard output, the summary then goes to stderr)")
     parser.add_argument("--segment-length", type=_float, default=DEFAULT_SEGMENT_LENGTH_M, metavar="M",
-                        help="segment length in m (default: 5)")
+                        help=f"segment length in m, the planning resolution (default: {DEFAULT_SEGMENT_LENGTH_M:g})")
+    parser.add_argument("--roughness-window", type=_float, default=DEFAULT_ROUGHNESS_WINDOW_M, metavar="M",
+                        help="roughness window in m: every stretch this long, wherever it starts, is driven at "
+                             f"speeds admissible for its own RI (default: {DEFAULT_ROUGHNESS_WINDOW_M:g})")
     parser.add_argument("--model", default=DEFAULT_MODEL, choices=list(MODEL_KEYS),
                         help="force model (default: sbem_tf)")
     parser.add_argument("--smoothing", type=_float, default=DEFAULT_SMOOTHING, metavar="W",
@@ -73,7 +77,8 @@ def _run(args: argparse.Namespace) -> int:
     for note in route.notes:
         print(f"profileopt plan: note: {note}", file=sys.stderr)
     profile = plan(
-        route, vehicle, segment_length_m=args.segment_length, model=args.model, smoothing=args.smoothing,
+        route, vehicle, segment_length_m=args.segment_length, roughness_window_m=args.roughness_window,
+        model=args.model, smoothing=args.smoothing,
         max_jerk_mps3=args.max_jerk, v0_mps=args.v0, vend_mps=args.vend, method=args.method,
         band=args.band,
     )

@@ -36,7 +36,7 @@ from .nlp import Scaling, cached_nlp, objective_s, row_bounds, solve_ipopt
 from .options import SolverOptions
 from .pieces import choose_cuts, cut_scores, solve_pieces
 from .result import Profile
-from .segments import DEFAULT_SEGMENT_LENGTH_M, Segments, segment_route
+from .segments import DEFAULT_ROUGHNESS_WINDOW_M, DEFAULT_SEGMENT_LENGTH_M, Segments, segment_route
 
 if TYPE_CHECKING:
     from ..route import Route
@@ -76,6 +76,7 @@ def plan(
     vehicle: "Vehicle",
     *,
     segment_length_m: float = DEFAULT_SEGMENT_LENGTH_M,
+    roughness_window_m: float = DEFAULT_ROUGHNESS_WINDOW_M,
     model: str = DEFAULT_MODEL,
     smoothing: float = DEFAULT_SMOOTHING,
     max_jerk_mps3: float | None = None,
@@ -96,7 +97,13 @@ def plan(
     vehicle : Vehicle
         The vehicle: quarter car, force limits, top speed, acceleration and jerk bounds.
     segment_length_m : float, default 5
-        Length of the segments whose roughness is measured (m).
+        Length of the segments (m): the planning resolution. Each segment's speeds are
+        admissible for every roughness window that shares a point with it, so where the
+        segments fall does not decide what is safe.
+    roughness_window_m : float, default 5
+        Roughness window length W (m): the force limit holds, for every stretch [a, a + W]
+        of the route (a at every sample), at every speed driven inside it, for that
+        stretch's own RI (docs/paper-notes.md, "Roughness windows").
     model : str, default :data:`~profileopt.forces.DEFAULT_MODEL` (``"sbem_tf"``)
         Force model: ``"sbem_tf"``, ``"sbem_ef"``, ``"iecm"`` or ``"prev_bem"``.
     smoothing : float, default :data:`DEFAULT_SMOOTHING` (0.01)
@@ -149,7 +156,7 @@ def plan(
     _validate_options(vehicle, smoothing, jerk, v0_mps, vend_mps, method, band)
     options = SolverOptions() if solver_options is None else solver_options
     timings: dict[str, float] = {}
-    seg = segment_route(route, vehicle, segment_length_m)
+    seg = segment_route(route, vehicle, segment_length_m, roughness_window_m=roughness_window_m)
     timings["segment"] = time.perf_counter() - t_start
 
     t = time.perf_counter()
@@ -204,7 +211,8 @@ def plan(
     b = np.clip(b, chosen.lower_b, chosen.upper_b) if success else b
     settings = {
         "vehicle": vehicle_reference(vehicle) or "unnamed", "model": model,
-        "segment_length_m": float(segment_length_m), "smoothing": float(smoothing),
+        "segment_length_m": float(segment_length_m), "roughness_window_m": float(roughness_window_m),
+        "smoothing": float(smoothing),
         "max_speed_mps": vehicle.max_speed_mps, "max_accel_mps2": vehicle.max_accel_mps2,
         "max_decel_mps2": vehicle.max_decel_mps2, "max_jerk_mps3": jerk,
         # "bands" is the profile file's key for the band option (kept so files stay readable)
@@ -319,7 +327,7 @@ def _assemble(seg: Segments, b: np.ndarray, vehicle: "Vehicle", model: str, band
     accel = segment_accel_mps2(b[:-1], b[1:], seg.length_m)
     dt = segment_time_s(speed[:-1], speed[1:], seg.length_m)
     time_s = np.concatenate([[0.0], np.cumsum(dt)])
-    force = max_force_over_segments(model, vehicle, seg.ri, speed, bands.peaks_mps)
+    force = max_force_over_segments(model, vehicle, seg.ri, speed, bands.peaks_mps, ri_min=seg.ri_min)
     rows = np.arange(seg.count)
 
     def per_row(x: np.ndarray) -> np.ndarray:

@@ -1,9 +1,12 @@
 """A route cut into segments: stations, the samples of each segment and its terrain numbers.
 
 Segment i covers s_i <= s < s_{i+1} (the last one closed); which samples that is, is
-decided in one place, :mod:`profileopt.stations`. Each segment's roughness index (RI,
-Eq. 1, detrended) is measured from its own samples and gives the worst-case elevation
-e_max of Eq. (8).
+decided in one place, :mod:`profileopt.stations`. Segments are the planning resolution
+only: the roughness is measured over sliding *roughness windows* of a fixed length W
+(:func:`profileopt.terrain.roughness_windows`), wherever the segments fall, and a
+segment's admissible speeds are those admissible for every window that shares a point
+with it. So each segment carries the least and the largest RI (Eq. 1, detrended) of those
+windows, and the worst-case elevation e_max of Eq. (8) of the largest.
 """
 
 from __future__ import annotations
@@ -14,19 +17,21 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..defaults import DEFAULT_SEGMENT_LENGTH_M
+from ..defaults import DEFAULT_ROUGHNESS_WINDOW_M, DEFAULT_SEGMENT_LENGTH_M
 from ..errors import InputError
 from ..stations import segment_samples
-from ..terrain import segment_roughness_index, worst_case_elevation
+from ..terrain import RoughnessWindows, range_extremes, roughness_windows, worst_case_elevation
 
 if TYPE_CHECKING:
     from ..route import Route
     from ..vehicle import Vehicle
 
-__all__ = ["Segments", "segment_route", "MIN_SAMPLES_PER_SEGMENT", "DEFAULT_SEGMENT_LENGTH_M"]
+__all__ = ["Segments", "segment_route", "segments_at", "MIN_SAMPLES_PER_SEGMENT", "DEFAULT_SEGMENT_LENGTH_M",
+           "DEFAULT_ROUGHNESS_WINDOW_M"]
 
-#: A segment's RI is a standard deviation: with fewer samples it means little.
-MIN_SAMPLES_PER_SEGMENT = 8
+#: Samples a segment must hold: the roughness comes from the windows, but the simulator
+#: (verify) measures each segment's own samples.
+MIN_SAMPLES_PER_SEGMENT = 1
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -40,13 +45,20 @@ class Segments:
     length_m : numpy.ndarray, shape (N,)
         Segment lengths (m).
     ri : numpy.ndarray, shape (N,)
-        Detrended RI of each segment's own samples (dimensionless).
+        The largest detrended RI of the roughness windows that share a point with each
+        segment (dimensionless).
+    ri_min : numpy.ndarray, shape (N,)
+        The least RI of those windows (dimensionless).
     e_max_m : numpy.ndarray, shape (N,)
-        Worst-case elevation of Eq. (8) (m).
+        Worst-case elevation of Eq. (8) of ``ri`` (m).
     first_sample : numpy.ndarray of int, shape (N,)
         Index of each segment's first route sample.
     samples : numpy.ndarray of int, shape (N,)
         Number of route samples in each segment.
+    windows : RoughnessWindows
+        Every roughness window of the route, with its RI.
+    window_first, window_stop : numpy.ndarray of int, shape (N,)
+        Segment i shares a point with the windows ``window_first[i] <= k < window_stop[i]``.
     notes : tuple of str
         Decisions taken while segmenting (e.g. a short tail merged into its neighbour).
     """
@@ -54,10 +66,19 @@ class Segments:
     boundaries_m: np.ndarray
     length_m: np.ndarray
     ri: np.ndarray
+    ri_min: np.ndarray
     e_max_m: np.ndarray
     first_sample: np.ndarray
     samples: np.ndarray
+    windows: RoughnessWindows
+    window_first: np.ndarray
+    window_stop: np.ndarray
     notes: tuple[str, ...] = ()
+
+    @property
+    def roughness_window_m(self) -> float:
+        """The roughness window length W (m)."""
+        return self.windows.window_m
 
     @property
     def count(self) -> int:
@@ -65,9 +86,10 @@ class Segments:
         return int(self.length_m.size)
 
 
-def segment_route(route: "Route", vehicle: "Vehicle", segment_length_m: float = DEFAULT_SEGMENT_LENGTH_M
-                  ) -> Segments:
-    """Cut a route into segments of ``segment_length_m`` and measure each one's roughness.
+def segment_route(route: "Route", vehicle: "Vehicle", segment_length_m: float = DEFAULT_SEGMENT_LENGTH_M,
+                  *, roughness_window_m: float = DEFAULT_ROUGHNESS_WINDOW_M) -> Segments:
+    """Cut a route into segments of ``segment_length_m`` and find the roughness windows
+    each one meets.
 
     Parameters
     ----------
@@ -76,9 +98,13 @@ def segment_route(route: "Route", vehicle: "Vehicle", segment_length_m: float = 
     vehicle : Vehicle
         Supplies h (for the RI) and Pe (for e_max).
     segment_length_m : float, default 5
-        Segment length (m), > 0 and at most the route's length. The last segment takes what
-        is left; if that tail holds fewer than ``MIN_SAMPLES_PER_SEGMENT`` samples it is
-        merged into the segment before it (noted in ``Segments.notes``).
+        Segment length (m), > 0 and at most the route's length: the planning resolution.
+        The last segment takes what is left; if that tail holds fewer than
+        ``MIN_SAMPLES_PER_SEGMENT`` samples it is merged into the segment before it (noted
+        in ``Segments.notes``).
+    roughness_window_m : float, default 5
+        Roughness window length W (m), > 0 and at most the route's length; each window
+        needs :data:`profileopt.terrain.MIN_SAMPLES_PER_WINDOW` samples.
 
     Returns
     -------
@@ -87,8 +113,8 @@ def segment_route(route: "Route", vehicle: "Vehicle", segment_length_m: float = 
     Raises
     ------
     InputError
-        A bad segment length, or a segment with fewer than ``MIN_SAMPLES_PER_SEGMENT``
-        samples (the message says what sample spacing is needed).
+        A bad segment or window length, or a segment or window with too few samples (the
+        message says what sample spacing is needed).
     """
     length = float(segment_length_m)
     total = route.length_m
@@ -100,6 +126,7 @@ def segment_route(route: "Route", vehicle: "Vehicle", segment_length_m: float = 
             "choose a shorter segment length"
         )
     s, z = route.s_m, route.z_m
+    windows = roughness_windows(s, z, vehicle.ground_clearance_m, window_m=roughness_window_m, source=route.source)
     if total / length > s.size:  # more segments than samples: refuse before allocating them
         raise InputError(
             f"segment_length_m = {length:g} m cuts {route.source} ({total:g} m, {s.size} samples) into more "
@@ -125,19 +152,47 @@ def segment_route(route: "Route", vehicle: "Vehicle", segment_length_m: float = 
     thin = np.flatnonzero(counts < MIN_SAMPLES_PER_SEGMENT)
     if thin.size:
         i = thin[0]
-        spacing = length / MIN_SAMPLES_PER_SEGMENT
         raise InputError(
             f"{route.source}: segment {i} ({bounds[i]:g} to {bounds[i + 1]:g} m) holds {counts[i]} samples; "
-            f"measuring roughness needs at least {MIN_SAMPLES_PER_SEGMENT}: sample the route every "
-            f"{spacing:.3g} m or closer, or raise segment_length_m"
+            f"a segment must hold at least {MIN_SAMPLES_PER_SEGMENT}: raise segment_length_m above the "
+            "route's sample spacing"
         )
-    ri = segment_roughness_index(s, z, starts, vehicle.ground_clearance_m)
+    return segments_at(bounds, windows, vehicle, starts=starts, stops=stops, notes=notes)
+
+
+def segments_at(boundaries_m: np.ndarray, windows: RoughnessWindows, vehicle: "Vehicle", *, starts: np.ndarray,
+                stops: np.ndarray, notes: tuple[str, ...] = ()) -> Segments:
+    """The segments between given boundaries, with the RI range of the windows each meets.
+
+    Parameters
+    ----------
+    boundaries_m : numpy.ndarray, shape (N+1,)
+        Segment boundaries (m), increasing, within the route.
+    windows : RoughnessWindows
+        The route's roughness windows (:func:`profileopt.terrain.roughness_windows`).
+    vehicle : Vehicle
+        Supplies Pe and h (for e_max).
+    starts, stops : numpy.ndarray of int, shape (N,)
+        Each segment's route samples (:func:`profileopt.stations.segment_samples`).
+    notes : tuple of str, default ()
+
+    Returns
+    -------
+    Segments
+    """
+    bounds = np.asarray(boundaries_m, dtype=float)
+    window_first, window_stop = windows.overlapping(bounds[:-1], bounds[1:])
+    ri_min, ri = range_extremes(windows.ri, window_first, window_stop)
     return Segments(
         boundaries_m=bounds,
         length_m=np.diff(bounds),
         ri=ri,
+        ri_min=ri_min,
         e_max_m=worst_case_elevation(ri, vehicle),
         first_sample=starts,
-        samples=counts,
+        samples=stops - starts,
+        windows=windows,
+        window_first=window_first,
+        window_stop=window_stop,
         notes=notes,
     )

@@ -1,7 +1,9 @@
 """The terrain force limit: the chosen model's admissible speed bands of each segment.
 
-Each segment's worst-case elevation (Eq. 8) gives, through the force model, the bands of
-speeds whose predicted force is within the vehicle's limit (:func:`profileopt.speed_bands`).
+Each segment's range of window RI values (the least and the largest RI of the roughness
+windows it meets) gives, through the force model, the bands of speeds whose predicted
+force is within the vehicle's limit for every RI of the range (:func:`profileopt.speed_bands`
+with ``ri_min``).
 A resonant vehicle may have several bands; the planner keeps both boundary speeds of a
 segment in one of them, so the limit holds for every speed driven in between.
 """
@@ -41,7 +43,7 @@ class ForceLimit(Limit):
         get_model(self.model)  # an unknown model is refused here, by name
 
     def speed_bands(self, context: PlanContext) -> SpeedBands:
-        """Every admissible speed band of each segment at its RI (m/s).
+        """Every speed band of each segment admissible for every window it meets (m/s).
 
         Parameters
         ----------
@@ -52,7 +54,8 @@ class ForceLimit(Limit):
         -------
         SpeedBands
         """
-        return speed_bands(context.segments.ri, context.vehicle, model=self.model)
+        segments = context.segments
+        return speed_bands(segments.ri, context.vehicle, model=self.model, ri_min=segments.ri_min)
 
     def check(self, profile: "Profile") -> float:
         """How far the largest predicted force inside any segment exceeds the limit (relative).
@@ -112,7 +115,7 @@ class ForceLimit(Limit):
 
 
 def max_force_over_segments(model: str, vehicle: "Vehicle", ri: np.ndarray, speed_mps: np.ndarray,
-                            peaks_mps: np.ndarray) -> np.ndarray:
+                            peaks_mps: np.ndarray, *, ri_min: np.ndarray | None = None) -> np.ndarray:
     """Largest predicted force over the speeds between each segment's two boundary speeds.
 
     The force of a speed interval is largest at one of its ends or at an interior local
@@ -125,12 +128,15 @@ def max_force_over_segments(model: str, vehicle: "Vehicle", ri: np.ndarray, spee
     vehicle : Vehicle
         The quarter car and its limits.
     ri : numpy.ndarray, shape (N,)
-        RI of each segment.
+        RI of each segment (with ``ri_min``: the largest RI of its windows).
     speed_mps : numpy.ndarray, shape (N+1,)
         Speeds at the boundaries (m/s).
     peaks_mps : numpy.ndarray, shape (N, P)
         Speeds of the force's interior local maxima of each segment, NaN-padded
-        (:attr:`profileopt.speeds.SpeedBands.peaks_mps`).
+        (:attr:`profileopt.speeds.SpeedBands.peaks_mps`, of the same force).
+    ri_min : numpy.ndarray, shape (N,), optional
+        The least RI of each segment's windows: the force is then the largest over the RI
+        range (:func:`profileopt.forces.envelope_force_n`).
 
     Returns
     -------
@@ -141,5 +147,10 @@ def max_force_over_segments(model: str, vehicle: "Vehicle", ri: np.ndarray, spee
     hi = np.maximum(speed_mps[:-1], speed_mps[1:])[:, None]
     inside = (peaks_mps >= lo) & (peaks_mps <= hi)
     candidates = np.concatenate([lo, hi, np.where(inside, peaks_mps, lo)], axis=1)
-    forces = get_model(model).force_n(candidates, np.broadcast_to(ri[:, None], candidates.shape), vehicle)
+    spec = get_model(model)
+    high = np.broadcast_to(ri[:, None], candidates.shape)
+    if ri_min is None:
+        forces = spec.force_n(candidates, high, vehicle)
+    else:
+        forces = spec.envelope_force_n(candidates, np.broadcast_to(ri_min[:, None], candidates.shape), high, vehicle)
     return forces.max(axis=1)
