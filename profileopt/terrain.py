@@ -378,7 +378,8 @@ def roughness_windows(positions_m: ArrayLike, elevations_m: ArrayLike, clearance
     clearance_m : float
         Ground clearance h (m), > 0.
     window_m : float
-        Window length W (m), > 0 and at most the route's length.
+        Window length W (m), > 0; a route shorter than W is one window, the whole route
+        (``RoughnessWindows.window_m`` is then the route's length).
     detrend : bool, default True
         Remove each window's least-squares line before taking the STD (else only its mean).
     source : str, default "the route"
@@ -391,8 +392,7 @@ def roughness_windows(positions_m: ArrayLike, elevations_m: ArrayLike, clearance
     Raises
     ------
     InputError
-        A window length that is not a positive number or is longer than the route, or a
-        window with fewer than :data:`MIN_SAMPLES_PER_WINDOW` samples (the message says what
+        A window length that is not a positive number, or a window with fewer than :data:`MIN_SAMPLES_PER_WINDOW` samples (the message says what
         sample spacing is needed).
     """
     s = np.asarray(positions_m, dtype=float)
@@ -402,17 +402,18 @@ def roughness_windows(positions_m: ArrayLike, elevations_m: ArrayLike, clearance
         raise InputError(f"roughness_window_m = {window_m!r} m: must be a number > 0")
     total = float(s[-1] - s[0])
     tol = 1e-9 * max(width, 1.0)
-    if width > total + tol:
-        raise InputError(f"roughness_window_m = {width:g} m is longer than {source} ({total:g} m); "
-                         "choose a shorter roughness window")
+    if width > total:  # a route shorter than the window is one window: the whole route
+        width = total
     from_start = np.flatnonzero(s + width <= s[-1] + tol)  # windows [s_j, s_j + W]
     to_end = np.flatnonzero(s - width >= s[0] - tol)  # windows [s_k - W, s_k]
     first = np.concatenate([from_start, np.searchsorted(s, s[to_end] - width - tol, side="left")])
     stop = np.concatenate([np.searchsorted(s, s[from_start] + width + tol, side="right"), to_end + 1])
     start = np.concatenate([s[from_start], s[to_end] - width])
-    key = first.astype(np.int64) * (s.size + 1) + stop
-    _, keep = np.unique(key, return_index=True)  # one window per distinct set of samples
-    keep = keep[np.argsort(start[keep], kind="stable")]
+    order = np.lexsort((stop, first, start))
+    first, stop, start = first[order], stop[order], start[order]
+    # a window that both starts at one sample and ends at another is listed once
+    same = (np.diff(start) <= tol) & (np.diff(first) == 0) & (np.diff(stop) == 0)
+    keep = np.concatenate([[True], ~same])
     first, stop, start = first[keep], stop[keep], start[keep]
     count = stop - first
     thin = np.flatnonzero(count < MIN_SAMPLES_PER_WINDOW)

@@ -80,24 +80,72 @@ def _check_profile(profile, route, vehicle, *, jerk=None, rtol=1e-6, grid=64):
     if math.isfinite(j_max) and ds.size >= 2:
         jerk_values = v[1:-1] * np.diff(accel) / (0.5 * (ds[:-1] + ds[1:]))
         assert np.all(np.abs(jerk_values) <= j_max * (1 + rtol))
-    # each segment's RI again, from the route's own samples: Eq. (1) on the residual of a
-    # least-squares line (numpy.polyfit), population std over the clearance h
-    seg_of_sample = np.clip(np.searchsorted(s, route.s_m, side="right") - 1, 0, s.size - 2)
-    ri_route = np.empty(s.size - 1)
-    for i in range(s.size - 1):
-        xs, zs = route.s_m[seg_of_sample == i], route.z_m[seg_of_sample == i]
-        residual = zs - np.polyval(np.polyfit(xs - xs[0], zs, 1), xs - xs[0])
-        ri_route[i] = np.std(residual) / vehicle.ground_clearance_m
-    np.testing.assert_allclose(profile.ri[:-1], ri_route, rtol=1e-6, atol=1e-9)
-    # the force over every speed between the two boundary speeds of each segment
+    # every roughness window again, from the route's own samples, and the speeds driven
+    # inside it against its own RI (the definition of issue 10)
+    window_m = float(profile.settings.get("roughness_window_m", 5.0))
+    start_m, ri_w = window_ri(route, window_m, vehicle.ground_clearance_m)
+    # a segment's ri column is the largest RI of the windows that share a point with it
+    seg_lo = np.searchsorted(start_m, s[:-1] - window_m - 1e-9 * window_m, side="left")
+    seg_hi = np.searchsorted(start_m, s[1:] + 1e-9 * window_m, side="right")
+    ri_seg = np.array([ri_w[a:b].max() for a, b in zip(seg_lo, seg_hi)])
+    # atol: prefix sums carry an absolute variance error of about 1e-16 times the mean
+    # square of the block they run through (a flat window after rough ground: RI 7e-9 for 0
+    # on krc_rms_2in.csv), 1e-7 RI being 0.01 micrometre of elevation at h = 0.1 m
+    np.testing.assert_allclose(profile.ri[:-1], ri_seg, rtol=1e-6, atol=1e-7)
+    v_lo, v_hi = window_speeds(s, v, start_m, window_m)
     frac = np.linspace(0.0, 1.0, grid)
-    speeds = v[:-1, None] + (v[1:] - v[:-1])[:, None] * frac[None, :]
-    ri = ri_route[:, None] * np.ones_like(frac)[None, :]
-    forces = force_n(speeds, vehicle, ri=ri, model=profile.model)
+    speeds = v_lo[:, None] + (v_hi - v_lo)[:, None] * frac[None, :]
+    forces = force_n(speeds, vehicle, ri=np.broadcast_to(ri_w[:, None], speeds.shape), model=profile.model)
     limit = profile.force_limit_n[0]
-    assert np.all(forces <= limit * (1 + rtol)), f"force ratio {forces.max() / limit}"
-    # the reported force is at least what the grid sees, and within the limit
-    assert np.all(profile.force_n[:-1] >= forces.max(axis=1) * (1 - 1e-9))
+    assert np.all(forces <= limit * (1 + rtol)), f"force ratio {forces.max() / limit} in a roughness window"
+    # the reported force (the largest over the segment's windows) is within the limit
     assert np.all(profile.force_n <= limit * (1 + rtol))
     # time: dt = 2 ds / (v_i + v_{i+1}) for constant acceleration
     np.testing.assert_allclose(np.diff(profile.time_s), 2 * ds / (v[:-1] + v[1:]), rtol=1e-12)
+
+
+def window_ri(route, window_m: float, clearance_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """Start (m) and RI of every roughness window [a, a + W] that starts or ends at a
+    sample, shapes (K,): Eq. (1) on the residual of each window's own least-squares line,
+    computed directly (two passes over each window's centred samples, numpy.polyfit's
+    normal equations), independent of the prefix sums the package uses."""
+    s, z = route.s_m, route.z_m
+    tol = 1e-9 * max(window_m, 1.0)
+    a_start = s[s + window_m <= s[-1] + tol]
+    a_end = s[s - window_m >= s[0] - tol] - window_m
+    starts = np.unique(np.concatenate([a_start, a_end]))
+    first = np.searchsorted(s, starts - tol, side="left")
+    stop = np.searchsorted(s, starts + window_m + tol, side="right")
+    width = int((stop - first).max())
+    idx = np.minimum(first[:, None] + np.arange(width)[None, :], s.size - 1)
+    inside = np.arange(width)[None, :] < (stop - first)[:, None]
+    count = inside.sum(axis=1)
+    xs = np.where(inside, s[idx] - s[first][:, None], 0.0)
+    zs = np.where(inside, z[idx] - z[first][:, None], 0.0)
+    xm = xs.sum(axis=1) / count
+    zm = zs.sum(axis=1) / count
+    dx = np.where(inside, xs - xm[:, None], 0.0)
+    dz = np.where(inside, zs - zm[:, None], 0.0)
+    slope = (dx * dz).sum(axis=1) / (dx * dx).sum(axis=1)
+    residual = np.where(inside, dz - slope[:, None] * dx, 0.0)
+    return starts, np.sqrt((residual**2).sum(axis=1) / count) / clearance_m
+
+
+def window_speeds(s: np.ndarray, v: np.ndarray, start_m: np.ndarray, window_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """Least and largest speed (m/s) driven inside each window [a, a + W], shape (K,): v^2
+    is linear in s inside a segment (constant acceleration), so the extremes lie at the
+    window's two ends or at a segment boundary inside it."""
+    def speed_at(x: np.ndarray) -> np.ndarray:
+        i = np.clip(np.searchsorted(s, x, side="right") - 1, 0, s.size - 2)
+        t = np.clip((x - s[i]) / (s[i + 1] - s[i]), 0.0, 1.0)
+        return np.sqrt(v[i] ** 2 + t * (v[i + 1] ** 2 - v[i] ** 2))
+
+    ends = np.minimum(start_m + window_m, s[-1])
+    lo, hi = speed_at(start_m), speed_at(ends)
+    v_lo, v_hi = np.minimum(lo, hi), np.maximum(lo, hi)
+    first = np.searchsorted(s, start_m, side="right")
+    stop = np.searchsorted(s, ends, side="left")
+    for k in np.flatnonzero(stop > first):
+        inner = v[first[k]:stop[k]]
+        v_lo[k], v_hi[k] = min(v_lo[k], inner.min()), max(v_hi[k], inner.max())
+    return v_lo, v_hi

@@ -104,21 +104,25 @@ def test_speed_bands_unchanged_by_the_numpy_evaluator(model: str, vehicle_name: 
     # RI from smooth to impassable, a dense sweep through the resonant vehicle's band changes
     ri = np.concatenate([[0.0], rng.uniform(0, 0.05, 100), rng.uniform(0, 1.5, 300),
                          np.linspace(0.1, 0.6, 200)])
+    ri_min = ri * rng.uniform(0.0, 1.0, ri.size)  # RI ranges too (roughness windows)
     fast = speeds.speed_bands(ri, vehicle, model=model)
+    fast_range = speeds.speed_bands(ri, vehicle, model=model, ri_min=ri_min)
     if model == "sbem_tf" and vehicle_name == "atv-resonant":  # the multi-band path is exercised
         assert fast.count.max() >= 2 and np.isfinite(fast.peaks_mps).any()
 
-    def casadi_evaluators(model_: str, vehicle_: object) -> tuple:
+    def casadi_evaluators(model_: str, vehicle_: object, envelope: bool = False) -> tuple:
         return tuple(lambda *a, f=f: casadi_values(f, *np.broadcast_arrays(*map(np.asarray, a)))
-                     for f in speeds._constraint_derivatives(model_, vehicle_))
+                     for f in speeds._constraint_derivatives(model_, vehicle_, envelope))
 
     monkeypatch.setattr(speeds, "_constraint_evaluators", casadi_evaluators)
     slow = speeds.speed_bands(ri, vehicle, model=model)
-    np.testing.assert_array_equal(fast.count, slow.count)
-    for name in ("lower_mps", "upper_mps", "peaks_mps"):
-        a, b = getattr(fast, name), getattr(slow, name)
-        assert a.shape == b.shape
-        np.testing.assert_allclose(a, b, rtol=1e-12, atol=0, equal_nan=True)
+    slow_range = speeds.speed_bands(ri, vehicle, model=model, ri_min=ri_min)
+    for one, other in ((fast, slow), (fast_range, slow_range)):
+        np.testing.assert_array_equal(one.count, other.count)
+        for name in ("lower_mps", "upper_mps", "peaks_mps"):
+            a, b = getattr(one, name), getattr(other, name)
+            assert a.shape == b.shape
+            np.testing.assert_allclose(a, b, rtol=1e-12, atol=0, equal_nan=True)
 
 
 def test_speed_bands_in_row_blocks_equal_all_at_once(monkeypatch) -> None:

@@ -31,7 +31,7 @@ __all__ = ["Segments", "segment_route", "segments_at", "MIN_SAMPLES_PER_SEGMENT"
 
 #: Samples a segment must hold: the roughness comes from the windows, but the simulator
 #: (verify) measures each segment's own samples.
-MIN_SAMPLES_PER_SEGMENT = 1
+MIN_SAMPLES_PER_SEGMENT = 2
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -126,7 +126,11 @@ def segment_route(route: "Route", vehicle: "Vehicle", segment_length_m: float = 
             "choose a shorter segment length"
         )
     s, z = route.s_m, route.z_m
+    notes: tuple[str, ...] = ()
     windows = roughness_windows(s, z, vehicle.ground_clearance_m, window_m=roughness_window_m, source=route.source)
+    if windows.window_m < float(roughness_window_m):
+        notes = (f"the route ({total:g} m) is shorter than the {float(roughness_window_m):g} m roughness window: its "
+                 "RI is that of the whole route",)
     if total / length > s.size:  # more segments than samples: refuse before allocating them
         raise InputError(
             f"segment_length_m = {length:g} m cuts {route.source} ({total:g} m, {s.size} samples) into more "
@@ -140,9 +144,8 @@ def segment_route(route: "Route", vehicle: "Vehicle", segment_length_m: float = 
     bounds[-1] = s[-1]
     starts, stops = segment_samples(s, bounds)
     counts = stops - starts
-    notes: tuple[str, ...] = ()
     if counts.size > 1 and counts[-1] < MIN_SAMPLES_PER_SEGMENT:
-        notes = (
+        notes += (
             f"the last {bounds[-1] - bounds[-2]:.3g} m hold only {counts[-1]} samples; "
             "merged into the segment before them",
         )
