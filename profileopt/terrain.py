@@ -245,6 +245,9 @@ def segment_line_fit(positions_m: ArrayLike, elevations_m: ArrayLike, starts: Ar
 #: A window's RI is a standard deviation: with fewer samples it means little.
 MIN_SAMPLES_PER_WINDOW = 8
 
+#: Windows whose moments are formed together: their samples' work arrays stay in cache.
+_WINDOW_BATCH = 1 << 15
+
 
 @dataclasses.dataclass(frozen=True)
 class RoughnessWindows:
@@ -424,7 +427,13 @@ def roughness_windows(positions_m: ArrayLike, elevations_m: ArrayLike, clearance
             f"measuring roughness needs at least {MIN_SAMPLES_PER_WINDOW}: sample the route every "
             f"{width / MIN_SAMPLES_PER_WINDOW:.3g} m or closer, or raise roughness_window_m"
         )
-    _, var_s, cov, var_z = window_line_moments(s, z, first, stop, block_m=width * (1 + 1e-6) + 2 * tol)
+    var_s, cov, var_z = (np.empty(first.size) for _ in range(3))
+    block_m = width * (1 + 1e-6) + 2 * tol
+    for lo in range(0, first.size, _WINDOW_BATCH):  # batches that stay in the processor's cache
+        hi = min(lo + _WINDOW_BATCH, first.size)
+        a, b = int(first[lo]), int(stop[lo:hi].max())
+        _, var_s[lo:hi], cov[lo:hi], var_z[lo:hi] = window_line_moments(s[a:b], z[a:b], first[lo:hi] - a,
+                                                                        stop[lo:hi] - a, block_m=block_m)
     if detrend:
         ok = var_s > 0
         var_z = var_z - np.where(ok, cov * cov / np.where(ok, var_s, 1.0), 0.0)
