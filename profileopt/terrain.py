@@ -303,7 +303,7 @@ class RoughnessWindows:
 
 
 def window_line_moments(positions_m: np.ndarray, elevations_m: np.ndarray, first: np.ndarray, stop: np.ndarray,
-                        *, block_m: float) -> tuple[np.ndarray, ...]:
+                        *, block_m: float, block_origin_m: float | None = None) -> tuple[np.ndarray, ...]:
     """Count, centred moments and least-squares slope of the samples of many windows,
     from prefix sums, in time proportional to the samples.
 
@@ -322,6 +322,9 @@ def window_line_moments(positions_m: np.ndarray, elevations_m: np.ndarray, first
         at most ``block_m``.
     block_m : float
         Block length (m), at least the longest window's extent.
+    block_origin_m : float, optional
+        Where the blocks start (m); default the first sample. Pass the route's first
+        position when giving a slice of it, so the result does not depend on the slicing.
 
     Returns
     -------
@@ -334,7 +337,8 @@ def window_line_moments(positions_m: np.ndarray, elevations_m: np.ndarray, first
     first = np.asarray(first, dtype=np.intp)
     stop = np.asarray(stop, dtype=np.intp)
     m = s.size
-    block = np.floor((s - s[0]) / block_m).astype(np.intp)
+    block = np.floor((s - (s[0] if block_origin_m is None else block_origin_m)) / block_m).astype(np.intp)
+    block -= block[0]
     block_first = np.searchsorted(block, np.arange(block[-1] + 1), side="left")
     origin = block_first[block]
     u, w = s - s[origin], z - z[origin]
@@ -429,11 +433,14 @@ def roughness_windows(positions_m: ArrayLike, elevations_m: ArrayLike, clearance
         )
     var_s, cov, var_z = (np.empty(first.size) for _ in range(3))
     block_m = width * (1 + 1e-6) + 2 * tol
+    block = np.floor((s - s[0]) / block_m).astype(np.intp)
     for lo in range(0, first.size, _WINDOW_BATCH):  # batches that stay in the processor's cache
         hi = min(lo + _WINDOW_BATCH, first.size)
-        a, b = int(first[lo]), int(stop[lo:hi].max())
+        # the slice starts at a block's first sample: the same sums, bit for bit, as unsliced
+        a, b = int(np.searchsorted(block, block[first[lo]], side="left")), int(stop[lo:hi].max())
         _, var_s[lo:hi], cov[lo:hi], var_z[lo:hi] = window_line_moments(s[a:b], z[a:b], first[lo:hi] - a,
-                                                                        stop[lo:hi] - a, block_m=block_m)
+                                                                        stop[lo:hi] - a, block_m=block_m,
+                                                                        block_origin_m=float(s[0]))
     if detrend:
         ok = var_s > 0
         var_z = var_z - np.where(ok, cov * cov / np.where(ok, var_s, 1.0), 0.0)
