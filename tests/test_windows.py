@@ -156,3 +156,16 @@ def test_travel_time_converges_as_the_segments_shrink(atv) -> None:
     assert times[0] > times[1] > times[2]
     assert times[0] - times[1] > times[1] - times[2]
     assert times[1] == pytest.approx(times[2], rel=0.02)
+
+
+def test_batches_change_no_bit(monkeypatch) -> None:
+    # the moments are formed in batches of windows (cache); every batch must give the very
+    # bits of one pass over the whole route
+    import profileopt.terrain as terrain
+
+    rng = np.random.default_rng(3)
+    s = np.cumsum(rng.uniform(0.02, 0.08, 20000))
+    z = 0.01 * rng.standard_normal(s.size) + 0.001 * s
+    whole = roughness_windows(s, z, 0.1, window_m=5.0).ri
+    monkeypatch.setattr(terrain, "_WINDOW_BATCH", 997)
+    np.testing.assert_array_equal(roughness_windows(s, z, 0.1, window_m=5.0).ri, whole)
