@@ -47,8 +47,9 @@ __all__ = ["ExportedFunction", "CExport", "vehicle_slug", "jacobian_function", "
            "export_c_paths", "C_BYTES_PER_STAGE", "MAX_C_BYTES"]
 
 #: Bytes of C per stage that each model's two Functions and their Jacobians add (measured
-#: with CasADi 3.6 at 1 and 1000 stages: the code is unrolled, one block per stage).
-C_BYTES_PER_STAGE = {"prev_bem": 1275, "iecm": 4815, "sbem_ef": 6674, "sbem_tf": 10913}
+#: with CasADi 3.8 at 1 and 201 stages, source and header: the code is unrolled, one block
+#: per stage, with the NaN guard for terrain that is not terrain).
+C_BYTES_PER_STAGE = {"prev_bem": 1810, "iecm": 5867, "sbem_ef": 7212, "sbem_tf": 11060}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -416,6 +417,11 @@ Each `_jac` function takes the same inputs and returns `jac_<output>_speed_mps` 
 then `jac_<output>_ri` or `jac_<output>_e_max_m` (per m): the derivatives of the output
 with respect to speed and terrain. On smooth ground (terrain value 0) the force is 0.
 Speeds are in m/s, e_max in m, forces in N; RI and g are dimensionless.
+
+A negative or NaN terrain value (RI or e_max) is not terrain: every function returns NaN
+there (a force of NaN, g = NaN), never a g <= 0, so a check `g <= 0` (false for NaN)
+rejects it. Keep it so: do not compile with `-ffast-math` or `-ffinite-math-only`, which
+let the compiler assume that no NaN occurs.
 
 ## Calling convention
 
