@@ -26,6 +26,7 @@ Units: positions and elevations in m, speeds in m/s, forces in N; g is dimension
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from typing import TYPE_CHECKING, Any, Iterator
 
@@ -329,6 +330,40 @@ def _numeric(value: Any) -> np.ndarray | None:
     return np.asarray(value.full() if isinstance(value, ca.DM) else value, dtype=float)
 
 
+#: The least elevation (m) the SBEM:TF interval bound is computed from (see
+#: :func:`interval_force_constraints`, e_min_m).
+_LEAST_E_MIN_M = 1e-12
+
+
+@functools.lru_cache(maxsize=32)
+def _interval_rows(model: str, vehicle: "Vehicle") -> ca.Function:
+    """The bounding forces (N) of one interval's rows, as an SX Function of (v_start,
+    v_end, e_max, e_min): 3 rows for SBEM:TF with a force peak, else 2."""
+    v0, v1, e_hi, e_lo = (ca.SX.sym(name) for name in ("v_start", "v_end", "e_max_m", "e_min_m"))
+    if model == "sbem_tf":
+        # X_w(e) = sqrt(e (2 r - e)) has an infinite slope at e = 0, which makes NaN of
+        # every derivative through it (inf * 0): the least elevation is taken at least
+        # _LEAST_E_MIN_M (see the docstring of e_min_m), and a NaN or negative one still
+        # gives NaN
+        e_least = ca.if_else(e_lo >= 0, ca.fmax(e_lo, _LEAST_E_MIN_M), e_lo)
+
+        def bound(speed: Any) -> Any:
+            return sbem_tf_envelope_force_n(speed, e_least, e_hi, vehicle)
+    else:
+        def bound(speed: Any) -> Any:
+            return force_n(speed, vehicle, e_max_m=e_hi, model=model)
+
+    columns = [bound(v0), bound(v1)]
+    r_phi = force_peak_ratio(vehicle.damping_ratio) if model == "sbem_tf" else None
+    if r_phi is not None:
+        wn = vehicle.natural_frequency_radps
+        v_peak = r_phi * 2.0 * step_width(e_hi, vehicle) * wn / math.pi
+        inside = ca.fmin(ca.fmax(v_peak, ca.fmin(v0, v1)), ca.fmax(v0, v1))
+        columns.append(bound(inside))
+    return ca.Function(f"{model}_interval_forces", [v0, v1, e_hi, e_lo], [ca.vertcat(*columns)],
+                       ["v_start", "v_end", "e_max_m", "e_min_m"], ["force_n"])
+
+
 def interval_force_constraints(
     v_start: Any,
     v_end: Any,
@@ -395,7 +430,11 @@ def interval_force_constraints(
         ``"iecm"``, ``"sbem_ef"`` or ``"sbem_tf"`` (Prev:BEM is defined on the RI only).
     e_min_m : SX, MX, DM, numpy array or number, shape (N,) or scalar, default 0.0
         The least elevation each interval's bound must cover (m), 0 <= e_min <= e_max
-        (SBEM:TF only; the other models' force grows with e).
+        (SBEM:TF only; the other models' force grows with e). Values below 1e-12 m are
+        taken as 1e-12 m, where the step width's infinite slope at 0 would make every
+        derivative NaN; the elevations below it are covered all the same except at speeds
+        below 2 wn r_p X_w(1e-12 m) / pi (2e-6 m/s for the bundled vehicles, where their
+        force is under 1e-7 N).
 
     Returns
     -------
@@ -440,21 +479,9 @@ def interval_force_constraints(
         raise InputError("interval_force_constraints: e_min_m must not exceed e_max_m (the least and the largest "
                          "elevation each interval covers)")
 
-    if model == "sbem_tf":
-        def bound(speed: Any) -> Any:
-            return sbem_tf_envelope_force_n(speed, e_lo, e_hi, vehicle)
-    else:
-        def bound(speed: Any) -> Any:
-            return force_n(speed, vehicle, e_max_m=e_hi, model=model)
-
-    columns = [bound(v0), bound(v1)]
-    r_phi = force_peak_ratio(vehicle.damping_ratio) if model == "sbem_tf" else None
-    if r_phi is not None:
-        wn = vehicle.natural_frequency_radps
-        v_peak = r_phi * 2.0 * step_width(e_hi, vehicle) * wn / math.pi
-        inside = ca.fmin(ca.fmax(v_peak, ca.fmin(v0, v1)), ca.fmax(v0, v1))
-        columns.append(bound(inside))
-    force = ca.vec(ca.horzcat(*columns).T)  # interval by interval
+    rows_fn = _interval_rows(model, vehicle)
+    # one call of the scalar rows per interval: compact in MX graphs, inlined for SX
+    force = ca.vec(rows_fn.map(n)(v0.T, v1.T, e_hi.T, e_lo.T))  # interval by interval
     limit = spec.limit_n(vehicle)
     rows = int(force.shape[0])
     return ForceConstraints(g=force / limit - 1.0, lbg=np.full(rows, -np.inf), ubg=np.zeros(rows), force_n=force,

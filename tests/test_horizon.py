@@ -381,3 +381,21 @@ def test_add_force_constraints_takes_a_rockit_like_problem() -> None:
     problem = Problem()
     add_force_constraints(problem, ca.MX.sym("v", 4), ATV, e_max_m=np.full(3, 0.05))
     assert len(problem.got) == 1 and problem.got[0].shape == (6, 1)
+
+
+@pytest.mark.parametrize("e_min", [0.0, "symbol"])
+def test_interval_rows_have_finite_derivatives_at_rest_and_on_smooth_ground(e_min) -> None:
+    """The step width sqrt(e (2 r - e)) has an infinite slope at e = 0; no derivative of the
+    rows may be NaN there (IPOPT stops at the first NaN), in SX and through MX calls."""
+    for kind in (ca.SX, ca.MX):
+        x = kind.sym("x", 3)
+        low = x[2] if e_min == "symbol" else e_min
+        g = interval_force_constraints(x[0], x[1], 0.05, RESONANT, e_min_m=low).g
+        jac = ca.Function("j", [x], [ca.jacobian(g, x), ca.hessian(ca.sum1(g), x)[0]])
+        for point in ([0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.3, 0.3, 0.0], [2.0, 1.0, 0.01]):
+            for out in jac(point):
+                assert np.all(np.isfinite(np.asarray(out))), (kind.__name__, point)
+    # the 1e-12 m floor changes no row by more than a rounding error at driving speeds
+    a = np.asarray(interval_force_constraints(0.5, 2.0, 0.05, RESONANT).g)
+    b = np.asarray(interval_force_constraints(0.5, 2.0, 0.05, RESONANT, e_min_m=1e-12).g)
+    np.testing.assert_array_equal(a, b)
