@@ -116,7 +116,7 @@ class ForceConstraints:
 # ---------------------------------------------------------------------------------------
 
 #: Knot intervals a :func:`terrain_envelope` may have: its expression grows with them (about
-#: ten operations each, every one evaluated at every call).
+#: 9 operations each, every one evaluated at every call).
 MAX_ENVELOPE_INTERVALS = 200_000
 
 #: Relative margin added to the envelope: it covers the rounding of the spline's evaluation
@@ -148,9 +148,11 @@ def terrain_envelope(
     is a weighted mean of coefficients that each cover s: it is never below the requirement
     at s. It is a cubic on each knot interval and twice continuously differentiable
     everywhere, which IPOPT needs (a piecewise-linear table makes it cycle at the kinks).
-    It is written out as an ``SX`` expression (one cubic per knot interval, chosen by the
-    interval's index, no ``interpolant``), so it expands to ``SX``, calls on ``MX`` and
-    evaluates on numbers. Outside the route it holds the end values: from 3 h before the
+    It is written out as an ``SX`` expression (the coefficients of every knot interval's
+    cubic, the active one picked by the interval's index; no ``interpolant``), so it expands
+    to ``SX``, calls on ``MX`` and evaluates on numbers. Its size and evaluation cost grow
+    with the knot intervals (about 9 operations each); its derivatives cost a few
+    operations, since they flow through the one active cubic. Outside the route it holds the end values: from 3 h before the
     first sample and from 4 h after the last on, it is constant, the requirement at that
     end. A NaN or infinite position gives NaN. A relative margin of 1e-12 covers the
     rounding of the evaluation.
@@ -240,8 +242,16 @@ def terrain_envelope(
     y = ca.fmin(ca.fmax((s_sym - start) / h, 0), n_intervals)
     index = ca.fmin(ca.floor(y), n_intervals - 1)
     u = y - index
-    pieces = [a0[i] + u * (a1[i] + u * (a2[i] + u * a3[i])) for i in range(n_intervals)]
-    value = ca.conditional(index, pieces[:-1], pieces[-1])
+    # The active interval's four coefficients, picked by its index (exactly one term is
+    # not zero). They depend on s only through floor(), whose derivative is 0, so every
+    # derivative flows through the one cubic in u below: the gradient and the Hessian cost
+    # a few operations, not one per interval as a sum of pieces would.
+    selected = [ca.SX(0.0)] * 4
+    for i in range(n_intervals):
+        here = index == i
+        selected = [acc + float(coef[i]) * here for acc, coef in zip(selected, (a0, a1, a2, a3))]
+    b0, b1, b2, b3 = selected
+    value = b0 + u * (b1 + u * (b2 + u * b3))
     value = ca.if_else(ca.fabs(s_sym) < math.inf, value, math.nan)
     fn = ca.Function("terrain_envelope", [s_sym], [value], ["s_m"], ["e_max_m"])
     fn.__doc__ = (f"Largest worst-case elevation e_max (m) of the {window:g} m roughness windows overlapping "
