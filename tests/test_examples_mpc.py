@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 from profileopt import load_vehicle
-from profileopt.constraints import force_limit_n, force_n
+from profileopt.constraints import add_force_constraints, force_limit_n, force_n
 from profileopt.io import read_route
 from profileopt.terrain import roughness_windows
 
@@ -174,3 +174,34 @@ def test_readme_between_the_grid_points_snippet_runs_and_prints_its_answer() -> 
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd=ROOT, env=env)
     assert run.returncode == 0, run.stderr
     assert run.stdout.strip() == "3.37" and "3.37" in code
+
+
+@needs_mpc_extra
+def test_add_force_constraints_works_on_a_rockit_ocp() -> None:
+    """add_force_constraints takes any problem with subject_to: a rockit Ocp, minimum time
+    over 50 m from rest. The fastest speed is the allowable speed of the RI (profileopt.speeds,
+    bracketing Newton) where that is below sqrt(2 a_max 50 m), the acceleration-limited one."""
+    from rockit import FreeTime, MultipleShooting, Ocp
+
+    from profileopt import allowable_speed
+
+    vehicle = load_vehicle("atv")
+    for ri in (0.05, 0.3):
+        ocp = Ocp(T=FreeTime(5.0))
+        s, v, a = ocp.state(), ocp.state(), ocp.control()
+        ocp.set_der(s, v)
+        ocp.set_der(v, a)
+        ocp.add_objective(ocp.T)
+        cons = add_force_constraints(ocp, v, vehicle, ri=ri, accel_mps2=a)
+        assert cons.n_force == 1
+        ocp.subject_to(v >= 0)
+        ocp.subject_to(ocp.at_t0(s) == 0)
+        ocp.subject_to(ocp.at_t0(v) == 0)
+        ocp.subject_to(ocp.at_tf(s) == 50)
+        ocp.solver("ipopt", {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes"})
+        ocp.method(MultipleShooting(N=20))
+        sol = ocp.solve()
+        speeds, accels = sol.sample(v, grid="control")[1], sol.sample(a, grid="control")[1]
+        expected = min(float(allowable_speed(ri, vehicle)), np.sqrt(2 * vehicle.max_accel_mps2 * 50.0))
+        assert speeds.max() == pytest.approx(expected, rel=1e-5)
+        assert accels.max() <= vehicle.max_accel_mps2 + 1e-6
