@@ -5,10 +5,13 @@ force is within the limit) take the stage speeds and the terrain (roughness inde
 worst-case elevation) and are what :mod:`profileopt.codegen` generates as C;
 :func:`jacobian_function` gives their Jacobians with the same inputs. They evaluate the very
 expressions of :mod:`profileopt.forces`. Also importable from :mod:`profileopt.constraints`.
+A negative or NaN terrain value is not terrain: every Function returns NaN there, never a
+force or a g <= 0 that would call it admissible (and so does the generated C).
 """
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 from typing import Any, Literal
@@ -39,8 +42,13 @@ def _check_terrain_kind(terrain: str, model: str) -> None:
 
 def _force(model: str, terrain: Terrain, speed_mps: Any, value: Any, vehicle: Vehicle) -> Any:
     if terrain == "ri":
-        return force_n(speed_mps, vehicle, ri=value, model=model)
-    return force_n(speed_mps, vehicle, e_max_m=value, model=model)
+        force = force_n(speed_mps, vehicle, ri=value, model=model)
+    else:
+        force = force_n(speed_mps, vehicle, e_max_m=value, model=model)
+    # A negative or NaN terrain value is no terrain: NaN, never "admissible". The forces
+    # say so too, but an RI of a few 1e-324 below zero becomes e_max = -0.0 (smooth
+    # ground) on the way: the input itself is tested here.
+    return ca.if_else(value >= 0, force, math.nan)
 
 
 
@@ -97,7 +105,8 @@ def force_function(
         Inputs ``speed_mps`` (n_stages x 1, m/s) and ``ri`` (dimensionless) or ``e_max_m``
         (m), output ``force_n`` (n_stages x 1, N). :func:`jacobian_function` gives
         ``jac_force_n_speed_mps`` (N per m/s) and ``jac_force_n_ri`` (N) or
-        ``jac_force_n_e_max_m`` (N/m), diagonal. At terrain 0 (smooth ground) the force is 0.
+        ``jac_force_n_e_max_m`` (N/m), diagonal. At terrain 0 (smooth ground) the force is 0;
+        at a negative or NaN terrain value it is NaN (not terrain, never admissible).
 
     Notes
     -----
@@ -152,8 +161,9 @@ def constraint_function(
     -------
     casadi.Function
         Inputs ``speed_mps`` (n_stages x 1, m/s) and ``ri`` or ``e_max_m`` (m), output ``g``
-        (n_stages x 1) with g <= 0 admissible. :func:`jacobian_function` gives ``jac_g_speed_mps``
-        and ``jac_g_ri`` / ``jac_g_e_max_m``.
+        (n_stages x 1) with g <= 0 admissible; g is NaN (never <= 0) at a negative or NaN
+        terrain value. :func:`jacobian_function` gives ``jac_g_speed_mps`` and ``jac_g_ri`` /
+        ``jac_g_e_max_m``.
 
     Notes
     -----

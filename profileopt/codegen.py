@@ -417,6 +417,11 @@ then `jac_<output>_ri` or `jac_<output>_e_max_m` (per m): the derivatives of the
 with respect to speed and terrain. On smooth ground (terrain value 0) the force is 0.
 Speeds are in m/s, e_max in m, forces in N; RI and g are dimensionless.
 
+A negative or NaN terrain value (RI or e_max) is not terrain: every function returns NaN
+there (a force of NaN, g = NaN), never a g <= 0, so a check `g <= 0` (false for NaN)
+rejects it. Keep it so: do not compile with `-ffast-math` or `-ffinite-math-only`, which
+let the compiler assume that no NaN occurs.
+
 ## Calling convention
 
 Every function has the CasADi signature

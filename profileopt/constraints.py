@@ -26,8 +26,16 @@ Forces on any kind of argument (numbers, numpy arrays, ``DM``, ``SX``, ``MX``)
 Constraints over a horizon
     :func:`force_constraints` returns a :class:`ForceConstraints` that unpacks as the
     ``(g, lbg, ubg)`` triple of ``casadi.nlpsol``; :func:`add_force_constraints` adds the
-    same to a ``casadi.Opti``. The normalised form g = F / F_limit - 1 <= 0 (default) is
-    of order one, which IPOPT prefers to forces of thousands of newtons.
+    same to a ``casadi.Opti`` (or anything with a ``subject_to`` method, such as a rockit
+    ``Ocp``). The normalised form g = F / F_limit - 1 <= 0 (default) is of order one,
+    which IPOPT prefers to forces of thousands of newtons.
+Between the grid points, on the terrain ahead (:mod:`profileopt.horizon`)
+    :func:`terrain_envelope` turns a route into a smooth ``casadi.Function`` of the
+    position, never below the e_max of any roughness window a stage can reach;
+    :func:`interval_force_constraints` holds the limit over every speed between a stage's
+    two speeds, the resonance peak included. Together they keep the limit between the grid
+    points of any controller (``casadi.Opti``, ``nlpsol``, do-mpc's ``set_nl_cons``,
+    rockit): see "Stages and segments" below.
 Named ``casadi.Function`` objects
     :func:`force_function` and :func:`constraint_function`, with named inputs and outputs,
     for ``map``, differentiation and code generation (:mod:`profileopt.codegen`);
@@ -61,42 +69,33 @@ layouts:
   constrained (2 N rows, ordered segment by segment).
 
 Within a segment the vehicle passes through every speed between its entry and exit speeds
-(docs/paper-notes.md, "Which root"), so the limit must hold over that whole interval, not only at its
-ends. When the force grows monotonically with speed (IECM, SBEM:EF, Prev:BEM always; SBEM:TF
-of a well-damped suspension such as the bundled ``atv``), holding it at both ends holds it
-everywhere in between, and the *segments* layout is exact. When it does not (SBEM:TF of a
-lightly damped suspension, ``atv-resonant``), read the next section.
+(docs/paper-notes.md, "Which root"), so the limit must hold over that whole interval, not
+only at its ends. When the force grows monotonically with speed (IECM, SBEM:EF, Prev:BEM
+always; SBEM:TF of a suspension with zeta >= 1 / (2 sqrt 2) such as the bundled ``atv``),
+holding it at both ends holds it everywhere in between, and the *segments* layout is exact
+for the terrain value given.
 
-Resonance and controllers
--------------------------
-For a lightly damped suspension the SBEM:TF force peaks near resonance (r = w_b / wn ~ 1),
-dips, then grows again, so the admissible speeds over one terrain value form several
-*bands* [lower_j, upper_j]. A pointwise constraint F(v_k) <= F_limit at the stages of a
-horizon then admits a plan whose speed jumps across a forbidden band between two stages,
-which the real vehicle cannot do: it passes through every speed in between. What a
-controller should do:
+Two things the *segments* layout does not cover, and the helpers that do:
 
-* **Starting from rest, or whenever you cannot guarantee staying inside one band**, use the
-  ``"first"`` band [0, V_first]: every speed from 0 to V_first is admissible, so any path
-  of speeds below it is safe. ``band_edges(ri, vehicle, band="first")`` gives it; it is
-  ``allowable_speed(ri, vehicle, band="first")``.
-* **``"largest"`` only if the vehicle is already above resonance** and the plan keeps it
-  there: the top band [lower, upper] is admissible as a whole, but the vehicle must never
-  slow through the forbidden speeds below ``lower`` on that terrain. Experienced drivers do
-  this on washboard: accelerate on smooth ground to above resonance, then hold the band.
-* The force limit is **a speed constraint that must hold over every speed passed
-  through**, not only over the speeds at the stage points (see the segments layout above).
-* **Pin a horizon to a band by speed bounds**: compute the band per stage (numbers, from the
-  terrain the stage will see) with :func:`band_edges` and pass its edges as ``lbx``/``ubx``
-  of the stage speeds (or ``opti.subject_to(opti.bounded(lower, v, upper))``). Every speed
-  between two stages of one band is then admissible, because a band is an interval. Keep
-  the force constraint too: it costs little and documents the intent. When the terrain
-  ahead depends on the predicted position (an interpolant of s), bound the speed by the
-  *smallest* upper edge of every terrain patch the stage can reach (see
-  ``examples/mpc_terrain_preview.py``).
-* A band whose lower edge is above the current speed cannot be reached without crossing
-  forbidden speeds on that terrain: that is a planning decision (accelerate earlier, on
-  smoother ground), not something one horizon can fix.
+* **Resonance.** For a lightly damped suspension (SBEM:TF of ``atv-resonant``) the force
+  peaks just above resonance, dips, then grows again: the admissible speeds over one
+  terrain value form several *bands*, and a plan checked at the stage points can jump
+  across a forbidden band between two stages. :func:`interval_force_constraints` adds the
+  peak between the two speeds as a third row, so every speed passed through is held.
+* **Terrain that depends on the predicted position.** A stage from s_k to s_k + ds meets
+  every roughness window overlapping that stretch, not only the terrain at s_k.
+  ``env = terrain_envelope(s, z, vehicle, reach_m=ds)`` is never below the largest e_max
+  of those windows, and ``interval_force_constraints(v_k, v_k1, env(s_k), vehicle)`` then
+  holds the limit for every speed driven inside every window the stage meets (the proof is
+  in its docstring).
+
+Band bounds remain useful as plain numbers: :func:`band_edges` gives per-stage bounds
+(``"first"``: every speed from rest up to it is admissible; ``"largest"``: the top band,
+for a vehicle already above resonance that stays there). A band whose lower edge is above
+the current speed cannot be reached without crossing forbidden speeds on that terrain: that
+is a planning decision (accelerate earlier, on smoother ground), not something one horizon
+can fix; with :func:`interval_force_constraints` such a horizon is infeasible rather than
+unsafe.
 
 Units: speeds in m/s, e_max in m, forces in N, accelerations in m/s^2; RI and g are
 dimensionless.
@@ -107,7 +106,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import warnings
-from typing import Any, Iterator, Literal
+from typing import Any, Literal
 
 import casadi as ca
 import numpy as np
@@ -116,6 +115,7 @@ from numpy.typing import ArrayLike
 from ._deprecation import OldCall, old_forms
 from .errors import InputError
 from .casadi_functions import constraint_function, force_function, jacobian_function
+from .horizon import ForceConstraints, force_peak_ratio, interval_force_constraints, terrain_envelope
 from .forces import (
     DEFAULT_MODEL,
     check_e_max_model,
@@ -145,6 +145,9 @@ __all__ = [
     "ForceConstraints",
     "force_constraints",
     "add_force_constraints",
+    "terrain_envelope",
+    "interval_force_constraints",
+    "force_peak_ratio",
     "force_function",
     "constraint_function",
     "jacobian_function",
@@ -225,58 +228,6 @@ def force_limit_n(vehicle: Vehicle, *, model: str = DEFAULT_MODEL) -> float:
 # ---------------------------------------------------------------------------------------
 # Constraints over a horizon
 # ---------------------------------------------------------------------------------------
-
-
-@dataclasses.dataclass(frozen=True)
-class ForceConstraints:
-    """Force-limit (and optional acceleration) constraints lbg <= g <= ubg.
-
-    Unpacks as the triple ``g, lbg, ubg = force_constraints(...)`` that
-    ``casadi.nlpsol`` takes (``{"g": g}`` and ``lbg=lbg, ubg=ubg`` at the call), and
-    converts to the dict of the same three: ``dict(cons)``, ``{**cons}``.
-
-    Attributes
-    ----------
-    g : casadi.SX or casadi.MX, shape (R, 1)
-        The constraint expressions: first the ``n_force`` force rows, then the acceleration
-        rows (if an acceleration vector was given). A force row is F / F_limit - 1
-        (dimensionless, ``normalised=True``) or F (N); an acceleration row is a (m/s^2).
-    lbg, ubg : numpy.ndarray, shape (R,)
-        Bounds: force rows (-inf, 0] normalised or (-inf, F_limit] raw; acceleration rows
-        [-max_decel_mps2, max_accel_mps2].
-    force_n : casadi.SX or casadi.MX, shape (n_force, 1)
-        The force (N) of each force row, for inspection.
-    limit_n : float
-        The force limit F_limit (N).
-    n_force : int
-        Number of force rows.
-    model : str
-        The force model.
-    normalised : bool
-        Whether the force rows are F / F_limit - 1.
-    """
-
-    g: Any
-    lbg: np.ndarray
-    ubg: np.ndarray
-    force_n: Any
-    limit_n: float
-    n_force: int
-    model: str
-    normalised: bool
-
-    def __iter__(self) -> Iterator[Any]:
-        return iter((self.g, self.lbg, self.ubg))
-
-    def keys(self) -> tuple[str, str, str]:
-        """``("g", "lbg", "ubg")``: with :meth:`__getitem__`, ``dict(cons)`` and ``**cons``
-        give the same three as unpacking."""
-        return ("g", "lbg", "ubg")
-
-    def __getitem__(self, key: str) -> Any:
-        if key not in self.keys():
-            raise KeyError(f"{key!r}: a ForceConstraints maps 'g', 'lbg' and 'ubg' (attributes hold the rest)")
-        return getattr(self, key)
 
 
 def _column(x: Any) -> Any:
@@ -510,8 +461,8 @@ def band_edges(
     band: Band = "first",
     speed_mps: ArrayLike | None = None,
 ) -> BandEdges:
-    """Edges of the admissible speed band to pin each stage to (see "Resonance and
-    controllers" in the module docstring).
+    """Edges of the admissible speed band to pin each stage to (see "Stages and segments"
+    in the module docstring).
 
     Parameters
     ----------

@@ -156,3 +156,45 @@ def test_export_c_positional_models_still_work_with_a_warning(tmp_path: Path) ->
     assert old.functions == new.functions
     for name in ("source", "header", "example", "readme"):
         assert getattr(old, name).read_bytes() == getattr(new, name).read_bytes()
+
+
+# ------------------------------------------------------------ not terrain: never admissible (issue 10)
+
+#: Terrain values that are not terrain: negative (down to the smallest subnormal), NaN and
+#: minus infinity. Each must give g > 0 or NaN, never g <= 0 ("admissible").
+NOT_TERRAIN = [-0.1, -1e-300, -5e-324, -np.inf, np.nan]
+
+
+def _never_admissible(values: np.ndarray, kind: str) -> None:
+    values = np.asarray(values, dtype=float).ravel()
+    ok = np.isnan(values) | (values > 0) if kind == "constraint" else np.isnan(values)
+    assert np.all(ok), values
+
+
+@pytest.mark.parametrize("name", ["atv", "atv-resonant"])
+def test_functions_never_call_negative_or_nan_terrain_admissible(name: str) -> None:
+    vehicle = load_vehicle(name)
+    speeds = np.array([0.0, 0.3, 5.0, 20.0])
+    for e, fn, _ in c_functions(vehicle, n_stages=1):
+        for bad in NOT_TERRAIN:
+            _never_admissible(fn.map(speeds.size)(speeds[None, :], np.full((1, speeds.size), bad)), e.kind)
+        # smooth ground is terrain: no force, g = -1 (so the check above can tell the two apart)
+        assert float(fn(5.0, 0.0)) == (-1.0 if e.kind == "constraint" else 0.0)
+    for terrain in ("ri", "e_max"):  # the Functions of casadi_functions on their own, several stages
+        g = constraint_function(vehicle, terrain=terrain, n_stages=3)
+        _never_admissible(g([1.0, 2.0, 3.0], [-0.2, np.nan, -np.inf]), "constraint")
+
+
+@needs_cc
+@pytest.mark.parametrize("name", ["atv", "atv-resonant"])
+def test_generated_c_never_calls_negative_or_nan_terrain_admissible(tmp_path: Path, name: str) -> None:
+    vehicle = load_vehicle(name)
+    result = export_c(vehicle, tmp_path / "c", n_stages=len(NOT_TERRAIN))
+    assert "never a g <= 0" in result.readme.read_text() and "-ffast-math" in result.readme.read_text()
+    so = _compile_shared(result.source, tmp_path / "lib.so")
+    speeds = np.full(len(NOT_TERRAIN), 4.0)
+    for e in result.functions:
+        c = ca.external(e.name, str(so))
+        _never_admissible(c(speeds, NOT_TERRAIN), e.kind)
+        at_zero = np.asarray(c(speeds, np.zeros(len(NOT_TERRAIN)))).ravel()
+        np.testing.assert_array_equal(at_zero, -1.0 if e.kind == "constraint" else 0.0)
