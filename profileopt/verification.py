@@ -201,7 +201,8 @@ class Verification:
         -------
         dict
             Route, vehicle, model, the worst segment and counts over the limit, the
-            simulation's step, the notes (and the timings).
+            roughness windows (``windows``: :meth:`WindowCheck.summary`, the count over the
+            limit and the worst window), the simulation's step, the notes (and the timings).
         """
         i = self.worst_segment
         return {
