@@ -157,14 +157,19 @@ def verification_figure(verification: "Verification") -> "Figure":
 
     v = verification
     run = v.run
+    win = v.windows
     series = run.transmitted_n if v.quantity == "transmitted" else run.excitation_n
-    label = "transmitted force F_T" if v.quantity == "transmitted" else "excitation force k y + c y'"
+    label = ("transmitted force F_T" if v.quantity == "transmitted"
+             else "excitation force k y + c y' (y from each segment's line)")
     fig = Figure(figsize=(10, 8), layout="constrained")
     top, bottom = fig.subplots(2, 1, height_ratios=[3, 2])
     xs, lo, hi = _envelope_trace(run.s_m, series, 3000)
     top.fill_between(xs, lo, hi, color="0.6", lw=0, label=f"simulated {label}")
-    top.plot(*_step(v.s_m, v.simulated_n), color="C0", lw=1.2, label="simulated peak |F| per segment")
-    top.plot(*_step(v.s_m, v.predicted_n), color="C2", lw=1.2, label=f"predicted ({get_model(v.model).label})")
+    centre = win.start_m + 0.5 * win.window_m
+    top.plot(centre, win.simulated_n, color="C0", lw=1.0,
+             label=f"simulated peak |F| while inside each {win.window_m:g} m window (at its centre)")
+    top.plot(centre, win.predicted_n, color="C2", lw=1.0,
+             label=f"predicted for each window ({get_model(v.model).label}, at its RI)")
     top.plot(*_step(v.s_m, v.limit_n), color="C3", ls="--", lw=2.6, alpha=0.6, zorder=1.5,
              label="limit")  # wide, under the prediction that reaches it
     top.axhline(-v.weight_n, color="C4", ls=":", lw=1, label="-m g (wheel lifts off below)")
@@ -178,33 +183,36 @@ def verification_figure(verification: "Verification") -> "Figure":
     # limit, where a plan drives)
     handles, labels = top.get_legend_handles_labels()
     more = speed_axis.get_legend_handles_labels()
-    top.legend(handles + more[0], labels + more[1], loc="lower left", bbox_to_anchor=(0.0, 1.01), ncols=3,
+    top.legend(handles + more[0], labels + more[1], loc="lower left", bbox_to_anchor=(0.0, 1.01), ncols=2,
                fontsize=8, borderaxespad=0.0)
     fig.suptitle(f"{Path(v.route).name}: {get_model(v.model).label} plan, {Path(v.vehicle).stem}; "
-                  f"{v.over_count}/{v.ratio.size} segments over the limit, worst {v.worst_ratio:.2f} x limit")
+                 f"{win.over_count}/{win.count} windows over the limit, worst {win.worst_ratio:.2f} x limit; "
+                 f"{v.over_count}/{v.ratio.size} segments")
 
-    over = v.over
-    bottom.scatter(v.predicted_n[~over], v.simulated_n[~over], s=12, color="C0", label="within the limit")
-    bottom.scatter(v.predicted_n[over], v.simulated_n[over], s=16, color="C3", label="over the limit")
-    top_value = max(float(np.max(v.simulated_n)), float(np.max(v.predicted_n)), float(v.limit_n.max())) * 1.05
+    over = win.over
+    bottom.scatter(win.predicted_n[~over], win.simulated_n[~over], s=3, color="C0", rasterized=True,
+                   label="window within the limit")
+    bottom.scatter(win.predicted_n[over], win.simulated_n[over], s=5, color="C3", rasterized=True,
+                   label="window over the limit")
+    top_value = max(float(np.max(win.simulated_n)), float(np.max(win.predicted_n)), win.limit_n) * 1.05
     bottom.plot([0, top_value], [0, top_value], color="0.3", lw=1, label="simulated = predicted")
-    bottom.axhline(float(v.limit_n.max()), color="C3", ls="--", lw=1, label="limit")
+    bottom.axhline(win.limit_n, color="C3", ls="--", lw=1, label="limit")
     bottom.set_xlim(0, top_value)
     bottom.set_ylim(0, top_value)
-    bottom.set_xlabel("predicted peak force per segment (N)")
-    bottom.set_ylabel("simulated peak force (N)")
+    bottom.set_xlabel("predicted peak force of the window (N)")
+    bottom.set_ylabel("simulated peak force while inside (N)")
     bottom.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, borderaxespad=0.0)
     return fig
 
 
 def plot_verification(verification: "Verification", path: str | Path) -> None:
-    """Write a PNG: forces and limit along s, and simulated versus predicted per segment.
+    """Write a PNG: forces and limit along s, and simulated versus predicted per window.
 
     Top: the simulated force of the model's kind along s (band between its smallest and
-    largest value in each of 3000 bins), the per-segment simulated peak, the model's
-    prediction and the limit; the speed on the right axis. Bottom: per segment, the
-    simulated peak against the prediction (points above the diagonal: the model was not
-    conservative there; above the dashed line: over the limit).
+    largest value in each of 3000 bins), each roughness window's simulated peak and
+    prediction (plotted at the window's centre) and the limit; the speed on the right
+    axis. Bottom: per window, the simulated peak against the prediction (points above the
+    diagonal: the model was not conservative there; above the dashed line: over the limit).
 
     The file is written through :func:`profileopt.io.atomic_path`.
 

@@ -5,7 +5,8 @@ confidence level); :func:`profileopt.verify` measures the forces a plan really
 causes in the quarter-car simulation. This module runs that check for several models:
 
 :func:`run_model`
-    plan one route with one model and verify the plan: one :class:`ModelRun`. An
+    plan one route with one model and verify the plan (by roughness windows and by
+    segments, :func:`profileopt.verify`): one :class:`ModelRun`. An
     infeasible route (:class:`~profileopt.errors.InfeasibleError`) or a solver failure
     (:class:`~profileopt.errors.PlanningError`) is recorded as the run's status, not
     raised.
@@ -13,9 +14,9 @@ causes in the quarter-car simulation. This module runs that check for several mo
     :func:`run_model` for each model on one route (what ``profileopt compare`` prints).
 :func:`safety_study`
     :func:`compare_models` over every (route, vehicle) pair of a fixed set, with per-model
-    totals pooled over the set (:class:`SafetyStudy`): the fraction of all driven segments
-    whose simulated force exceeds the limit, the paper's claim (Prev:BEM is aggressive, the
-    SBEM models are safe) put to a test on many routes at once.
+    totals pooled over the set (:class:`SafetyStudy`): the fraction of all roughness windows
+    (and of all segments) whose simulated force exceeds the limit, the paper's claim
+    (Prev:BEM is aggressive, the SBEM models are safe) put to a test on many routes at once.
 
 Everything reported is deterministic (no wall-clock times), so the same routes and
 vehicles give the same numbers on every run.
@@ -38,18 +39,8 @@ if TYPE_CHECKING:
     from .vehicle import Vehicle
     from .verification import Verification
 
-__all__ = [
-    "Exceedance",
-    "ModelRun",
-    "ModelTotals",
-    "SafetyStudy",
-    "run_model",
-    "compare_models",
-    "safety_study",
-    "PLANNED",
-    "INFEASIBLE",
-    "SOLVER_FAILED",
-]
+__all__ = ["Exceedance", "ModelRun", "ModelTotals", "SafetyStudy", "run_model", "compare_models", "safety_study",
+           "PLANNED", "INFEASIBLE", "SOLVER_FAILED"]
 
 #: :attr:`ModelRun.outcome` of a run that was planned and simulated.
 PLANNED = "planned"
@@ -65,21 +56,16 @@ class Exceedance:
 
     Attributes
     ----------
-    s_start_m, s_end_m : float
-        The segment (m).
-    peak_s_m : float
-        Where in the segment the simulated force of the model's kind peaks (m); a peak right
-        after ``s_start_m`` is often the ringing of the segment before.
+    s_start_m, s_end_m, peak_s_m : float
+        The segment, and where in it the simulated force of the model's kind peaks (m); a
+        peak right after ``s_start_m`` is often the ringing of the segment before.
     ri : float
         The segment's RI (dimensionless).
     speed_start_mps, speed_end_mps : float
         Planned speeds at the segment's ends (m/s).
-    predicted_n : float
-        The model's largest predicted force over the speeds driven in the segment (N).
-    simulated_n : float
-        Simulated peak of the model's force in the segment (N).
-    limit_n : float
-        The vehicle's limit for that force (N).
+    predicted_n, simulated_n, limit_n : float
+        The model's largest predicted force over the speeds driven in the segment, the
+        simulated peak of that force in it, and the vehicle's limit for it (N).
     """
 
     s_start_m: float
@@ -140,6 +126,10 @@ class ModelRun:
         Segments where F_T < -m g (the real wheel would leave the ground).
     exceedances : tuple of Exceedance
         The segments over the limit, in order along the route.
+    windows : dict or None
+        The roughness windows (:meth:`profileopt.window_check.WindowCheck.summary`): their
+        count ``windows``, ``over_count`` (over the limit), ``underpredicted_count`` and the
+        ``worst`` (``start_m``, ``ri``, ``simulated_n``, ``predicted_n``, ``ratio``, ...).
     """
 
     route: str
@@ -159,6 +149,17 @@ class ModelRun:
     underpredicted_count: int | None = None
     lift_off_count: int | None = None
     exceedances: tuple[Exceedance, ...] = ()
+    windows: dict | None = None
+
+    @property
+    def windows_over(self) -> int | None:
+        """Roughness windows over the limit, ``None`` if not planned."""
+        return None if self.windows is None else self.windows["over_count"]
+
+    @property
+    def worst_window_ratio(self) -> float | None:
+        """Largest simulated force / limit of any roughness window, ``None`` if not planned."""
+        return None if self.windows is None else self.windows["worst"]["ratio"]
 
     @property
     def planned(self) -> bool:
@@ -182,19 +183,10 @@ class ModelRun:
         if not self.planned:
             row["status"] = f"{self.outcome}: {self.status}"
             return row
-        row.update({
-            "status": self.status,
-            "travel_time_s": self.travel_time_s,
-            "segments": self.segments,
-            "worst_ratio": self.worst_ratio,
-            "worst_segment_start_m": self.worst_segment_start_m,
-            "over_count": self.over_count,
-            "over_fraction": self.over_fraction,
-            "over_length_m": self.over_length_m,
-            "worst_transmitted_ratio": self.worst_transmitted_ratio,
-            "underpredicted_count": self.underpredicted_count,
-            "lift_off_count": self.lift_off_count,
-        })
+        row.update({name: getattr(self, name) for name in (
+            "status", "travel_time_s", "segments", "worst_ratio", "worst_segment_start_m", "over_count",
+            "over_fraction", "over_length_m", "worst_transmitted_ratio", "underpredicted_count", "lift_off_count",
+            "windows")})
         return row
 
 
@@ -221,7 +213,8 @@ def _exceedances(result: "Verification") -> tuple[Exceedance, ...]:
     return tuple(out)
 
 
-def run_model(route: "Route", vehicle: "Vehicle", model: str, *, segment_length_m: float = 5.0) -> ModelRun:
+def run_model(route: "Route", vehicle: "Vehicle", model: str, *, segment_length_m: float = 5.0,
+              roughness_window_m: float = 5.0) -> ModelRun:
     """Plan ``route`` with ``model`` (planner defaults otherwise) and verify the plan.
 
     Parameters
@@ -232,6 +225,8 @@ def run_model(route: "Route", vehicle: "Vehicle", model: str, *, segment_length_
         Force model key (:data:`profileopt.forces.MODELS`).
     segment_length_m : float, default 5
         Segment length (m).
+    roughness_window_m : float, default 5
+        Roughness window length W (m), for the plan and for the check.
 
     Returns
     -------
@@ -253,7 +248,8 @@ def run_model(route: "Route", vehicle: "Vehicle", model: str, *, segment_length_
     common = {"route": str(route.source), "vehicle": _vehicle_label(vehicle), "model": force_model.key,
               "label": force_model.label, "quantity": force_model.quantity}
     try:
-        profile = plan(route, vehicle, segment_length_m=segment_length_m, model=force_model.key)
+        profile = plan(route, vehicle, segment_length_m=segment_length_m, model=force_model.key,
+                       roughness_window_m=roughness_window_m)
     except InfeasibleError as exc:
         return ModelRun(**common, outcome=INFEASIBLE, status=str(exc))
     except PlanningError as exc:
@@ -273,6 +269,7 @@ def run_model(route: "Route", vehicle: "Vehicle", model: str, *, segment_length_
         underpredicted_count=int(result.underpredicted.sum()),
         lift_off_count=int(result.lift_off.sum()),
         exceedances=_exceedances(result),
+        windows=result.windows.summary(),
     )
 
 
@@ -282,6 +279,7 @@ def compare_models(
     *,
     models: Sequence[str] | None = None,
     segment_length_m: float = 5.0,
+    roughness_window_m: float = 5.0,
 ) -> tuple[ModelRun, ...]:
     """:func:`run_model` for each model on one route (``profileopt compare``).
 
@@ -293,6 +291,8 @@ def compare_models(
         Model keys in the order wanted; default all four (:data:`profileopt.forces.MODELS`).
     segment_length_m : float, default 5
         Segment length (m).
+    roughness_window_m : float, default 5
+        Roughness window length W (m).
 
     Returns
     -------
@@ -300,7 +300,8 @@ def compare_models(
         One per model, in the order given.
     """
     keys = list(MODELS) if models is None else list(models)
-    return tuple(run_model(route, vehicle, key, segment_length_m=segment_length_m) for key in keys)
+    return tuple(run_model(route, vehicle, key, segment_length_m=segment_length_m,
+                           roughness_window_m=roughness_window_m) for key in keys)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -334,6 +335,14 @@ class ModelTotals:
         Mean over the pairs that both this model and the study's reference model planned of
         travel time / the reference's travel time (dimensionless; nan if there is no such
         pair).
+    windows, windows_over : int
+        Roughness windows of the planned pairs, and those over the limit.
+    worst_window_ratio : float
+        Largest simulated force / limit of any window (nan if no pair was planned).
+    worst_window_run : str
+        ``"route, vehicle"`` of that window (empty if none).
+    runs_window_over : int
+        Planned pairs with at least one window over the limit.
     """
 
     model: str
@@ -348,11 +357,21 @@ class ModelTotals:
     runs_over: int
     travel_time_s: float
     mean_time_ratio: float
+    windows: int = 0
+    windows_over: int = 0
+    worst_window_ratio: float = math.nan
+    worst_window_run: str = ""
+    runs_window_over: int = 0
 
     @property
     def over_fraction(self) -> float:
         """Pooled share of segments over the limit: over_count / segments (nan if none)."""
         return self.over_count / self.segments if self.segments else math.nan
+
+    @property
+    def window_over_fraction(self) -> float:
+        """Pooled share of windows over the limit: windows_over / windows (nan if none)."""
+        return self.windows_over / self.windows if self.windows else math.nan
 
 
 @dataclasses.dataclass(frozen=True)
@@ -371,6 +390,8 @@ class SafetyStudy:
         The model travel times are compared with (``ModelTotals.mean_time_ratio``).
     segment_length_m : float
         Segment length used for every plan (m).
+    roughness_window_m : float
+        Roughness window length W of every plan and check (m).
     """
 
     runs: tuple[ModelRun, ...]
@@ -378,6 +399,7 @@ class SafetyStudy:
     models: tuple[str, ...]
     reference_model: str
     segment_length_m: float
+    roughness_window_m: float = 5.0
 
     def total(self, model: str) -> ModelTotals:
         """The pooled totals of one model (by key).
@@ -423,32 +445,36 @@ class SafetyStudy:
         return tuple(_totals(pairs, key, self.reference_model) for key in self.models)
 
     def markdown(self) -> str:
-        """The pooled totals as a Markdown table (one row per model)."""
+        """The pooled totals as a Markdown table (one row per model): roughness windows
+        first (the definition of keeping the limit), then segments."""
         reference = get_model(self.reference_model).label
         lines = [
-            f"| model | segments over the limit (pooled) | worst simulated / limit (where) | "
-            f"pairs with a segment over | mean travel time / {reference} | not drivable |",
-            "|---|---:|---:|---:|---:|---:|",
+            f"| model | windows over the limit (pooled) | worst window simulated / limit (where) | "
+            f"pairs with a window over | segments over the limit | worst segment | "
+            f"mean travel time / {reference} | not drivable |",
+            "|---|---:|---:|---:|---:|---:|---:|---:|",
         ]
         for t in self.totals:
-            fraction = f"{100 * t.over_fraction:.2f} %" if t.segments else "n/a"
+            share = f"{100 * t.window_over_fraction:.2f} %" if t.windows else "n/a"
             lines.append(
-                f"| {t.label} | {t.over_count} of {t.segments} ({fraction}) | {t.worst_ratio:.2f} ({t.worst_run}) | "
-                f"{t.runs_over} of {t.runs - t.infeasible_runs} | {t.mean_time_ratio:.2f} | "
+                f"| {t.label} | {t.windows_over} of {t.windows} ({share}) | {t.worst_window_ratio:.2f} "
+                f"({t.worst_window_run}) | {t.runs_window_over} of {t.runs - t.infeasible_runs} | "
+                f"{t.over_count} of {t.segments} | {t.worst_ratio:.2f} | {t.mean_time_ratio:.2f} | "
                 f"{t.infeasible_runs} of {t.runs} |"
             )
         return "\n".join(lines)
 
     def exceedance_markdown(self, every_pair: bool = False) -> str:
-        """Segments over the limit per (route, vehicle) pair and model, as a Markdown table.
+        """Windows over the limit per (route, vehicle) pair and model, as a Markdown table.
 
-        ``every_pair=False`` lists only the pairs where some model has a segment over the
-        limit. A cell reads ``over / segments (worst ratio)``, or ``not drivable``.
+        ``every_pair=False`` lists only the pairs where some model has a window or a segment
+        over the limit. A cell reads ``windows over / windows (worst ratio)``, or ``not
+        drivable``.
 
         Parameters
         ----------
         every_pair : bool, optional
-            List every (route, vehicle) pair, not only those with a segment over the limit.
+            List every (route, vehicle) pair, not only those with a window over the limit.
             Default False.
 
         Returns
@@ -461,17 +487,17 @@ class SafetyStudy:
                  "|---|---|" + "---:|" * len(labels)]
         for route, vehicle in self.pairs():
             runs = {r.model: r for r in self.runs if (r.route, r.vehicle) == (route, vehicle)}
-            if not every_pair and not any(r.planned and r.over_count for r in runs.values()):
+            if not every_pair and not any(r.planned and (r.windows_over or r.over_count) for r in runs.values()):
                 continue
             cells = []
             for key in self.models:
                 run = runs[key]
                 if not run.planned:
                     cells.append("not drivable" if run.outcome == INFEASIBLE else run.outcome)
-                elif run.over_count:
-                    cells.append(f"**{run.over_count}** / {run.segments} ({run.worst_ratio:.2f})")
+                elif run.windows_over:
+                    cells.append(f"**{run.windows_over}** / {run.windows['windows']} ({run.worst_window_ratio:.2f})")
                 else:
-                    cells.append(f"0 / {run.segments}")
+                    cells.append(f"0 / {run.windows['windows']} ({run.worst_window_ratio:.2f})")
             lines.append(f"| {_short(route)} | {vehicle} | " + " | ".join(cells) + " |")
         return "\n".join(lines)
 
@@ -486,6 +512,7 @@ def _totals(pairs: Sequence[tuple[ModelRun, ...]], model: str, reference_model: 
     mine = [r for runs in pairs for r in runs if r.model == model]
     done = [r for r in mine if r.planned]
     worst = max(done, key=lambda r: r.worst_ratio, default=None)
+    worst_window = max(done, key=lambda r: r.worst_window_ratio, default=None)
     ratios = []
     for runs in pairs:
         by_model = {r.model: r for r in runs}
@@ -505,6 +532,11 @@ def _totals(pairs: Sequence[tuple[ModelRun, ...]], model: str, reference_model: 
         runs_over=sum(1 for r in done if r.over_count > 0),
         travel_time_s=float(sum(r.travel_time_s for r in done)),
         mean_time_ratio=float(np.mean(ratios)) if ratios else math.nan,
+        windows=sum(r.windows["windows"] for r in done),
+        windows_over=sum(r.windows_over for r in done),
+        worst_window_ratio=worst_window.worst_window_ratio if worst_window else math.nan,
+        worst_window_run=f"{_short(worst_window.route)}, {worst_window.vehicle}" if worst_window else "",
+        runs_window_over=sum(1 for r in done if r.windows_over > 0),
     )
 
 
@@ -514,6 +546,7 @@ def safety_study(
     models: Sequence[str] | None = None,
     *,
     segment_length_m: float = 5.0,
+    roughness_window_m: float = 5.0,
     reference_model: str = "sbem_tf",
 ) -> SafetyStudy:
     """Plan every route for every vehicle with every model, simulate, and pool the results.
@@ -528,6 +561,8 @@ def safety_study(
         Model keys; default all four (:data:`profileopt.forces.MODELS`) in their order.
     segment_length_m : float, default 5
         Segment length of every plan (m).
+    roughness_window_m : float, default 5
+        Roughness window length W of every plan and check (m).
     reference_model : str, default ``"sbem_tf"``
         Model whose travel time the others are compared with (include it in ``models``,
         else every ``mean_time_ratio`` is nan).
@@ -548,7 +583,8 @@ def safety_study(
     keys = tuple(get_model(m).key for m in (MODELS if models is None else models))
     reference_key = get_model(reference_model).key
     pairs = [
-        compare_models(route, vehicle, models=keys, segment_length_m=segment_length_m)
+        compare_models(route, vehicle, models=keys, segment_length_m=segment_length_m,
+                       roughness_window_m=roughness_window_m)
         for route in routes
         for vehicle in vehicles
     ]
@@ -558,4 +594,5 @@ def safety_study(
         models=keys,
         reference_model=reference_key,
         segment_length_m=float(segment_length_m),
+        roughness_window_m=float(roughness_window_m),
     )

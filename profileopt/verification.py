@@ -1,8 +1,11 @@
 """Check a plan against a simulated vehicle: the forces it really causes on the route.
 
 :func:`verify` drives the vehicle's quarter car (:mod:`profileopt.simulate`) over the
-route's own elevation samples at the profile's speeds, and sets each segment's simulated
-peak force beside the model's prediction and the vehicle's limit. The prediction is
+route's own elevation samples at the profile's speeds and judges the drive by roughness
+windows (:mod:`profileopt.window_check`): in every window [a, a + W] of the route, the
+simulated peak force while the vehicle is inside it against the window's own prediction
+and the limit. It also sets each segment's simulated peak force beside the segment's
+prediction and the limit, as before the windows. The segment's prediction is
 recomputed from the profile's speeds (the file's ``force_n`` column is not trusted), and
 before the simulation :func:`profileopt.limit_check.check_limits` checks the profile against the vehicle's own
 limits, the ones every plan keeps (:func:`profileopt.planning.default_limits`): speed,
@@ -28,8 +31,10 @@ import numpy as np
 from .io.atomic import atomic_write
 from .forces import get_model
 from .limit_check import LimitBreach, LimitCheck, check_limits
+from .defaults import DEFAULT_ROUGHNESS_WINDOW_M
 from .simulate import QuarterCarRun, simulate_quarter_car
 from .stations import segment_index
+from .window_check import UNDERPREDICTION_TOLERANCE, WindowCheck, check_windows
 
 if TYPE_CHECKING:
     from .planning.result import Profile
@@ -46,10 +51,8 @@ VERIFICATION_COLUMNS = (
     "predicted_force_n", "force_limit_n",
     "sim_transmitted_peak_n", "sim_transmitted_up_n", "sim_transmitted_down_n", "sim_excitation_peak_n",
     "ratio", "over_limit", "lift_off",
+    "window_start_m", "window_ri", "window_predicted_n", "window_sim_peak_n", "window_ratio", "window_over_limit",
 )
-#: A simulated peak counts as above the prediction only beyond this share of the limit,
-#: so that the ringing after a rough patch over smooth ground (prediction 0) is not counted.
-UNDERPREDICTION_TOLERANCE = 0.01
 @dataclasses.dataclass(frozen=True, eq=False)
 class Verification:
     """A profile checked against the simulated quarter car, segment by segment.
@@ -79,6 +82,8 @@ class Verification:
         ``excitation_peak_n`` otherwise) (N).
     ratio : numpy.ndarray, shape (N,)
         ``simulated_n / limit_n`` (dimensionless); above 1 the plan is not safe there.
+    windows : WindowCheck
+        Every roughness window of the route, its prediction and its simulated peak.
     model : str
         Force model key.
     quantity : str
@@ -93,7 +98,7 @@ class Verification:
         The simulation itself (time series), for plots.
     timings_s : dict
         Wall-clock seconds: ``simulate`` (of which ``envelope`` and ``integrate``),
-        ``total``.
+        ``windows`` (judging every roughness window), ``total``.
     notes : tuple of str
         Remarks for the user (for example a profile limit that differs from the vehicle's).
     breaches : tuple of LimitBreach
@@ -112,6 +117,7 @@ class Verification:
     excitation_peak_n: np.ndarray
     simulated_n: np.ndarray
     ratio: np.ndarray
+    windows: WindowCheck
     model: str
     quantity: str
     route: str
@@ -130,8 +136,9 @@ class Verification:
 
     @property
     def passes(self) -> bool:
-        """True when it keeps every limit and no segment's simulated force exceeds the limit."""
-        return self.keeps_limits and self.over_count == 0
+        """True when it keeps every limit and no roughness window's (nor segment's) simulated
+        force exceeds the limit."""
+        return self.keeps_limits and self.windows.over_count == 0 and self.over_count == 0
 
     @property
     def length_m(self) -> np.ndarray:
@@ -194,7 +201,8 @@ class Verification:
         -------
         dict
             Route, vehicle, model, the worst segment and counts over the limit, the
-            simulation's step, the notes (and the timings).
+            roughness windows (``windows``: :meth:`WindowCheck.summary`, the count over the
+            limit and the worst window), the simulation's step, the notes (and the timings).
         """
         i = self.worst_segment
         return {
@@ -213,6 +221,7 @@ class Verification:
             "over_fraction": self.over_fraction,
             "underpredicted_count": int(np.count_nonzero(self.underpredicted)),
             "lift_off_count": int(np.count_nonzero(self.lift_off)),
+            "windows": self.windows.summary(),
             "time_step_s": self.run.time_step_s,
             "steps": self.run.steps,
             "notes": list(self.notes),
@@ -221,7 +230,14 @@ class Verification:
         } | ({"timings_s": dict(self.timings_s)} if timings else {})
 
     def columns(self) -> dict[str, np.ndarray]:
-        """The CSV columns by name, in order (:data:`VERIFICATION_COLUMNS`)."""
+        """The CSV columns by name, in order (:data:`VERIFICATION_COLUMNS`).
+
+        The ``window_*`` columns describe the worst of the roughness windows that share a
+        point with the segment (:meth:`WindowCheck.worst_meeting`): a window over the limit
+        shows in every segment it meets.
+        """
+        win = self.windows
+        k = win.worst_meeting(self.s_m)
         return {
             "s_start_m": self.s_m[:-1],
             "s_end_m": self.s_m[1:],
@@ -237,6 +253,12 @@ class Verification:
             "ratio": self.ratio,
             "over_limit": self.over.astype(int),
             "lift_off": self.lift_off.astype(int),
+            "window_start_m": win.start_m[k],
+            "window_ri": win.ri[k],
+            "window_predicted_n": win.predicted_n[k],
+            "window_sim_peak_n": win.simulated_n[k],
+            "window_ratio": win.ratio[k],
+            "window_over_limit": win.over[k].astype(int),
         }
 
     def to_csv(self, path: str | Path) -> None:
@@ -300,8 +322,8 @@ def verify(
         The force model to check against; default ``profile.model`` (the model the profile
         was planned with, recorded in its CSV).
     detrend : bool, default True
-        Datum of the excitation force: each segment's trend line (True, as the RI) or
-        mean (False).
+        Datum of the excitation force: each window's (and, per segment, each segment's)
+        least-squares line of the base input (True, as the RI) or mean (False).
     check : LimitCheck, optional
         The result of :func:`check_limits` for the same arguments, if already computed.
 
@@ -331,6 +353,9 @@ def verify(
     down = np.minimum.reduceat(run.transmitted_n, starts)
     simulated = run.transmitted_peak_n if force_model.quantity == "transmitted" else run.excitation_peak_n
     limit_n = np.full(s.size - 1, check.limit_n)
+    window_m = float(profile.settings.get("roughness_window_m", DEFAULT_ROUGHNESS_WINDOW_M))  # checked by check_limits
+    windows = check_windows(route, run, profile.speed_mps, vehicle, model=force_model.key, window_m=window_m,
+                            detrend=detrend)
     t_end = time.perf_counter()
     return Verification(
         s_m=s.copy(),
@@ -344,6 +369,7 @@ def verify(
         excitation_peak_n=run.excitation_peak_n,
         simulated_n=simulated,
         ratio=simulated / limit_n,
+        windows=windows,
         model=force_model.key,
         quantity=force_model.quantity,
         route=str(route.source),
@@ -355,6 +381,7 @@ def verify(
             "simulate": t_sim - t_start,
             "envelope": run.timings_s["envelope"],
             "integrate": run.timings_s["integrate"],
+            "windows": t_end - t_sim,
             "total": t_end - t_start,
         },
         notes=check.notes,

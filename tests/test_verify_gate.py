@@ -15,6 +15,7 @@ Each test edits a real profile (``profileopt plan`` on a bundled route) as a use
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 from pathlib import Path
 
@@ -111,8 +112,10 @@ def test_speeds_raised_by_hand_break_the_vehicles_limits_exit_3(profileopt_comma
     # simulation", exit 0. Exit 3, not 4: the plan breaks the vehicle's own limits on paper
     # already (the planned profile sits at the edge of the force, acceleration and jerk
     # limits, so 1.6 times its speeds predict more force than the limit and 2.56 times the
-    # acceleration), which is the verdict that comes first; the simulation's excess is
-    # reported beside it.
+    # acceleration), which is the verdict that comes first; the simulation is reported
+    # beside it. (Since every segment is planned for the windows it meets, issue 10, the
+    # plan is slower, and 1.6 times it simulates 0.88 of the limit, not 1.225: the number
+    # is the simulation's, what this test holds is that it is reported.)
     raised = edited(planned["krc"], tmp_path / "raised.csv", speed=lambda v: 1.6 * v)
     out = tmp_path / "v.csv"
     done = run(profileopt_command, "verify", KRC_1IN, raised, "-o", out)
@@ -121,7 +124,9 @@ def test_speeds_raised_by_hand_break_the_vehicles_limits_exit_3(profileopt_comma
     assert "breaks" in verdict
     for kind in ("acceleration", "jerk", "force"):
         assert kind in done.stdout
-    assert "1.225" in done.stdout  # the simulation is still reported
+    # the simulation is still reported, by windows and by segments
+    assert "roughness windows (5 m) over the limit:" in done.stdout and "worst window:" in done.stdout
+    assert "worst segment, simulated / limit:" in done.stdout
     # the prediction follows the speeds: above the limit somewhere
     assert table(out)["predicted_force_n"].max() > 5000.0
 
@@ -169,10 +174,15 @@ def test_speeds_of_1e155_break_the_top_speed_without_a_crash(profileopt_command,
 
 def test_a_plan_that_keeps_its_limits_but_not_in_simulation_exits_4(profileopt_command, planned) -> None:
     # Prev:BEM's plan keeps Prev:BEM's own prediction within the limit, but the simulated
-    # excitation exceeds it on 7 segments (README, compare table)
+    # excitation exceeds it in hundreds of the 9996 roughness windows (738 measured) and on 7
+    # segments (README, compare table). 9996 windows: the 10096 samples 5 cm apart, less the
+    # 100 whose 5 m window would run past the end (a window ending at a sample covers the
+    # same samples as one starting at a sample).
     done = run(profileopt_command, "verify", KRC_1IN, planned["krc_prev_bem"])
     assert done.returncode == 4, done.stdout + done.stderr
-    assert "simulation" in verdict_line(done.stdout) and "7 of 101" in verdict_line(done.stdout)
+    verdict = verdict_line(done.stdout)
+    over = re.search(r"in simulation (\d+) of 9996 roughness windows \(5 m\) and (\d+) of 101 segments", verdict)
+    assert over and int(over.group(1)) >= 100 and int(over.group(2)) >= 5, verdict
 
 
 def test_the_exit_statuses_are_documented_in_the_help(profileopt_command) -> None:

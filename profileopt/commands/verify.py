@@ -1,8 +1,9 @@
 """``profileopt verify`` and ``profileopt compare``: check plans against a simulated vehicle.
 
 ``verify`` checks a profile against the vehicle's own limits, drives the vehicle's quarter
-car over the route at its speeds and reports the simulated peak forces per segment beside the
-model's prediction (recomputed from the speeds) and the limit. Its exit status is a verdict a
+car over the route at its speeds and judges the drive by roughness windows: in every window
+[a, a + W] of the route, the simulated peak force while the vehicle is inside it beside the
+window's own prediction (recomputed from the speeds) and the limit; the same per segment. Its exit status is a verdict a
 script or CI can gate on (:data:`VERIFY_EXIT_STATUSES`).
 ``compare`` plans the route with each of the four force models, verifies each plan and
 prints one table: the paper's claim (Prev:BEM is aggressive, the SBEM models are safe) put
@@ -42,36 +43,41 @@ def _vehicle_of(args: argparse.Namespace, profile) -> str:
 
 
 #: The exit status of ``profileopt verify``: the plan keeps every limit of the vehicle and no
-#: segment's simulated force exceeds the limit.
+#: roughness window's (nor segment's) simulated force exceeds the limit.
 EXIT_PASSES = 0
 #: The profile breaks one of the vehicle's own limits (speed, acceleration, jerk, predicted force).
 EXIT_BREAKS_LIMITS = 3
-#: The limits hold on paper, but the simulation puts a segment over the force limit.
+#: The limits hold on paper, but the simulation puts a roughness window (or a segment) over
+#: the force limit.
 EXIT_OVER_IN_SIMULATION = 4
 #: Every exit status of ``profileopt verify`` and its meaning (also in its ``--help``).
 VERIFY_EXIT_STATUSES = {
     EXIT_PASSES: "the plan keeps every limit of the vehicle (speed, acceleration, jerk, predicted force) and no "
-                 "segment's simulated force exceeds the force limit",
+                 "roughness window's (nor segment's) simulated force exceeds the force limit",
     1: "internal error",
     2: "bad input (one line on stderr), e.g. a profile that does not cover its route exactly",
     EXIT_BREAKS_LIMITS: "the profile breaks one of the vehicle's own limits (speed, acceleration, jerk or "
                         "predicted force); the simulation is still reported when it can be run",
-    EXIT_OVER_IN_SIMULATION: "the limits hold on paper, but the simulation puts a segment over the force limit",
+    EXIT_OVER_IN_SIMULATION: "the limits hold on paper, but the simulation puts a roughness window (or a segment) "
+                             "over the force limit",
 }
 
 
-def _verdict(check, over_count: int | None, segments: int) -> tuple[int, str]:
-    """The exit status and the verdict line (``over_count`` None: not simulated)."""
+def _verdict(check, result=None) -> tuple[int, str]:
+    """The exit status and the verdict line (``result`` None: not simulated)."""
     if check.breaches:
         kinds = ", ".join(dict.fromkeys(b.quantity for b in check.breaches))
         return EXIT_BREAKS_LIMITS, (f"  verdict: the profile breaks the vehicle's limits ({kinds}); "
                                     f"exit {EXIT_BREAKS_LIMITS}")
-    if over_count:
+    if result is not None and not result.passes:
+        win = result.windows
         return EXIT_OVER_IN_SIMULATION, (
-            f"  verdict: the profile keeps the vehicle's limits on paper, but in simulation {over_count} of "
-            f"{segments} segments exceed the force limit; exit {EXIT_OVER_IN_SIMULATION}")
+            f"  verdict: the profile keeps the vehicle's limits on paper, but in simulation {win.over_count} of "
+            f"{win.count} roughness windows ({win.window_m:g} m) and {result.over_count} of {result.ratio.size} "
+            f"segments exceed the force limit; exit {EXIT_OVER_IN_SIMULATION}")
     return EXIT_PASSES, ("  verdict: the profile keeps every limit of the vehicle (speed, acceleration, jerk, "
-                         f"predicted force) and no segment exceeds the force limit in simulation; exit {EXIT_PASSES}")
+                         "predicted force) and no roughness window or segment exceeds the force limit in "
+                         f"simulation; exit {EXIT_PASSES}")
 
 
 def _verify(args: argparse.Namespace) -> int:
@@ -106,18 +112,28 @@ def _verify(args: argparse.Namespace) -> int:
         if args.plot is not None:
             plot_verification(result, args.plot)
     out = sys.stderr if outputs.uses_stdout else sys.stdout  # standard output holds the table
-    status, verdict = _verdict(check, result.over_count, result.ratio.size)
+    status, verdict = _verdict(check, result)
     if args.json:
         print(json.dumps(result.summary(timings=False) | {"exit_status": status}, indent=2), file=out)
         return status
     i = result.worst_segment
+    win = result.windows
+    worst = win.describe(win.worst)
     lines = [
         header,
         verdict,
         *(f"  {breach.describe()}" for breach in check.breaches),
+        f"  roughness windows ({win.window_m:g} m) over the limit: {win.over_count} of {win.count} "
+        f"({100 * win.over_count / win.count:.1f} %)",
+        f"  worst window: {worst['start_m']:g} to {worst['stop_m']:g} m (RI {worst['ri']:.3f}, speeds "
+        f"{worst['speed_low_mps']:.3g} to {worst['speed_high_mps']:.3g} m/s): {_ratio_text(worst['ratio'])} of the "
+        f"limit, {worst['simulated_n']:.0f} N simulated at s = {worst['peak_s_m']:.2f} m, "
+        f"{worst['predicted_n']:.0f} N predicted, limit {worst['limit_n']:g} N",
+        f"  windows where the simulation exceeds the prediction by > 1 % of the limit: "
+        f"{int(win.underpredicted.sum())}",
         f"  segments over the limit: {result.over_count} of {result.ratio.size} "
         f"({100 * result.over_fraction:.1f} %, {result.over_length_m:g} m)",
-        f"  worst simulated / limit: {_ratio_text(result.worst_ratio)} in the segment from s = {result.s_m[i]:g} m "
+        f"  worst segment, simulated / limit: {_ratio_text(result.worst_ratio)} in the segment from s = {result.s_m[i]:g} m "
         f"({result.simulated_n[i]:.0f} N simulated, {result.predicted_n[i]:.0f} N predicted)",
         f"  segments where the simulation exceeds the prediction by > 1 % of the limit: "
         f"{int(result.underpredicted.sum())}",
@@ -137,7 +153,7 @@ def _verify(args: argparse.Namespace) -> int:
 
 def _report_unsimulated(args: argparse.Namespace, check, header: str, reason: str) -> int:
     """The verdict of a profile that breaks the limits and cannot be simulated; nothing is written."""
-    status, verdict = _verdict(check, None, check.predicted_n.size)
+    status, verdict = _verdict(check)
     unwritten = [name for name in (args.output, args.plot) if name]
     if args.json:
         print(json.dumps({"route": str(args.route), "vehicle": str(args.vehicle), "model": check.model,
@@ -165,9 +181,9 @@ def _verify_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--model", default=None, choices=list(MODEL_KEYS),
                         help="force model to check against (default: the model the profile records)")
     parser.add_argument("-o", "--output", metavar="CSV",
-                        help="write one row per segment to this CSV ('-': standard output, the summary then "
-                             "goes to stderr)")
-    parser.add_argument("--plot", metavar="PNG", help="write forces along s and simulated vs predicted")
+                        help="write one row per segment to this CSV, with the worst roughness window that meets "
+                             "it ('-': standard output, the summary then goes to stderr)")
+    parser.add_argument("--plot", metavar="PNG", help="write forces along s and simulated vs predicted per window")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
 
 
@@ -182,10 +198,11 @@ def _compare(args: argparse.Namespace) -> int:
 
     vehicle = load_vehicle(args.vehicle)
     route = read_route(args.route)
-    rows = [run.to_dict() for run in compare_models(route, vehicle, segment_length_m=args.segment_length)]
+    rows = [run.to_dict() for run in compare_models(route, vehicle, segment_length_m=args.segment_length,
+                                                    roughness_window_m=args.roughness_window)]
     if args.json:
-        print(json.dumps({"route": args.route, "vehicle": args.vehicle,
-                          "segment_length_m": args.segment_length, "models": rows}, indent=2))
+        print(json.dumps({"route": args.route, "vehicle": args.vehicle, "segment_length_m": args.segment_length,
+                          "roughness_window_m": args.roughness_window, "models": rows}, indent=2))
         return 0
     print(_table(args, route.length_m, rows))
     return 0
@@ -193,31 +210,36 @@ def _compare(args: argparse.Namespace) -> int:
 
 def _table(args: argparse.Namespace, length_m: float, rows: list[dict]) -> str:
     """A Markdown table (pastes into the README as it is)."""
-    head = (f"`profileopt compare {args.route} --vehicle {args.vehicle} --segment-length {args.segment_length:g}` "
-            f"({length_m:g} m)\n\n"
-            "| model | travel time (s) | worst simulated / limit | segments over the limit | length over (m) "
-            "| worst F_T / F_T limit | simulated > predicted | wheel lift-off |\n"
-            "|---|---:|---:|---:|---:|---:|---:|---:|")
+    head = (f"`profileopt compare {args.route} --vehicle {args.vehicle} --segment-length {args.segment_length:g} "
+            f"--roughness-window {args.roughness_window:g}` ({length_m:g} m)\n\n"
+            "| model | travel time (s) | worst window simulated / limit | windows over the limit "
+            "| worst segment simulated / limit | segments over the limit | worst F_T / F_T limit "
+            "| windows simulated > predicted | wheel lift-off |\n"
+            "|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     out = [head]
     notes = []
     for row in rows:
         if "travel_time_s" not in row:
-            out.append(f"| {row['label']} | {row['status'].split(':')[0]} | | | | | | |")
+            out.append(f"| {row['label']} | {row['status'].split(':')[0]} | | | | | | | |")
             notes.append(f"{row['label']}: {row['status']}")
             continue
+        win = row["windows"]
         out.append(
-            f"| {row['label']} | {row['travel_time_s']:.1f} | {row['worst_ratio']:.2f} "
-            f"| {row['over_count']} of {row['segments']} ({100 * row['over_fraction']:.1f} %) "
-            f"| {row['over_length_m']:g} | {row['worst_transmitted_ratio']:.2f} "
-            f"| {row['underpredicted_count']} | {row['lift_off_count']} |"
+            f"| {row['label']} | {row['travel_time_s']:.1f} | {win['worst']['ratio']:.2f} (at {win['worst']['start_m']:g} m) "
+            f"| {win['over_count']} of {win['windows']} ({100 * win['over_count'] / win['windows']:.1f} %) "
+            f"| {row['worst_ratio']:.2f} | {row['over_count']} of {row['segments']} "
+            f"| {row['worst_transmitted_ratio']:.2f} | {win['underpredicted_count']} "
+            f"| {row['lift_off_count']} |"
         )
         if row["status"] not in ("optimal", "exact"):
             notes.append(f"{row['label']}: planner status {row['status']}")
     out.append("")
-    out.append("Simulated force: the one the model limits (F_T for SBEM:TF, k y + c y' for the others); "
-               "'simulated > predicted': segments where it exceeds the model's own prediction by more than "
-               "1 % of the limit; 'wheel lift-off': segments where F_T < -m g (the linear model keeps the "
-               "wheel on the ground).")
+    out.append(f"Simulated force: the one the model limits (F_T for SBEM:TF, k y + c y' for the others), its peak "
+               f"while the vehicle is inside each {args.roughness_window:g} m roughness window (y measured from the "
+               "window's least-squares line, as its RI) and in each segment, against the limit; 'simulated > "
+               "predicted': windows where it exceeds the model's own prediction for the window by more than 1 % "
+               "of the limit; 'wheel lift-off': segments where F_T < -m g (the linear model keeps the wheel on "
+               "the ground).")
     out += [f"note: {n}" for n in notes]
     return "\n".join(out)
 
@@ -228,6 +250,8 @@ def _compare_arguments(parser: argparse.ArgumentParser) -> None:
                         help="bundled vehicle name or .toml file (default: atv)")
     parser.add_argument("--segment-length", type=float, default=5.0, metavar="M",
                         help="segment length in m (default: 5)")
+    parser.add_argument("--roughness-window", type=float, default=5.0, metavar="M",
+                        help="roughness window length in m, for the plans and the checks (default: 5)")
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
 
 
