@@ -190,7 +190,8 @@ def terrain_envelope(
     Raises
     ------
     InputError
-        Bad samples (as for a route), a window longer than the route or holding fewer than
+        Bad samples (as for a route), a window length that is not > 0 (a window longer
+        than the route is the whole route), a window holding fewer than
         :data:`~profileopt.terrain.MIN_SAMPLES_PER_WINDOW` samples, a negative or
         non-finite ``reach_m``, a ``knot_spacing_m`` that is not > 0, or more than
         :data:`MAX_ENVELOPE_INTERVALS` knot intervals.
@@ -201,6 +202,8 @@ def terrain_envelope(
     if reach < 0:
         raise InputError(f"terrain_envelope: reach_m = {reach_m!r} m must be >= 0 (how far a stage can go)")
     window = _finite_number(window_m, "window_m", "m")
+    if not window > 0:
+        raise InputError(f"terrain_envelope: window_m = {window_m!r} m must be > 0 (the roughness window length)")
     h = window / 20.0 if knot_spacing_m is None else _finite_number(knot_spacing_m, "knot_spacing_m", "m")
     if not h > 0:
         raise InputError(f"terrain_envelope: knot_spacing_m = {knot_spacing_m!r} m must be > 0")

@@ -168,7 +168,7 @@ def test_envelope_holds_the_end_values_outside_the_route_and_nan_is_nan() -> Non
         ({"reach_m": math.nan}, "reach_m"),
         ({"knot_spacing_m": 0.0}, "knot_spacing_m"),
         ({"knot_spacing_m": 1e-5}, "knot intervals"),
-        ({"window_m": 500.0}, "longer than"),
+        ({"window_m": -5.0}, "window_m"),
         ({"window_m": 0.2}, "samples"),
     ],
 )

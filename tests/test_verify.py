@@ -271,7 +271,7 @@ def test_verify_takes_the_vehicle_the_profile_was_planned_for(tmp_path: Path) ->
     assert "planned for vehicle 'atv-resonant' but --vehicle is 'atv'" in done.stderr
 
 
-@pytest.mark.parametrize("window", ["-1", "nan", "1000"])
+@pytest.mark.parametrize("window", ["-1", "nan", "0"])
 def test_compare_refuses_a_bad_roughness_window_in_one_line(window: str) -> None:
     done = _run("compare", str(ROUTES / "curb.csv"), "--roughness-window", window)
     assert done.returncode == 2 and done.stdout == ""
