@@ -48,23 +48,29 @@ def study(example) -> SafetyStudy:
 
 
 def test_sbem_tf_pooled_fraction_is_what_was_measured(study: SafetyStudy) -> None:
-    # Measured on 2026-11-22 with `python examples/safety_study.py` (the README's comparison),
-    # after the wheel envelope learned to roll on the ground between samples
-    # (simulate.wheel_envelope_m): SBEM:TF plans drive 2634 segments on the 26 route-vehicle
-    # pairs, and the simulated transmitted force exceeds the limit in none of them. The
-    # largest ratios are 0.861 (krc_rms_1in.csv, atv-resonant) and 0.842 (the curb's step
-    # down, atv-resonant): a 14 % margin, far beyond solver tolerances. (Before, with circles
-    # on the samples alone, 3 segments: the two step-down segments of curb.csv, 1.39 and
-    # 1.36, and KRC 1-inch 380-385 m for atv-resonant, 1.10. The step-down force depends on
-    # the sample resolution: the drop off a 0.15 m step sampled every 5 cm is spread over a
-    # sample interval, see wheel_envelope_m.)
+    # Measured on 2026-11-23 with `python examples/safety_study.py`, after the simulator
+    # learned the wheel's exact path between samples (profileopt.wheel_path: the kinks of
+    # the path are no longer smoothed by an interpolation through its heights at the
+    # samples): SBEM:TF plans drive 2634 segments on the 26 route-vehicle pairs, and the
+    # simulated transmitted force exceeds the limit in 4 of them, all at curb.csv's step
+    # (0.15 m between samples 5 cm apart: a ramp of slope 3 whose foot the wheel meets with
+    # a kink of slope 3, a jump of c v 3 in F_T): up (100-105 m) 1.042 (atv) and 1.021
+    # (atv-resonant), down (150-155 m) 1.077 and 1.297. These depend on the sampling of
+    # the step (README, "How a result on steps depends on the sampling"). Off the curb the
+    # largest ratio is 0.955 (krc_rms_1in.csv, atv-resonant). (Before, with the path
+    # interpolated through its heights at the samples: 0 segments, worst 0.861; with
+    # circles on the samples alone: 3 segments.)
     tf = study.total("sbem_tf")
-    assert (tf.over_count, tf.segments) == (0, 2634)
+    assert (tf.over_count, tf.segments) == (4, 2634)
     assert tf.infeasible_runs == 0 and tf.runs == 26
-    assert tf.worst_ratio < 0.9
+    assert tf.worst_ratio < 1.35
     where = sorted((Path(r.route).name, r.vehicle, e.s_start_m)
                    for r in study.runs if r.model == "sbem_tf" for e in r.exceedances)
-    assert where == []
+    assert where == [("curb.csv", "atv", 100.0), ("curb.csv", "atv", 150.0),
+                     ("curb.csv", "atv-resonant", 100.0), ("curb.csv", "atv-resonant", 150.0)]
+    off_the_curb = [r.worst_ratio for r in study.runs
+                    if r.model == "sbem_tf" and r.planned and Path(r.route).name != "curb.csv"]
+    assert max(off_the_curb) < 0.97
 
 
 def test_the_paper_claim_holds_on_the_pooled_set(study: SafetyStudy) -> None:
@@ -124,8 +130,9 @@ def test_infeasible_exactly_where_a_segment_is_over_the_limit_at_standstill(exam
 def test_curb_exceedances_are_at_the_edges(study: SafetyStudy) -> None:
     # curb.csv (examples/routes/make_routes.py): 0.15 m up at s = 102.5 m, down at 152.5 m.
     # Where a plan exceeds the limit there, the force peaks within a wheel radius or two of
-    # an edge (the rigid wheel meets the edge X_w = r = 0.1 m before it). Only Prev:BEM
-    # plans exceed it there now (both edges, both vehicles).
+    # an edge (the rigid wheel meets the ramp the samples make, 0.07 m before its foot).
+    # With the wheel's exact path every model's plans exceed it there: 13 segments (Prev:BEM
+    # and SBEM:TF 2 per vehicle, IECM 2 for atv, SBEM:EF 2 for atv and 1 for atv-resonant).
     edges = (102.5, 152.5)
     found = 0
     for run in study.runs:
@@ -138,7 +145,7 @@ def test_curb_exceedances_are_at_the_edges(study: SafetyStudy) -> None:
                 if run.model.startswith("sbem"):
                     # an SBEM plan is at the model's limit there: no margin left
                     assert math.isclose(e.predicted_n, e.limit_n, rel_tol=1e-6)
-    assert found == 4
+    assert found == 13
 
 
 def test_example_prints_and_writes_the_same_markdown(example, study, tmp_path, monkeypatch, capsys) -> None:
@@ -148,7 +155,7 @@ def test_example_prints_and_writes_the_same_markdown(example, study, tmp_path, m
     printed = capsys.readouterr().out
     written = out.read_text()
     assert printed.startswith(written)  # then "wrote ..."
-    assert "| SBEM:TF | 0 of 2634 (0.00 %) |" in written
+    assert "| SBEM:TF | 4 of 2634 (0.15 %) |" in written
     assert "`python examples/safety_study.py`" in written
     for label in ("Prev:BEM", "IECM", "SBEM:EF", "SBEM:TF"):
         assert f"| {label} |" in written

@@ -121,7 +121,7 @@ def test_speeds_raised_by_hand_break_the_vehicles_limits_exit_3(profileopt_comma
     assert "breaks" in verdict
     for kind in ("acceleration", "jerk", "force"):
         assert kind in done.stdout
-    assert "1.225" in done.stdout  # the simulation is still reported
+    assert "1.196" in done.stdout  # the simulation is still reported (1.225 before the wheel's path was exact)
     # the prediction follows the speeds: above the limit somewhere
     assert table(out)["predicted_force_n"].max() > 5000.0
 
