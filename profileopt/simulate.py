@@ -32,38 +32,40 @@ Forces (N), both positive upwards:
 
 Wheel geometry
 --------------
-The wheel does not follow the raw samples: a rigid wheel of radius r rolls over the
-ground the route means, the straight lines between its samples (Fig. 2). Its centre above
-s_j is the lowest that keeps the wheel out of that ground, w(s_j), the largest of the
-circles of radius r about the samples within r and of the segments offset by r along their
-normals (:func:`wheel_envelope_m` derives it); the base input is y(s_j) = w(s_j) - r. A
-step of height e is climbed over the horizontal distance X_w = sqrt(2 e r - e^2) of
-Eq. (2); on a straight incline of slope m, y = z + r (sqrt(1 + m^2) - 1) however the samples
-are spaced. (Circles on the samples alone let the wheel sag between samples on a slope,
-by up to r (sqrt(1 + m^2) - 1): 3.9 mm on washboard.csv's corrugation sampled every 5 cm,
-which the damper made 8-10 % of the force at 20 m/s.) Between samples y is interpolated
-with a monotone cubic (PCHIP, :class:`scipy.interpolate.PchipInterpolator`): its slope is
-continuous and it never overshoots a step. Linear interpolation would not do: its slope
-jumps at every sample, and the damper turns each jump into a force spike c v (change of
-slope) that is an artefact of sampling (1.3 % of the transmitted force on a 10 m sinusoid
-sampled every 2 cm at 2 m/s). A genuine jump of slope (where the wheel first touches an
-edge) is spread over one sample interval instead; its full slope is still reached.
+The ground the route means is the polyline through its samples (straight lines between
+them). A rigid wheel of radius r rolls on it, and the base input is the exact path of its
+lowest point, :func:`profileopt.wheel_path.wheel_path`: a chain of the segments offset by r
+along their normals and of circular arcs of radius r about the convex vertices (Fig. 2), with
+every kink (where the contact jumps from one piece to another: a concave vertex, the edge
+of a step met ahead, a pothole bridged) located exactly. A step of height e < r is climbed
+over X_w = sqrt(2 e r - e^2) (Eq. 2); on a straight incline of slope m,
+y = z + r (sqrt(1 + m^2) - 1) however the samples are spaced.
+
+A kink of the path, a jump dm of its slope, is a jump c v dm of the transmitted and of the
+excitation force at speed v: the damper's velocity jumps. So a result depends on how the
+route was sampled wherever the polyline through the samples differs from the ground: on
+smooth ground sampled every h each concave vertex is a kink of about z'' h, and the forces
+differ from those of the smooth ground by up to about c v |z''| h / 2 (first order in h);
+a step is as steep as the samples make it (0.15 m between samples 5 cm apart is a ramp of
+slope 3, whose top edge the wheel meets with a kink), and its force grows without bound as
+the sampling around it gets finer (a vertical step has no finite answer for a rigid wheel).
 
 Integration
 -----------
 The speed profile (boundaries s_i and speeds v_i, constant acceleration inside a segment,
-so v^2 is linear in s) gives the time of every position exactly; the motion is sampled on a
-uniform time grid t_k = k dt, and y(t) is taken as linear between grid points (a
-first-order hold). For such an input the linear ODE has an exact solution: in the relative
-coordinate u = x - y, m u'' = -k u - c u' between grid points, and at each grid point u'
-jumps by minus the jump of the input's slope. The transition matrix expm(A dt)
-(:func:`scipy.linalg.expm`) makes this a discrete linear system, run with
-:func:`scipy.signal.lfilter` in compiled code (a 5 km route sampled every 5 cm, driven at
-10 m/s: 4e5 steps, 0.15 s). The relative coordinate keeps the numbers small (millimetres) even on routes at absolute elevations of
-hundreds of metres.
+so v^2 is linear in s) gives the time of every position exactly. Knots are placed at every
+break of the wheel's path (kinks and the tangent joins of lines and arcs), along each arc
+every :data:`MAX_ARC_STEP_RAD` of its angle, at every segment boundary and on a uniform
+time grid of step dt (:func:`choose_time_step_s`). At each knot the path gives y and its
+slope from both sides exactly; between knots the input is the quadratic in time with those
+end slopes, exact on the path's lines (v linear in t), second order on its arcs. The linear
+ODE is solved exactly for that input (:mod:`profileopt.quarter_car`); nothing is smoothed.
 
-Being exact for the held input, the only approximation is the hold itself: see
-:func:`choose_time_step_s` for how dt is chosen.
+The forces are recorded at every knot, from both sides at a kink, and between knots where
+either force turns (its derivative changes sign: the stationary point is placed by the cubic
+through the ends and evaluated exactly), so each segment's peak is the largest value the
+forces take while the wheel is in it, not the largest at a grid point. The peaks converge as
+dt shrinks; the tests compare them with an adaptive integrator at tight tolerances.
 """
 
 from __future__ import annotations
@@ -77,9 +79,10 @@ import numpy as np
 
 from .errors import InputError
 from .kinematics import segment_accel_mps2, segment_time_s
+from .quarter_car import hermite_extremum, knot_jumps, respond, transition
 from .stations import segment_index, segment_samples
 from .terrain import segment_line_fit
-from .wheel import wheel_envelope_m
+from .wheel_path import WheelPath, wheel_path
 
 if TYPE_CHECKING:
     from .vehicle import Vehicle
@@ -91,51 +94,59 @@ __all__ = [
     "choose_time_step_s",
     "simulate_quarter_car",
     "STEPS_PER_SAMPLE",
+    "STEPS_PER_PERIOD",
+    "MAX_ARC_STEP_RAD",
     "MAX_STEPS",
 ]
 
-#: Time steps per route sample interval at the profile's top speed (see choose_time_step_s).
+#: No longer a bound on dt (the path's kinks are knots); kept for callers that read it.
 STEPS_PER_SAMPLE = 4
 #: Time steps per natural period of the suspension, at the least.
 STEPS_PER_PERIOD = 200
+#: Largest angle of the wheel's arcs between two knots (rad).
+MAX_ARC_STEP_RAD = 0.02
 #: Upper bound on the number of time steps (memory: about 15 arrays of this length).
 MAX_STEPS = 20_000_000
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class QuarterCarRun:
-    """A simulated drive: time series on the uniform time grid and per-segment peaks.
+    """A simulated drive: forces at every knot and turning point, and per-segment peaks.
 
-    The held input's slope changes at every grid point by O(dt); forces are the central
-    values (mean of the two one-sided limits), those of the smooth input to O(dt^2).
+    The time series hold one row per knot of the input (path breaks, arc steps, segment
+    boundaries, the uniform time grid), two rows with the same time at a kink of the
+    wheel's path (the values just before and just after it: the forces jump there), and a
+    row at every turning point of either force between knots.
 
     Attributes
     ----------
-    time_s : numpy.ndarray, shape (K+1,)
-        Grid times t_k = k dt (s).
-    s_m : numpy.ndarray, shape (K+1,)
-        Position of the wheel at t_k (m).
-    speed_mps : numpy.ndarray, shape (K+1,)
-        Speed at t_k (m/s).
-    base_m : numpy.ndarray, shape (K+1,)
-        Base input y (wheel envelope minus r), in the route's elevation datum (m).
-    mass_m : numpy.ndarray, shape (K+1,)
+    time_s : numpy.ndarray, shape (K,)
+        Time of each row (s), non-decreasing.
+    s_m : numpy.ndarray, shape (K,)
+        Position of the wheel (m).
+    speed_mps : numpy.ndarray, shape (K,)
+        Speed (m/s).
+    base_m : numpy.ndarray, shape (K,)
+        Base input y (the wheel's lowest point), in the route's elevation datum (m).
+    mass_m : numpy.ndarray, shape (K,)
         Sprung-mass position x about static equilibrium, same datum as ``base_m`` (m).
-    transmitted_n : numpy.ndarray, shape (K+1,)
+    transmitted_n : numpy.ndarray, shape (K,)
         F_T = k (y - x) + c (y' - x') = m x'' (N).
-    excitation_n : numpy.ndarray, shape (K+1,)
+    excitation_n : numpy.ndarray, shape (K,)
         F = k y + c y' with y measured from the segment's trend line or mean (N).
     boundaries_m : numpy.ndarray, shape (N+1,)
         Segment boundaries (m).
     transmitted_peak_n, excitation_peak_n : numpy.ndarray, shape (N,)
-        Largest |F_T| and |F| while the wheel is in each segment (N).
+        Largest |F_T| and |F| while the wheel is in each segment (N), its ends included
+        from inside.
     time_step_s : float
-        dt (s).
+        dt of the uniform time grid (s).
     steps_per_sample : float
-        Grid steps per route sample interval at the top speed (>= 4; a profile that would
-        need more than :data:`MAX_STEPS` steps is refused).
+        Grid steps per route sample interval at the top speed (informative only).
     timings_s : dict
-        Wall-clock seconds: ``envelope``, ``integrate``, ``total``.
+        Wall-clock seconds: ``envelope`` (the wheel's path), ``integrate``, ``total``.
+    path : WheelPath
+        The base input y(s) the wheel followed.
     """
 
     time_s: np.ndarray
@@ -151,11 +162,12 @@ class QuarterCarRun:
     time_step_s: float
     steps_per_sample: float
     timings_s: dict
+    path: WheelPath
 
     @property
     def steps(self) -> int:
-        """Number of time steps K."""
-        return int(self.time_s.size - 1)
+        """Number of steps of the uniform time grid."""
+        return int(round(float(self.time_s[-1]) / self.time_step_s))
 
 
 def boundary_times_s(boundaries_m: np.ndarray, speed_mps: np.ndarray) -> np.ndarray:
@@ -218,13 +230,16 @@ def position_at_time(
     s_m, speed_mps : numpy.ndarray, shape (K,)
         Position (m) and speed (m/s), clipped to the segment (rounding never leaves it).
     """
-    b = np.asarray(boundaries_m, dtype=float)
-    v = np.asarray(speed_mps, dtype=float)
     t = np.asarray(time_s, dtype=float)
-    seg = segment_index(t, times_s)
-    length = np.diff(b)
-    accel = segment_accel_mps2(v[:-1] ** 2, v[1:] ** 2, length)
-    tau = t - times_s[seg]
+    return _motion_in_segment(t, segment_index(t, times_s), np.asarray(boundaries_m, dtype=float),
+                              np.asarray(speed_mps, dtype=float), np.asarray(times_s, dtype=float))
+
+
+def _motion_in_segment(t: np.ndarray, seg: np.ndarray, b: np.ndarray, v: np.ndarray, times: np.ndarray
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    """Position and speed at times t, each inside the given segment."""
+    accel = segment_accel_mps2(v[:-1] ** 2, v[1:] ** 2, np.diff(b))
+    tau = np.maximum(t - times[seg], 0.0)
     s = b[seg] + v[seg] * tau + 0.5 * accel[seg] * tau * tau
     speed = np.maximum(v[seg] + accel[seg] * tau, 0.0)
     return np.clip(s, b[seg], b[seg + 1]), speed
@@ -236,28 +251,26 @@ def choose_time_step_s(
     natural_frequency_radps: float,
     shortest_segment_time_s: float,
 ) -> float:
-    """The time step dt (s) of the simulation, and why.
+    """The step dt (s) of the simulation's uniform time grid, and why.
 
-    The solution is exact for the held input (linear in time between grid points); what
-    the hold approximates is the smooth input y(s(t)) (a cubic between route samples). The
-    highest frequency the wheel passes is v_max / spacing samples per second, so
+    Every break of the wheel's path is a knot whatever dt is, and the input between knots
+    is exact on its lines and second order on its arcs (whose knots are at most
+    :data:`MAX_ARC_STEP_RAD` apart), so dt no longer has to resolve the samples. What it
+    resolves is the suspension's own motion, on which the turning points of the forces
+    between knots are searched:
 
-    * dt <= spacing / (4 v_max) (:data:`STEPS_PER_SAMPLE`): every cubic piece of the input
-      is sampled at least 4 times even at top speed; the central slope of the held input
-      then differs from y' by O(dt^2) (the closed-form checks in the tests agree to 1e-5);
-    * dt <= 2 pi / (200 wn) (:data:`STEPS_PER_PERIOD`): the suspension's own swing is
-      sampled 200 times per period, so a peak between grid points is missed by at most
-      1 - cos(pi / 200) ~ 1.2e-4 of its amplitude;
+    * dt <= 2 pi / (200 wn) (:data:`STEPS_PER_PERIOD`): the swing is sampled 200 times per
+      period, so the cubic that places a turning point is exact to about (pi / 100)^4;
     * dt <= (shortest segment time) / 4: every segment holds grid points.
 
-    For a route sampled every 5 cm driven at up to 10 m/s that is dt = 1.25 ms.
+    For the bundled ``atv`` (wn = 3 rad/s) dt is 10.5 ms.
 
     Parameters
     ----------
     sample_spacing_m : float
-        Smallest distance between route samples (m).
+        Smallest distance between route samples (m); no longer limits dt (kept for callers).
     peak_speed_mps : float
-        Top speed of the profile (m/s).
+        Top speed of the profile (m/s); no longer limits dt (kept for callers).
     natural_frequency_radps : float
         Suspension natural frequency wn (rad/s).
     shortest_segment_time_s : float
@@ -268,10 +281,8 @@ def choose_time_step_s(
     float
         dt (s).
     """
-    bounds = [2.0 * math.pi / (STEPS_PER_PERIOD * natural_frequency_radps), shortest_segment_time_s / 4.0]
-    if peak_speed_mps > 0:
-        bounds.append(sample_spacing_m / (STEPS_PER_SAMPLE * peak_speed_mps))
-    return min(bounds)
+    del sample_spacing_m, peak_speed_mps  # the path's kinks are knots: dt need not resolve samples
+    return min(2.0 * math.pi / (STEPS_PER_PERIOD * natural_frequency_radps), shortest_segment_time_s / 4.0)
 
 
 def _segment_trend(s: np.ndarray, y: np.ndarray, boundaries: np.ndarray, detrend: bool
@@ -294,58 +305,26 @@ def _segment_trend(s: np.ndarray, y: np.ndarray, boundaries: np.ndarray, detrend
     return s0, level, slope
 
 
-def simulate_quarter_car(
-    s_m: np.ndarray,
-    z_m: np.ndarray,
-    boundaries_m: np.ndarray,
-    speed_mps: np.ndarray,
-    vehicle: "Vehicle",
-    *,
-    envelope: bool = True,
-    detrend: bool = True,
-    time_step_s: float | None = None,
-) -> QuarterCarRun:
-    """Drive the vehicle's quarter car over sampled terrain at a speed profile.
+def _knots_m(path: WheelPath, b: np.ndarray, max_arc_step_rad: float) -> np.ndarray:
+    """Positions of the knots: segment boundaries, path breaks, steps along the arcs (m)."""
+    lo, hi = b[0], b[-1]
+    breaks = path.breaks_m
+    arcs = np.flatnonzero(path.is_arc & (breaks[1:] > lo) & (breaks[:-1] < hi))
+    r = path.wheel_radius_m
+    centre = path.x_ref_m[arcs]
+    angle = [np.arcsin(np.clip((centre - np.clip(breaks[arcs + side], lo, hi)) / r, -1.0, 1.0)) for side in (0, 1)]
+    count = np.maximum(np.ceil(np.abs(angle[1] - angle[0]) / max_arc_step_rad), 1).astype(int)
+    owner = np.repeat(np.arange(arcs.size), count - 1)
+    step = np.arange(owner.size) - np.repeat(np.cumsum(count - 1) - (count - 1), count - 1) + 1
+    theta = angle[0][owner] + (angle[1] - angle[0])[owner] * step / count[owner]
+    along_arcs = centre[owner] - r * np.sin(theta)
+    inner = breaks[(breaks > lo) & (breaks < hi)]
+    knots = np.unique(np.concatenate([b, inner, along_arcs]))
+    return knots[(knots >= lo) & (knots <= hi)]
 
-    The vehicle starts settled on the ground (x = y, x' = y'), so on a route that begins
-    with smooth ground it starts at static equilibrium.
 
-    Parameters
-    ----------
-    s_m : numpy.ndarray, shape (M,)
-        Distance along the route (m), strictly increasing.
-    z_m : numpy.ndarray, shape (M,)
-        Elevation of each sample (m).
-    boundaries_m : numpy.ndarray, shape (N+1,)
-        Segment boundaries of the speed profile (m), strictly increasing, inside
-        [s_m[0], s_m[-1]].
-    speed_mps : numpy.ndarray, shape (N+1,)
-        Speed at each boundary (m/s); constant acceleration (v^2 linear in s) in between.
-    vehicle : Vehicle
-        Supplies m, wn, zeta (hence k and c) and the wheel radius r.
-    envelope : bool, default True
-        Roll a rigid wheel over the samples (:func:`wheel_envelope_m`); False feeds the raw
-        samples in as the base input (for checks against closed forms).
-    detrend : bool, default True
-        Measure y for the excitation force from each segment's least-squares line (True,
-        as the RI does) or from its mean (False).
-    time_step_s : float, optional
-        dt (s); by default :func:`choose_time_step_s`.
-
-    Returns
-    -------
-    QuarterCarRun
-    """
-    # scipy's submodules take 0.6 s to import: only when a simulation is run
-    import scipy.interpolate
-    import scipy.linalg
-    import scipy.signal
-
-    t_start = time.perf_counter()
-    s = np.asarray(s_m, dtype=float)
-    z = np.asarray(z_m, dtype=float)
-    b = np.asarray(boundaries_m, dtype=float)
-    v = np.asarray(speed_mps, dtype=float)
+def _validate(s, z, b, v) -> None:
+    """The checks on the route and the profile (InputError with the fix)."""
     if s.ndim != 1 or z.shape != s.shape or s.size < 2:
         raise InputError("route: s and z must be 1-D arrays of the same length >= 2")
     if b.ndim != 1 or v.shape != b.shape or b.size < 2:
@@ -367,7 +346,68 @@ def simulate_quarter_car(
             "overflows a float); no ground vehicle drives at it"
         )
 
-    y_samples = wheel_envelope_m(s, z, vehicle.wheel_radius_m) if envelope else z.copy()
+
+def simulate_quarter_car(
+    s_m: np.ndarray,
+    z_m: np.ndarray,
+    boundaries_m: np.ndarray,
+    speed_mps: np.ndarray,
+    vehicle: "Vehicle",
+    *,
+    envelope: bool = True,
+    detrend: bool = True,
+    time_step_s: float | None = None,
+    max_arc_step_rad: float = MAX_ARC_STEP_RAD,
+) -> QuarterCarRun:
+    """Drive the vehicle's quarter car over sampled terrain at a speed profile.
+
+    The vehicle starts settled on the ground (x = y, x' = y'), so on a route that begins
+    with smooth ground it starts at static equilibrium.
+
+    Parameters
+    ----------
+    s_m : numpy.ndarray, shape (M,)
+        Distance along the route (m), strictly increasing.
+    z_m : numpy.ndarray, shape (M,)
+        Elevation of each sample (m).
+    boundaries_m : numpy.ndarray, shape (N+1,)
+        Segment boundaries of the speed profile (m), strictly increasing, inside
+        [s_m[0], s_m[-1]].
+    speed_mps : numpy.ndarray, shape (N+1,)
+        Speed at each boundary (m/s); constant acceleration (v^2 linear in s) in between.
+    vehicle : Vehicle
+        Supplies m, wn, zeta (hence k and c) and the wheel radius r.
+    envelope : bool, default True
+        Roll a rigid wheel over the polyline of the samples (:func:`wheel_path`); False
+        feeds the polyline itself in as the base input (a wheel of radius 0).
+    detrend : bool, default True
+        Measure y for the excitation force from each segment's least-squares line (True,
+        as the RI does) or from its mean (False).
+    time_step_s : float, optional
+        dt of the uniform time grid (s); by default :func:`choose_time_step_s`.
+    max_arc_step_rad : float, default MAX_ARC_STEP_RAD
+        Largest angle of an arc of the wheel's path between two knots (rad), > 0.
+
+    Returns
+    -------
+    QuarterCarRun
+
+    Raises
+    ------
+    InputError
+        Arrays of the wrong shape, a profile that does not lie on the route, a speed too
+        large to simulate, a segment never crossed, or more than :data:`MAX_STEPS` steps.
+    """
+    t_start = time.perf_counter()
+    s = np.asarray(s_m, dtype=float)
+    z = np.asarray(z_m, dtype=float)
+    b = np.asarray(boundaries_m, dtype=float)
+    v = np.asarray(speed_mps, dtype=float)
+    _validate(s, z, b, v)
+    if not (max_arc_step_rad > 0):
+        raise InputError(f"max_arc_step_rad = {max_arc_step_rad!r}: must be > 0 rad")
+    b = np.clip(b, s[0], s[-1])
+    path = wheel_path(s, z, vehicle.wheel_radius_m if envelope else 0.0)
     t_envelope = time.perf_counter()
 
     times = boundary_times_s(b, v)
@@ -378,7 +418,7 @@ def simulate_quarter_car(
             spacing, float(np.max(v)), vehicle.natural_frequency_radps, float(np.min(np.diff(times)))
         )
     steps = max(int(math.ceil(total / time_step_s)), 1)
-    if steps > MAX_STEPS:  # capping would break the step rules (and leave segments unsampled)
+    if steps > MAX_STEPS:  # memory
         slowest = int(np.argmax(np.diff(times)))
         raise InputError(
             f"speed profile: simulating it needs {steps:,} time steps of {time_step_s:.3g} s (at most "
@@ -386,68 +426,157 @@ def simulate_quarter_car(
             f"{times[slowest + 1] - times[slowest]:.4g} s; verify a profile that keeps moving"
         )
     dt = total / steps
-    grid_t = np.linspace(0.0, total, steps + 1)
-    grid_s, grid_v = position_at_time(grid_t, b, v, times)
-    y = scipy.interpolate.PchipInterpolator(s, y_samples)(grid_s)
-    y0 = y[0]
-    yr = y - y0  # the ODE is shift-invariant; small numbers, no cancellation
-    slope = np.diff(yr) / dt  # held input slope y' on [t_k, t_k+1], shape (K,)
-
-    # Relative coordinate u = x - y: m u'' = -k u - c u' between grid points; at t_k the
-    # input slope changes by (slope_k - slope_{k-1}) and u' jumps by minus that.
-    k_spring, c_damp, m = vehicle.spring_n_per_m, vehicle.damping_ns_per_m, vehicle.quarter_mass_kg
-    a_mat = np.array([[0.0, 1.0], [-k_spring / m, -c_damp / m]])
-    phi = scipy.linalg.expm(a_mat * dt)
-    kick = np.zeros(steps + 1)  # jump of u' at t_k; settled start: x'(0) = y'(0+)
-    kick[1:-1] = -(slope[1:] - slope[:-1])
-    # sigma_{k+1} = phi (sigma_k + e2 kick_k): a discrete LTI system with input kick.
-    b_in = phi[:, 1:2]
-    state = np.empty((steps + 1, 2))
-    for row in range(2):
-        num, den = scipy.signal.ss2tf(phi, b_in, np.eye(2)[row:row + 1], np.zeros((1, 1)))
-        # sigma_k depends on kicks up to k-1: one sample of delay is in num (num[0] == 0).
-        state[:, row] = scipy.signal.lfilter(num[0], den, kick)
-    u, du_before = state[:, 0], state[:, 1]
-    # The held input's slope jumps at each grid point by O(dt); the central value (mean of
-    # the two one-sided limits) is the smooth input's force to O(dt^2).
-    transmitted = -(k_spring * u + c_damp * (du_before + 0.5 * kick))
-
-    # Excitation F = k y~ + c y~' with y~ = y - (level + trend slope * (s - s0)).
-    s0, level, trend = _segment_trend(s, y_samples, b, detrend)
-    n_seg = b.size - 1
-    seg = segment_index(grid_s, b)
-    y_tilde = y - (level[seg] + trend[seg] * (grid_s - s0[seg]))
-    chord_speed = np.diff(grid_s) / dt  # consistent with the held y
-    dy_central = np.empty(steps + 1)
-    dy_central[1:-1] = 0.5 * (slope[1:] + slope[:-1]) - trend[seg[1:-1]] * 0.5 * (chord_speed[1:] + chord_speed[:-1])
-    dy_central[0] = slope[0] - trend[seg[0]] * chord_speed[0]
-    dy_central[-1] = slope[-1] - trend[seg[-1]] * chord_speed[-1]
-    excitation = k_spring * y_tilde + c_damp * dy_central
-
-    starts = np.searchsorted(seg, np.arange(n_seg), side="left")
-    if np.any(np.diff(np.append(starts, seg.size)) <= 0):  # pragma: no cover - dt rules prevent it
-        raise RuntimeError("a segment holds no time step; pass a smaller time_step_s")
-    transmitted_peak = np.maximum.reduceat(np.abs(transmitted), starts)
-    excitation_peak = np.maximum.reduceat(np.abs(excitation), starts)
-
-    peak_v = float(np.max(v))
+    knots = _Knots.build(path, b, v, times, steps, max_arc_step_rad)
+    run = knots.drive(path, vehicle, _segment_trend(s, path.evaluate(s)[0], b, detrend))
     t_end = time.perf_counter()
+    peak_v = float(np.max(v))
     return QuarterCarRun(
-        time_s=grid_t,
-        s_m=grid_s,
-        speed_mps=grid_v,
-        base_m=y,
-        mass_m=y0 + yr + u,
-        transmitted_n=transmitted,
-        excitation_n=excitation,
+        **run,
         boundaries_m=b.copy(),
-        transmitted_peak_n=transmitted_peak,
-        excitation_peak_n=excitation_peak,
         time_step_s=dt,
         steps_per_sample=spacing / (peak_v * dt) if peak_v > 0 else math.inf,
-        timings_s={
-            "envelope": t_envelope - t_start,
-            "integrate": t_end - t_envelope,
-            "total": t_end - t_start,
-        },
+        timings_s={"envelope": t_envelope - t_start, "integrate": t_end - t_envelope, "total": t_end - t_start},
+        path=path,
     )
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class _Knots:
+    """The knots in time, with what the profile and the path are on either side of each."""
+
+    t: np.ndarray  # (n,) times (s), strictly increasing
+    s: np.ndarray  # (n,) positions (m)
+    v: np.ndarray  # (n,) speeds (m/s)
+    grid: np.ndarray  # (n,) bool: on the uniform grid
+    piece: tuple[np.ndarray, np.ndarray]  # path piece before / after (n,)
+    seg: tuple[np.ndarray, np.ndarray]  # profile segment before / after (n,)
+    profile: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]  # b, v, times, accel
+
+    @classmethod
+    def build(cls, path: WheelPath, b: np.ndarray, v: np.ndarray, times: np.ndarray, steps: int,
+              max_arc_step_rad: float) -> "_Knots":
+        """Knots in s (boundaries, path breaks, arc steps), timed, merged with the grid."""
+        accel = segment_accel_mps2(v[:-1] ** 2, v[1:] ** 2, np.diff(b))
+        ks = _knots_m(path, b, max_arc_step_rad)
+        seg_after = segment_index(ks, b)
+        seg_before = np.clip(np.searchsorted(b, ks, side="left") - 1, 0, b.size - 2)
+        i = seg_after
+        v2 = np.maximum(v[i] ** 2 + 2.0 * accel[i] * (ks - b[i]), 0.0)
+        kv = np.sqrt(v2)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            kt = times[i] + np.where(ks > b[i], 2.0 * (ks - b[i]) / (v[i] + kv), 0.0)
+        at_end = ks == b[-1]
+        kt[at_end], kv[at_end] = times[-1], v[-1]
+        kt = np.maximum.accumulate(kt)  # rounding never reorders them
+        piece_after, piece_before = path.piece_index(ks, "right"), path.piece_index(ks, "left")
+        # knots that rounding put at one time: one knot, left side of the first, right of the last
+        first = np.concatenate([[True], kt[1:] != kt[:-1]])
+        last = np.concatenate([kt[1:] != kt[:-1], [True]])
+        group_first = np.flatnonzero(first)[np.cumsum(first) - 1]
+        piece_before, seg_before = piece_before[group_first][last], seg_before[group_first][last]
+        ks, kt, kv, piece_after, seg_after = ks[last], kt[last], kv[last], piece_after[last], seg_after[last]
+
+        grid_t = np.linspace(0.0, times[-1], steps + 1)
+        t = np.union1d(kt, grid_t)
+        is_knot = np.zeros(t.size, dtype=bool)
+        where_knot = np.searchsorted(t, kt)
+        is_knot[where_knot] = True
+        grid = np.zeros(t.size, dtype=bool)
+        grid[np.searchsorted(t, grid_t)] = True
+        # between knots the path piece and the profile segment are those after the last knot
+        last_knot = np.maximum.accumulate(np.where(is_knot, np.cumsum(is_knot) - 1, -1))
+        p_after, g_after = piece_after[last_knot], seg_after[last_knot]
+        p_before, g_before = p_after.copy(), g_after.copy()
+        p_before[where_knot], g_before[where_knot] = piece_before, seg_before
+        s_t, v_t = _motion_in_segment(t, g_after, b, v, times)
+        s_t[where_knot], v_t[where_knot] = ks, kv
+        return cls(t=t, s=s_t, v=v_t, grid=grid, piece=(p_before, p_after), seg=(g_before, g_after),
+                   profile=(b, v, times, accel))
+
+    def inputs(self, path: WheelPath, trend: tuple) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """y, y', y'' (from both sides) and the excitation's y~, y~', y~'' at the knots."""
+        accel = self.profile[3]
+        s0, level, slope = trend
+        out: dict[str, list] = {"y": [], "dy": [], "d2y": [], "yt": [], "dyt": [], "d2yt": []}
+        for side in (0, 1):
+            y, ys, yss = path.evaluate(self.s, self.piece[side])
+            seg = self.seg[side]
+            a = accel[seg]
+            out["y"].append(y)
+            out["dy"].append(ys * self.v)
+            out["d2y"].append(yss * self.v * self.v + ys * a)
+            out["yt"].append(y - (level[seg] + slope[seg] * (self.s - s0[seg])))
+            out["dyt"].append((ys - slope[seg]) * self.v)
+            out["d2yt"].append(yss * self.v * self.v + (ys - slope[seg]) * a)
+        return {key: (value[0], value[1]) for key, value in out.items()}
+
+    def drive(self, path: WheelPath, vehicle: "Vehicle", trend: tuple) -> dict[str, np.ndarray]:
+        """Run the quarter car over the knots; rows of the time series and segment peaks."""
+        wn, zeta = vehicle.natural_frequency_radps, vehicle.damping_ratio
+        m, k, c = vehicle.quarter_mass_kg, vehicle.spring_n_per_m, vehicle.damping_ns_per_m
+        n = self.t.size
+        h = np.diff(self.t)
+        q = self.inputs(path, trend)
+        y = q["y"][1]  # continuous: either side
+        g, u_star, jumps = knot_jumps(h, y, q["dy"][0], q["dy"][1], wn)
+        state = respond(self.t, jumps, self.grid, wn, zeta)
+        g_side = (np.concatenate([[0.0], g]), np.append(g, g[-1] if g.size else 0.0))
+        u_side = (np.concatenate([[u_star[0]], u_star[:-1]]), u_star)
+
+        def forces(w, side):
+            """F_T, its rate, and F, its rate, on one side of every knot."""
+            ft = -k * w[:, 0] - c * w[:, 1] + 2.0 * m * g_side[side]
+            ddw = -wn * wn * w[:, 0] - 2.0 * zeta * wn * w[:, 1]
+            fe = k * q["yt"][side] + c * q["dyt"][side]
+            return ft, -k * w[:, 1] - c * ddw, fe, k * q["dyt"][side] + c * q["d2yt"][side]
+
+        before, after = forces(state.before, 0), forces(state.after, 1)
+        # turning points inside the intervals, of either force
+        extra_j, extra_tau = [], []
+        for col in (0, 2):
+            tau = hermite_extremum(h, after[col][:-1], before[col][1:], after[col + 1][:-1], before[col + 1][1:])
+            hit = np.flatnonzero(np.isfinite(tau))
+            extra_j.append(hit)
+            extra_tau.append(tau[hit])
+        j = np.concatenate(extra_j)
+        tau = np.concatenate(extra_tau)
+        b, v, times, _ = self.profile
+        seg = self.seg[1][j]
+        te = self.t[j] + tau
+        se, ve = _motion_in_segment(te, seg, b, v, times)
+        p11, p12, p21, p22 = transition(tau, wn, zeta)
+        w0 = state.after[j]
+        w = np.stack([p11 * w0[:, 0] + p12 * w0[:, 1], p21 * w0[:, 0] + p22 * w0[:, 1]], axis=1)
+        ye, yse, _ = path.evaluate(se, self.piece[1][j])
+        s0, level, slope = trend
+        ft_e = -k * w[:, 0] - c * w[:, 1] + 2.0 * m * g[j]
+        fe_e = k * (ye - (level[seg] + slope[seg] * (se - s0[seg]))) + c * (yse - slope[seg]) * ve
+        mass_e = ye + w[:, 0] + u_star[j]
+
+        # rows: the left side at kinks and at the end, the right side elsewhere, turning points
+        jump = np.abs(q["dy"][1] - q["dy"][0]) > 1e-12 * (1.0 + np.abs(q["dy"][1]))
+        left = np.flatnonzero(jump | (np.arange(n) == n - 1))
+        left = left[left > 0]
+        right = np.arange(n - 1)
+        mass = (y + state.before[:, 0] + u_side[0], y + state.after[:, 0] + u_side[1])
+        rows = {
+            "time_s": (self.t[left], self.t[right], te),
+            "s_m": (self.s[left], self.s[right], se),
+            "speed_mps": (self.v[left], self.v[right], ve),
+            "base_m": (y[left], y[right], ye),
+            "mass_m": (mass[0][left], mass[1][right], mass_e),
+            "transmitted_n": (before[0][left], after[0][right], ft_e),
+            "excitation_n": (before[2][left], after[2][right], fe_e),
+        }
+        key = np.concatenate([2.0 * left, 2.0 * right + 1.0, 2.0 * j + 1.0 + 0.5 * tau / h[j]])  # left, right, inside
+        order = np.argsort(key, kind="stable")
+        out = {name: np.concatenate(parts)[order] for name, parts in rows.items()}
+        # per-segment peaks: left values belong to the segment before, right and inside to the one after
+        n_seg = b.size - 1
+        for name, col in (("transmitted_peak_n", 0), ("excitation_peak_n", 2)):
+            peak = np.zeros(n_seg)
+            np.maximum.at(peak, self.seg[0][1:], np.abs(before[col][1:]))
+            np.maximum.at(peak, self.seg[1][:-1], np.abs(after[col][:-1]))
+            np.maximum.at(peak, seg, np.abs(ft_e if col == 0 else fe_e))
+            out[name] = peak
+        return out

@@ -1,9 +1,10 @@
-"""The path of a rigid wheel rolling over a route's samples: the simulator's base input.
+"""The height of a rigid wheel rolling over a route's samples, at the samples.
 
 Between samples the route means the straight line from one sample to the next; a rigid wheel
 of radius r rolls on that polyline, and :func:`wheel_envelope_m` gives the height of its
-lowest point above each query position (the base input y of the quarter car in
-:mod:`profileopt.simulate`).
+lowest point above each sample. The simulator (:mod:`profileopt.simulate`) needs the same
+path between the samples too, kinks included: :func:`profileopt.wheel_path.wheel_path`
+builds it as lines and arcs, and agrees with this function at the samples.
 """
 
 from __future__ import annotations
@@ -67,17 +68,12 @@ def wheel_envelope_m(s_m: np.ndarray, z_m: np.ndarray, wheel_radius_m: float) ->
     slope of 0.4; 3.6 mm measured on a sinusoid of that slope sampled every 5 cm): a
     scallop at the sample spacing that the damper turns into force at speed.
 
-    y is evaluated at the samples only: the simulator interpolates between them with a
-    monotone cubic (see the module docstring). The envelope of the polyline itself has a
-    kink at every concave vertex (two offset lines meet), an artefact of sampling a smooth
-    ground that the cubic does not reproduce. The price is paid at sharp features: where the
-    path has structure finer than the spacing (the drop off a step, a narrow notch between
-    steep samples; the path is offset by up to r from the samples that shape it), the
-    values at the samples and the cubic between them spread it over a sample interval. Off
-    curb.csv's 0.15 m step sampled every 5 cm the path falls at the wall's slope, 3, for
-    2.5 cm; the cubic through the samples at about 1.4. Resolving such features needs
-    finer samples, and even then a rigid wheel rolling off a vertical step has no finite
-    answer (its centre drops vertically).
+    y is evaluated at the samples only. Between them the path has structure that values at
+    the samples cannot show: a kink at every concave vertex (two offset lines meet), the
+    wheel meeting an edge ahead, the drop off a step (off curb.csv's 0.15 m step sampled
+    every 5 cm the path falls at the wall's slope, 3, for 2.5 cm; a curve through the values
+    at the samples at about 1.4). :func:`profileopt.wheel_path.wheel_path` gives the whole
+    path, which is what the simulator drives on.
 
     The terrain beyond the route's ends is unknown; it is continued along the first and the
     last chord for 2 r, so that a wheel near an end is neither lifted nor dropped by missing

@@ -72,8 +72,11 @@ def test_the_models_own_force_is_simulated_and_set_against_the_limit(model: str,
     v = verify(sinusoid_route(), profile, vehicle, detrend=False)
     settled = v.s_m[:-1] >= 150.0  # 30 s in: the transient has decayed (exp(-1.5 * 30))
     assert v.quantity == ("transmitted" if model == "sbem_tf" else "excitation")
-    assert np.allclose(v.simulated_n[settled], closed_form, rtol=1e-3)
-    assert np.allclose(v.ratio[settled], 1 / 0.999, rtol=1e-3)
+    # 5e-3: the ground is the polyline through samples 2 cm apart, whose slope steps add up
+    # to c v A k^2 h / 2 = 0.12 N (0.44 %) to either force, and the rigid wheel a second
+    # harmonic of 0.03 % (tests/test_simulate.py); measured +0.32 % and +0.34 %
+    assert np.allclose(v.simulated_n[settled], closed_form, rtol=5e-3)
+    assert np.allclose(v.ratio[settled], 1 / 0.999, rtol=5e-3)
     assert np.all(v.over[settled])
     assert v.over_count == int(np.count_nonzero(v.simulated_n > 0.999 * closed_form))
     assert v.over_length_m == pytest.approx(SEGMENT_M * v.over_count)
@@ -97,8 +100,9 @@ def test_excitation_datum_is_the_segment_trend_so_a_grade_adds_nothing() -> None
     # its input leads the flat road's by k r g = 0.3 % of a radian (simulate.wheel_envelope_m);
     # that moves the wave against the segment's fixed datum (measured 0.13 %), not its size:
     assert np.allclose(steep.excitation_peak_n, flat.excitation_peak_n, rtol=3e-3)
-    # (1e-4: PCHIP is not linear in its data, so a grade changes the interpolant a little)
-    assert np.allclose(steep.transmitted_peak_n, flat.transmitted_peak_n, rtol=1e-4)
+    # (1e-5: the wheel's path on the graded ground is the flat one plus the grade only to
+    # first order, its lift r (sqrt(1 + m^2) - 1) being quadratic in the slope; measured 1.3e-6)
+    assert np.allclose(steep.transmitted_peak_n, flat.transmitted_peak_n, rtol=1e-5)
     # without the detrending the grade would count: k * 0.05 m/m * 5 m = 225 N at least
     raw = verify(graded, profile, ATV, detrend=False)
     assert np.min(raw.excitation_peak_n) > 0.05 * ATV.spring_n_per_m * SEGMENT_M / 2
