@@ -246,7 +246,8 @@ def prev_bem_force_n(speed_mps: Any, ri: Any, vehicle: "Vehicle") -> Any:
 
 def _of_e_max(force_of_e: Callable) -> Callable:
     def builder(speed_mps: Any, ri: Any, vehicle: "Vehicle") -> Any:
-        return force_of_e(speed_mps, worst_case_elevation(ri, vehicle), vehicle)
+        # the RI itself is tested: a tiny negative RI rounds to e_max = -0.0, not below 0
+        return ca.if_else(ri >= 0, force_of_e(speed_mps, worst_case_elevation(ri, vehicle), vehicle), math.nan)
 
     builder.__name__ = force_of_e.__name__ + "_of_ri"
     return builder
@@ -263,8 +264,9 @@ def _monotone_envelope(force_of_ri: Callable) -> Callable:
 
 
 def _sbem_tf_envelope_of_ri(speed_mps: Any, ri_min: Any, ri_max: Any, vehicle: "Vehicle") -> Any:
-    return sbem_tf_envelope_force_n.symbolic(speed_mps, worst_case_elevation(ri_min, vehicle),
-                                             worst_case_elevation(ri_max, vehicle), vehicle)
+    force = sbem_tf_envelope_force_n.symbolic(speed_mps, worst_case_elevation(ri_min, vehicle),
+                                              worst_case_elevation(ri_max, vehicle), vehicle)
+    return ca.if_else((ri_min >= 0) * (ri_max >= 0), force, math.nan)  # as _of_e_max: test the RI itself
 
 
 _sbem_tf_envelope_of_ri.__name__ = "sbem_tf_envelope_of_ri"  # a CasADi Function name
