@@ -62,6 +62,7 @@ __all__ = [
     "envelope_force_n",
     "transmissibility_peak_ratio",
     "sbem_tf_envelope_force_n",
+    "sbem_tf_crawl_bound_n",
     "iecm_force_n",
     "sbem_ef_force_n",
     "sbem_tf_force_n",
@@ -251,6 +252,31 @@ def _of_e_max(force_of_e: Callable) -> Callable:
 
     builder.__name__ = force_of_e.__name__ + "_of_ri"
     return builder
+
+
+def sbem_tf_crawl_bound_n(e_max_m: Any, vehicle: "Vehicle") -> Any:
+    """An upper bound (N) on the SBEM:TF force at every speed up to 2 wn r_w r_p / pi and
+    every elevation in [0, e_max]: k (r_p r_w)^2 e_max / X_w(e_max)^2 T(r_p).
+
+    Below that speed (the only speeds where the force can fall as e grows, see
+    :func:`sbem_tf_envelope_force_n`) F = k P T(r) with P = (pi V / (2 wn))^2 e / X_w(e)^2
+    growing in V and e, so P is at most its value at that speed and e_max, where
+    pi V / (2 wn) = r_p r_w; and T is at most T(r_p). Where this is within the limit, the
+    bands over an elevation range equal those at its top (the forces agree above that speed,
+    both are admissible below it).
+
+    Parameters
+    ----------
+    e_max_m : number, array, DM, SX or MX
+        The top of the elevation range (m), >= 0.
+    vehicle : Vehicle
+    """
+    k, zeta, r_w = vehicle.spring_n_per_m, vehicle.damping_ratio, vehicle.wheel_radius_m
+    r_p = transmissibility_peak_ratio(zeta)
+    a = 4.0 * zeta**2 * r_p**2
+    peak = math.sqrt((1.0 + a) / ((1.0 - r_p**2) ** 2 + a))
+    x_w = step_width(e_max_m, vehicle)
+    return _smooth_ground_is_zero(e_max_m, k * (r_p * r_w) ** 2 * e_max_m / x_w**2 * peak)
 
 
 def _monotone_envelope(force_of_ri: Callable) -> Callable:

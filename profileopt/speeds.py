@@ -32,8 +32,8 @@ from numpy.typing import ArrayLike
 from .symbolic import numpy_evaluator
 from ._deprecation import OldCall, old_forms
 from .errors import InputError
-from .forces import DEFAULT_MODEL, get_model
-from .terrain import check_ri
+from .forces import DEFAULT_MODEL, get_model, sbem_tf_crawl_bound_n
+from .terrain import check_ri, worst_case_elevation
 
 if TYPE_CHECKING:
     from .vehicle import Vehicle
@@ -277,7 +277,15 @@ def speed_bands(ri: ArrayLike, vehicle: "Vehicle", *, model: str = DEFAULT_MODEL
         check_ri(low)
         if np.any(low > ri):
             raise InputError("ri_min must not exceed ri (the least and the largest RI of each patch)")
-        terrain = (low, ri)
+        # where even a crawl cannot reach the limit the range changes no band: its top's
+        # bands are exact (forces.sbem_tf_crawl_bound_n), found with the plain model
+        # (the bound grows with e_max: the largest RI decides for every row)
+        top = float(ri.max(initial=0.0))
+        crawl = float(sbem_tf_crawl_bound_n(worst_case_elevation(top, vehicle), vehicle)) if top > 0 else 0.0
+        if crawl <= spec.limit_n(vehicle):
+            terrain = (ri,)
+        else:
+            terrain = (low, ri)
     if ri.size > _BLOCK_ROWS:  # rows are independent: bound the (rows x grid) temporaries
         blocks = [_speed_bands(tuple(t[i:i + _BLOCK_ROWS] for t in terrain), vehicle, model)
                   for i in range(0, ri.size, _BLOCK_ROWS)]

@@ -170,3 +170,30 @@ def test_batches_change_no_bit(monkeypatch) -> None:
     whole = roughness_windows(s, z, 0.1, window_m=5.0).ri
     monkeypatch.setattr(terrain, "_WINDOW_BATCH", 997)
     np.testing.assert_array_equal(roughness_windows(s, z, 0.1, window_m=5.0).ri, whole)
+
+
+@pytest.mark.parametrize("vehicle_name", ["atv", "atv-resonant"])
+def test_crawl_bound_bounds_every_force_below_the_ridge_speed(vehicle_name) -> None:
+    # sbem_tf_crawl_bound_n: no elevation in [0, e_max] gives more SBEM:TF force at any speed
+    # up to 2 wn r_w r_p / pi (checked on a dense grid of both)
+    from profileopt.forces import sbem_tf_crawl_bound_n
+    from profileopt.vehicle import load_vehicle
+
+    vehicle = load_vehicle(vehicle_name)
+    ridge = 2 * vehicle.natural_frequency_radps * vehicle.wheel_radius_m * transmissibility_peak_ratio(
+        vehicle.damping_ratio) / math.pi
+    speeds = np.linspace(0.0, ridge, 401)[:, None]
+    for e_max in (0.01, 0.05, 0.1, 0.3):
+        e = np.linspace(1e-6, e_max, 801)[None, :]
+        assert sbem_tf_force_n(speeds, e, vehicle).max() <= sbem_tf_crawl_bound_n(e_max, vehicle) * (1 + 1e-12)
+
+
+def test_bands_of_a_range_for_a_vehicle_that_cannot_reach_its_limit_crawling_are_the_tops(atv) -> None:
+    # for atv the crawl bound (276 N at RI 0.6) is far below the 5000 N limit, so a range's
+    # bands are exactly those of its largest RI
+    rng = np.random.default_rng(5)
+    ri = rng.uniform(0.0, 0.6, 500)
+    top = speed_bands(ri, atv)
+    ranged = speed_bands(ri, atv, ri_min=ri * rng.uniform(0.0, 1.0, 500))
+    np.testing.assert_array_equal(ranged.upper_mps, top.upper_mps)
+    np.testing.assert_array_equal(ranged.count, top.count)
