@@ -91,7 +91,7 @@ def profile_figure(profile: "Profile", *, title: str | None = None, route: str |
                  f"(status {profile.status})")
     ax_v.set_title(title)
     ax_ri.stairs(profile.ri[:-1], s, color="tab:green", fill=True, alpha=0.5)
-    ax_ri.set_ylabel("segment RI (-)")
+    ax_ri.set_ylabel("RI (-) of the\nroughest window met")
     ax_ri.set_xlabel("distance along the route s (m)")
     ax_ri.grid(True, alpha=0.3)
     ax_ri.set_xlim(s[0], s[-1])
@@ -106,7 +106,7 @@ def plot_profile(profile: "Profile", path: str | Path, title: str | None = None,
     docs/paper-notes.md ("first": every speed from rest up to it is admissible; "largest": the fastest
     admissible speed, possibly above resonance), drawn where the force model holds the speed
     below the speed cap, and the speed cap (the vehicle's top speed and the route's
-    ``speed_limit``) as its own line. Bottom: segment RI. The title names the route and the
+    ``speed_limit``) as its own line. Bottom: each segment's RI (its roughest window's). The title names the route and the
     vehicle. Written atomically as PNG.
 
     Parameters
