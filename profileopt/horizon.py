@@ -152,10 +152,10 @@ def terrain_envelope(
     cubic, the active one picked by the interval's index; no ``interpolant``), so it expands
     to ``SX``, calls on ``MX`` and evaluates on numbers. Its size and evaluation cost grow
     with the knot intervals (about 9 operations each); its derivatives cost a few
-    operations, since they flow through the one active cubic. Outside the route it holds the end values: from 3 h before the
-    first sample and from 4 h after the last on, it is constant, the requirement at that
-    end. A NaN or infinite position gives NaN. A relative margin of 1e-12 covers the
-    rounding of the evaluation.
+    operations, since they flow through the one active cubic. Outside the route it holds
+    the end values: from 3 h before the first sample and from 4 h after the last on, it is
+    constant, the requirement at that end. A NaN or infinite position gives NaN. A
+    relative margin of 1e-12 covers the rounding of the evaluation.
 
     How conservative: at s the value lies between the requirement (windows overlapping
     [s, s + reach_m]) and the largest e_max of the windows overlapping
@@ -252,7 +252,7 @@ def terrain_envelope(
     selected = [ca.SX(0.0)] * 4
     for i in range(n_intervals):
         here = index == i
-        selected = [acc + float(coef[i]) * here for acc, coef in zip(selected, (a0, a1, a2, a3))]
+        selected = [acc + float(power[i]) * here for acc, power in zip(selected, (a0, a1, a2, a3))]
     b0, b1, b2, b3 = selected
     value = b0 + u * (b1 + u * (b2 + u * b3))
     value = ca.if_else(ca.fabs(s_sym) < math.inf, value, math.nan)
