@@ -35,7 +35,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .errors import InputError
-from .forces import DEFAULT_MODEL, check_e_max_model, force_n, get_model, sbem_tf_envelope_force_n
+from .forces import (DEFAULT_MODEL, check_e_max_model, force_n, force_peak_ratio, get_model,
+                     sbem_tf_envelope_force_n)
 from .route import Route
 from .symbolic import is_symbolic
 from .terrain import check_e_max, range_extremes, roughness_windows, step_width, worst_case_elevation
@@ -276,57 +277,6 @@ def _finite_number(value: Any, name: str, unit: str) -> float:
 # ---------------------------------------------------------------------------------------
 # Every speed between two stages
 # ---------------------------------------------------------------------------------------
-
-
-def force_peak_ratio(damping_ratio: float) -> float | None:
-    """The frequency ratio r_phi where the SBEM:TF force at a fixed elevation has its
-    interior local maximum, or None if the force grows with speed everywhere (dimensionless).
-
-    At a fixed elevation e the force of Eq. (13) is F = k e phi(r) with phi(r) = r^2 T(r),
-    T the force transmissibility and r = pi V / (2 X_w(e) wn) proportional to the speed.
-    With x = r^2 and a = 4 zeta^2, phi^2 = x^2 (1 + a x) / ((1 - x)^2 + a x); its
-    derivative in x has the sign of the cubic a x^3 + 2 a (a - 2) x^2 + (4 a - 2) x + 2,
-    which is 2 at x = 0. For zeta < 1 / (2 sqrt 2) (a < 1/2) it has two positive roots:
-    phi rises to r_phi = sqrt(smaller root) (just above resonance, above the peak of T),
-    falls to the larger one and rises again (phi ~ 2 zeta r at high r). For
-    zeta >= 1 / (2 sqrt 2) the cubic has no positive root (a double one at x = 2 on the
-    boundary) and phi grows everywhere.
-
-    Parameters
-    ----------
-    damping_ratio : float
-        Suspension damping ratio zeta (dimensionless), > 0.
-
-    Returns
-    -------
-    float or None
-        r_phi, or None when phi has no interior maximum.
-
-    Raises
-    ------
-    InputError
-        A damping ratio that is not a number > 0.
-    """
-    zeta = float(damping_ratio)
-    if not (math.isfinite(zeta) and zeta > 0):
-        raise InputError(f"damping_ratio = {damping_ratio!r}: must be a number > 0")
-    a = 4.0 * zeta * zeta
-    coefficients = [a, 2.0 * a * (a - 2.0), 4.0 * a - 2.0, 2.0]
-    if a >= 0.5:
-        return None
-    roots = np.roots(coefficients)
-    real = np.sort(roots.real[(np.abs(roots.imag) <= 1e-9 * np.abs(roots)) & (roots.real > 0)])
-    if real.size == 0:  # pragma: no cover - a < 1/2 always has two positive roots
-        return None
-    x = float(real[0])
-    cubic = np.polynomial.Polynomial(coefficients[::-1])
-    slope = cubic.deriv()
-    for _ in range(3):  # polish to full precision
-        d = float(slope(x))
-        if d == 0.0:
-            break
-        x -= float(cubic(x)) / d
-    return math.sqrt(x)
 
 
 def _column(value: Any) -> Any:

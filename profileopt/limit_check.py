@@ -26,7 +26,7 @@ from .planning.options import SolverOptions
 from .defaults import DEFAULT_ROUGHNESS_WINDOW_M
 from .planning.segments import segments_at
 from .stations import segment_samples
-from .terrain import roughness_windows
+from .terrain import RoughnessWindows, roughness_windows
 
 if TYPE_CHECKING:
     from .planning.result import Profile
@@ -118,6 +118,9 @@ class LimitCheck:
         jerk, force; empty when it keeps them all.
     notes : tuple of str
         Remarks (a stale force column, a force limit in the file that is not the vehicle's).
+    windows : RoughnessWindows
+        The route's roughness windows, of the length the profile records (the segments' RI
+        comes from them; :func:`profileopt.window_check.check_windows` judges by them).
     """
 
     model: str
@@ -126,6 +129,7 @@ class LimitCheck:
     limit_n: float
     breaches: tuple[LimitBreach, ...]
     notes: tuple[str, ...]
+    windows: RoughnessWindows
 
 
 def _check_coverage(route: "Route", s: np.ndarray) -> None:
@@ -306,4 +310,4 @@ def check_limits(
             "recomputed from the speeds"
         )
     return LimitCheck(model=force_model.key, ri=ri_here, predicted_n=predicted, limit_n=float(limit),
-                      breaches=tuple(b for b in breaches if b is not None), notes=tuple(notes))
+                      breaches=tuple(b for b in breaches if b is not None), notes=tuple(notes), windows=windows)

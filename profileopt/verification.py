@@ -31,7 +31,6 @@ import numpy as np
 from .io.atomic import atomic_write
 from .forces import get_model
 from .limit_check import LimitBreach, LimitCheck, check_limits
-from .defaults import DEFAULT_ROUGHNESS_WINDOW_M
 from .simulate import QuarterCarRun, simulate_quarter_car
 from .stations import segment_index
 from .window_check import UNDERPREDICTION_TOLERANCE, WindowCheck, check_windows
@@ -353,8 +352,7 @@ def verify(
     down = np.minimum.reduceat(run.transmitted_n, starts)
     simulated = run.transmitted_peak_n if force_model.quantity == "transmitted" else run.excitation_peak_n
     limit_n = np.full(s.size - 1, check.limit_n)
-    window_m = float(profile.settings.get("roughness_window_m", DEFAULT_ROUGHNESS_WINDOW_M))  # checked by check_limits
-    windows = check_windows(route, run, profile.speed_mps, vehicle, model=force_model.key, window_m=window_m,
+    windows = check_windows(route, run, profile.speed_mps, vehicle, model=force_model.key, windows=check.windows,
                             detrend=detrend)
     t_end = time.perf_counter()
     return Verification(

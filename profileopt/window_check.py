@@ -14,7 +14,7 @@ simulation (:mod:`profileopt.simulate`):
     between the least and the largest of the speeds at a, at a + W and at the segment
     boundaries between; the force over it is largest at one of its ends or at an interior
     maximum of the force in speed (only SBEM:TF has one, its resonance peak, whose frequency
-    ratio depends on zeta alone: :func:`transmissibility_maxima`).
+    ratio depends on zeta alone: :func:`profileopt.forces.force_peak_ratio`).
 *simulated*
     The largest |F| of the simulation's rows whose position lies in [a, a + W].
 *the datum of the excitation force*
@@ -42,9 +42,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .forces import get_model
+from .forces import force_peak_ratio, get_model
 from .stations import segment_index, segment_samples
-from .terrain import (range_extremes, roughness_windows, segment_line_fit, step_width, window_line_moments,
+from .terrain import (RoughnessWindows, range_extremes, segment_line_fit, step_width, window_line_moments,
                       worst_case_elevation)
 
 if TYPE_CHECKING:
@@ -53,7 +53,7 @@ if TYPE_CHECKING:
     from .vehicle import Vehicle
 
 __all__ = ["WindowCheck", "check_windows", "window_speed_range_mps", "window_predicted_force_n",
-           "transmissibility_maxima", "BLOCK_ROWS", "UNDERPREDICTION_TOLERANCE"]
+           "BLOCK_ROWS", "UNDERPREDICTION_TOLERANCE"]
 
 #: Rows of the simulation per block of the bound on a window's excitation peak.
 BLOCK_ROWS = 64
@@ -246,35 +246,6 @@ def window_speed_range_mps(boundaries_m: np.ndarray, speed_mps: np.ndarray, star
     return low, high
 
 
-def transmissibility_maxima(damping_ratio: float) -> np.ndarray:
-    """Frequency ratios r where SBEM:TF's force, as a function of speed, has a local maximum.
-
-    F_T = k e r^2 T(r) (Eq. 13) with r proportional to V at a fixed e, so its interior maxima
-    in V are those of H(x) = x^2 (1 + a x) / ((1 - x)^2 + a x) in x = r^2, a = 4 zeta^2.
-    H'(x) = 0 reduces (numerator of the derivative, divided by x) to the cubic
-    a x^3 + (2 a^2 - 4 a) x^2 + (4 a - 2) x + 2 = 0. H rises from 0 and grows without bound
-    (like 2 zeta r^3), so of two positive roots the smaller is the maximum (near resonance)
-    and the larger a minimum; without positive roots (zeta = 0.5: x^3 - 2 x^2 + 2 x + 2 > 0)
-    F_T rises with speed everywhere.
-
-    Parameters
-    ----------
-    damping_ratio : float
-        Suspension damping ratio zeta (dimensionless), > 0.
-
-    Returns
-    -------
-    numpy.ndarray, shape (0,) or (1,)
-        The ratios r of the local maxima (dimensionless).
-    """
-    a = 4.0 * float(damping_ratio) ** 2
-    roots = np.roots([a, 2 * a * a - 4 * a, 4 * a - 2, 2.0])
-    real = np.sort(roots[(np.abs(roots.imag) <= 1e-12 * np.abs(roots)) & (roots.real > 0)].real)
-    if real.size < 2 or real[1] - real[0] <= 1e-12 * real[1]:  # a double root is an inflection
-        return np.empty(0)
-    return np.sqrt(real[:1])
-
-
 def window_predicted_force_n(model: str, vehicle: "Vehicle", ri: np.ndarray, speed_low_mps: np.ndarray,
                              speed_high_mps: np.ndarray) -> np.ndarray:
     """The model's largest force over every speed in [low, high], at each RI: exact.
@@ -282,7 +253,7 @@ def window_predicted_force_n(model: str, vehicle: "Vehicle", ri: np.ndarray, spe
     Prev:BEM, IECM and SBEM:EF grow with speed (Eq. 6, 11 and the reconstruction: e, X_w
     fixed, each a positive combination of 1 and V or V^2), so their largest force is at
     ``high``. SBEM:TF is largest at an end or at its resonance peak
-    V = r_p 2 X_w wn / pi (:func:`transmissibility_maxima`) when that lies inside.
+    V = r_p 2 X_w wn / pi (:func:`profileopt.forces.force_peak_ratio`) when that lies inside.
 
     Parameters
     ----------
@@ -306,7 +277,8 @@ def window_predicted_force_n(model: str, vehicle: "Vehicle", ri: np.ndarray, spe
     candidates = [low, high]
     if spec.key == "sbem_tf":
         x_w = np.asarray(step_width(worst_case_elevation(ri, vehicle), vehicle), dtype=float)
-        for r_peak in transmissibility_maxima(vehicle.damping_ratio):
+        r_peak = force_peak_ratio(vehicle.damping_ratio)
+        if r_peak is not None:
             peak = r_peak * 2.0 * x_w * vehicle.natural_frequency_radps / math.pi
             candidates.append(np.where((peak > low) & (peak < high), peak, low))
     speeds = np.stack(candidates)
@@ -422,7 +394,7 @@ def _excitation_terms(route: "Route", run: "QuarterCarRun", k_spring: float, c_d
 
 
 def check_windows(route: "Route", run: "QuarterCarRun", speed_mps: np.ndarray, vehicle: "Vehicle", *,
-                  model: str, window_m: float, detrend: bool = True) -> WindowCheck:
+                  model: str, windows: RoughnessWindows, detrend: bool = True) -> WindowCheck:
     """Judge a simulated drive by roughness windows (module docstring).
 
     Parameters
@@ -438,8 +410,9 @@ def check_windows(route: "Route", run: "QuarterCarRun", speed_mps: np.ndarray, v
         The quarter car and its limits.
     model : str
         Force model key: its force is simulated, predicted and limited.
-    window_m : float
-        Roughness window length W (m), as the profile was planned with.
+    windows : RoughnessWindows
+        The route's roughness windows, of the length the profile was planned with
+        (:func:`profileopt.terrain.roughness_windows`; :attr:`profileopt.limit_check.LimitCheck.windows`).
     detrend : bool, default True
         Datum of the excitation force: each window's least-squares line (True) or mean.
 
@@ -448,8 +421,7 @@ def check_windows(route: "Route", run: "QuarterCarRun", speed_mps: np.ndarray, v
     WindowCheck
     """
     spec = get_model(model)
-    windows = roughness_windows(route.s_m, route.z_m, vehicle.ground_clearance_m, window_m=window_m,
-                                source=route.source)
+    window_m = windows.window_m
     start, stop = windows.start_m, windows.start_m + windows.window_m
     low, high = window_speed_range_mps(run.boundaries_m, speed_mps, start, stop)
     predicted = window_predicted_force_n(spec.key, vehicle, windows.ri, low, high)
@@ -472,7 +444,7 @@ def check_windows(route: "Route", run: "QuarterCarRun", speed_mps: np.ndarray, v
         offset = k_spring * mean_y - k_spring * slope * mean_s
         peak, row = _affine_peaks(a_part, b_part, lo, hi, slope, offset)
         datum = "window line" if detrend else "window mean"
-    return WindowCheck(window_m=float(window_m), start_m=start, ri=windows.ri, speed_low_mps=low,
+    return WindowCheck(window_m=window_m, start_m=start, ri=windows.ri, speed_low_mps=low,
                        speed_high_mps=high, predicted_n=predicted, simulated_n=peak, peak_s_m=run.s_m[row],
                        limit_n=spec.limit_n(vehicle), model=spec.key, datum=datum)
 
