@@ -56,9 +56,8 @@ class Segments:
     samples : numpy.ndarray of int, shape (N,)
         Number of route samples in each segment.
     windows : RoughnessWindows
-        Every roughness window of the route, with its RI.
-    window_first, window_stop : numpy.ndarray of int, shape (N,)
-        Segment i shares a point with the windows ``window_first[i] <= k < window_stop[i]``.
+        Every roughness window of the route, with its RI (``windows.overlapping(
+        boundaries_m[:-1], boundaries_m[1:])`` gives the ones each segment meets).
     notes : tuple of str
         Decisions taken while segmenting (e.g. a short tail merged into its neighbour).
     """
@@ -71,8 +70,6 @@ class Segments:
     first_sample: np.ndarray
     samples: np.ndarray
     windows: RoughnessWindows
-    window_first: np.ndarray
-    window_stop: np.ndarray
     notes: tuple[str, ...] = ()
 
     @property
@@ -195,7 +192,5 @@ def segments_at(boundaries_m: np.ndarray, windows: RoughnessWindows, vehicle: "V
         first_sample=starts,
         samples=stops - starts,
         windows=windows,
-        window_first=window_first,
-        window_stop=window_stop,
         notes=notes,
     )
