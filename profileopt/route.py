@@ -40,6 +40,10 @@ class Route:
         Where the route came from (file name), used in messages.
     notes : tuple of str
         Remarks made while reading (ignored columns), for the user to see.
+    x_m, y_m : numpy.ndarray, shape (M,), or None
+        The path in the horizontal plane (m), for a route given as ``x,y,z``: its turns
+        (:mod:`profileopt.geometry`). None for a route given as ``s,z`` (a straight path).
+        Given, s must be the cumulative horizontal distance between the points.
     """
 
     s_m: np.ndarray
@@ -47,6 +51,8 @@ class Route:
     speed_limit_mps: np.ndarray | None = None
     source: str = "route"
     notes: tuple[str, ...] = ()
+    x_m: np.ndarray | None = None
+    y_m: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         s = np.ascontiguousarray(self.s_m, dtype=float)
@@ -64,6 +70,14 @@ class Route:
                 raise InputError(f"{self.source}: speed_limit_mps has shape {limit.shape} but s has {s.shape}; "
                                  "give one speed limit per sample")
             object.__setattr__(self, "speed_limit_mps", limit)
+        if (self.x_m is None) != (self.y_m is None):
+            raise InputError(f"{self.source}: give both x_m and y_m (the path in the horizontal plane) or neither")
+        if self.x_m is not None:
+            for name in ("x_m", "y_m"):
+                col = np.ascontiguousarray(getattr(self, name), dtype=float)
+                if col.shape != s.shape or not np.all(np.isfinite(col)):
+                    raise InputError(f"{self.source}: {name} must hold one finite coordinate (m) per sample")
+                object.__setattr__(self, name, col)
         lines = np.arange(s.size)  # sample indices, used when no file lines are known
         validate_route_arrays(self.source, s, z, limit, lines, "sample")
 

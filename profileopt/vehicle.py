@@ -1,6 +1,8 @@
 """Vehicle model files: a frozen, validated quarter-car description loaded from TOML.
 
-A vehicle file (``models/*.toml``) holds exactly the keys of :class:`Vehicle`, in SI units.
+A vehicle file (``models/*.toml``) holds the keys of :class:`Vehicle`, in SI units: the
+quarter car and planning limits always, the limits of turns and hills (lateral acceleration,
+rollover, friction, drive power) when the file gives them.
 Bundled files are found by name (``load_vehicle("atv")``) both in a source checkout and in
 an installed wheel, where they ship as the package ``profileopt.models``.
 """
@@ -34,6 +36,21 @@ _UNITS: dict[str, tuple[str, str]] = {
     "max_jerk_mps3": ("m/s^3", "largest jerk"),
 }
 
+# Optional keys (issue 11: turns and hills): a file without them plans exactly as before, with
+# the limits they set off. key -> (unit, what it is), in file order.
+_OPTIONAL_UNITS: dict[str, tuple[str, str]] = {
+    "max_lateral_accel_mps2": ("m/s^2", "largest lateral acceleration in turns"),
+    "track_width_m": ("m", "track width t (between the wheels' centres)"),
+    "cg_height_m": ("m", "height h_cg of the centre of gravity above the ground"),
+    "friction_coefficient": ("-", "tyre-ground friction coefficient mu"),
+    "mass_kg": ("kg", "mass of the whole vehicle"),
+    "max_power_w": ("W", "largest drive power at the wheels"),
+}
+
+#: Optional keys that only make sense together: rollover needs both track width and centre of
+#: gravity height, the power limit needs the whole vehicle's mass.
+_PAIRED_KEYS = (("track_width_m", "cg_height_m"), ("mass_kg", "max_power_w"))
+
 #: key -> (smallest, largest) value a ground vehicle can physically have, in the key's unit.
 #: Wide on purpose (a 1 kg robot corner to a 400 t mining truck's, walking pace to beyond any
 #: off-road vehicle); a value outside is a unit mistake or a typo, and would make the force
@@ -53,6 +70,12 @@ PLAUSIBLE_RANGES: dict[str, tuple[float, float]] = {
     "max_accel_mps2": (1e-3, 100.0),
     "max_decel_mps2": (1e-3, 100.0),
     "max_jerk_mps3": (1e-3, 1e4),
+    "max_lateral_accel_mps2": (1e-2, 100.0),
+    "track_width_m": (0.05, 20.0),
+    "cg_height_m": (0.01, 20.0),
+    "friction_coefficient": (0.01, 3.0),
+    "mass_kg": (0.4, 1e6),
+    "max_power_w": (1.0, 1e8),
 }
 
 
@@ -89,6 +112,17 @@ class Vehicle:
         Planning limits: acceleration (m/s^2), deceleration as a positive number (m/s^2) and
         jerk (m/s^3). ``max_jerk_mps3`` may be ``inf`` only when set from code (the command
         line's ``--max-jerk inf``), never in a file.
+    max_lateral_accel_mps2 : float or None
+        Largest lateral acceleration v^2 kappa in turns (m/s^2); None: no such limit.
+    track_width_m, cg_height_m : float or None
+        Track width t and centre-of-gravity height h_cg (m), given together: the static
+        rollover threshold g t / (2 h_cg) caps the lateral acceleration too.
+    friction_coefficient : float or None
+        Tyre-ground friction coefficient mu (-): the friction circle
+        (a + g sin theta)^2 + (v^2 kappa)^2 <= (mu g cos theta)^2.
+    mass_kg, max_power_w : float or None
+        Mass of the whole vehicle (kg, at least ``quarter_mass_kg``) and its largest drive
+        power at the wheels (W), given together: m (a + g sin theta) v <= P.
     name : str
         Where the vehicle came from (a bundled name or a path); not a file key.
     """
@@ -106,12 +140,20 @@ class Vehicle:
     max_accel_mps2: float
     max_decel_mps2: float
     max_jerk_mps3: float
+    max_lateral_accel_mps2: float | None = None
+    track_width_m: float | None = None
+    cg_height_m: float | None = None
+    friction_coefficient: float | None = None
+    mass_kg: float | None = None
+    max_power_w: float | None = None
     name: str = dataclasses.field(default="", compare=False)
 
     def __post_init__(self) -> None:
         where = self.name or "Vehicle"
-        for key, (unit, what) in _UNITS.items():
+        for key, (unit, what) in {**_UNITS, **_OPTIONAL_UNITS}.items():
             value = getattr(self, key)
+            if value is None and key in _OPTIONAL_UNITS:
+                continue
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 raise InputError(
                     f"{where}: key '{key}' = {value!r} is not a number; "
@@ -144,6 +186,15 @@ class Vehicle:
                 f"{where}: key 'confidence' = {self.confidence!r} is outside (0.5, 1); "
                 "give the probability Pe that e <= e_max, for example 0.999999"
             )
+        for first, second in _PAIRED_KEYS:
+            if (getattr(self, first) is None) != (getattr(self, second) is None):
+                given, absent = (first, second) if getattr(self, second) is None else (second, first)
+                unit, what = _OPTIONAL_UNITS[absent]
+                raise InputError(f"{where}: key '{given}' needs key '{absent}' as well; add the {what} in {unit}, "
+                                 f"or remove '{given}'")
+        if self.mass_kg is not None and self.mass_kg < self.quarter_mass_kg:
+            raise InputError(f"{where}: key 'mass_kg' = {self.mass_kg:g} kg is less than quarter_mass_kg = "
+                             f"{self.quarter_mass_kg:g} kg; give the mass of the whole vehicle")
 
     # Quarter-car constants (docs/paper-notes.md): k = m wn^2, c = 2 zeta m wn.
     @property
@@ -251,11 +302,11 @@ def load_vehicle(name_or_path: str | Path) -> Vehicle:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{where}: not valid TOML ({exc}); fix the syntax at that line") from None
-    unknown = sorted(set(data) - set(_UNITS))
+    unknown = sorted(set(data) - set(_UNITS) - set(_OPTIONAL_UNITS))
     if unknown:
         raise InputError(
-            f"{where}: unknown key '{unknown[0]}'; a vehicle file has exactly the keys "
-            + ", ".join(_UNITS)
+            f"{where}: unknown key '{unknown[0]}'; a vehicle file has the keys "
+            + ", ".join(_UNITS) + " and optionally " + ", ".join(_OPTIONAL_UNITS)
         )
     missing = [k for k in _UNITS if k not in data]
     if missing:
@@ -263,7 +314,7 @@ def load_vehicle(name_or_path: str | Path) -> Vehicle:
         raise InputError(f"{where}: missing key '{missing[0]}'; add the {what} in {unit}")
     for key, value in data.items():
         if isinstance(value, float) and not math.isfinite(value):
-            unit, what = _UNITS[key]
+            unit, what = {**_UNITS, **_OPTIONAL_UNITS}[key]
             raise InputError(
                 f"{where}: key '{key}' = {value!r} is not finite; give the {what} as a finite "
                 f"number > 0 in {unit}"

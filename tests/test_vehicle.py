@@ -68,7 +68,10 @@ def test_a_valid_file_loads_and_integers_become_floats(tmp_path):
     path = write_vehicle(tmp_path, {"quarter_mass_kg": "100"})
     vehicle = load_vehicle(path)
     assert vehicle.quarter_mass_kg == 100.0 and isinstance(vehicle.quarter_mass_kg, float)
-    assert vehicle == load_vehicle("atv")  # same values (name is not compared)
+    # same values (name is not compared); the file has none of the optional keys of turns and hills
+    assert vehicle == load_vehicle("atv").replace(max_lateral_accel_mps2=None, track_width_m=None, cg_height_m=None,
+                                                  friction_coefficient=None, mass_kg=None, max_power_w=None)
+    assert vehicle.max_power_w is None and vehicle.friction_coefficient is None
     assert load_vehicle(str(path)).name == str(path)
 
 
@@ -170,3 +173,17 @@ def test_infinite_jerk_only_from_code():
         atv.replace(max_speed_mps=math.inf)
     with pytest.raises(InputError, match="quarter_mass_kg"):
         Vehicle(**{**{k: v for k, (v, _u) in TABLE_1.items()}, "quarter_mass_kg": -1.0})
+
+
+def test_optional_keys_of_turns_and_hills_load_and_pair(tmp_path):
+    extra = "max_lateral_accel_mps2 = 3\ntrack_width_m = 1.2\ncg_height_m = 0.5\nfriction_coefficient = 0.7\n" \
+            "mass_kg = 400\nmax_power_w = 20000\n"
+    vehicle = load_vehicle(write_vehicle(tmp_path, extra=extra))
+    assert (vehicle.max_lateral_accel_mps2, vehicle.track_width_m, vehicle.cg_height_m) == (3.0, 1.2, 0.5)
+    assert (vehicle.friction_coefficient, vehicle.mass_kg, vehicle.max_power_w) == (0.7, 400.0, 20000.0)
+    with pytest.raises(InputError, match="'max_power_w' needs key 'mass_kg'"):
+        load_vehicle(write_vehicle(tmp_path, extra="max_power_w = 20000\n"))
+    with pytest.raises(InputError, match="'cg_height_m' needs key 'track_width_m'"):
+        load_vehicle(write_vehicle(tmp_path, extra="cg_height_m = 0.5\n"))
+    with pytest.raises(InputError, match="'friction_coefficient' = 0"):
+        load_vehicle(write_vehicle(tmp_path, extra="friction_coefficient = 0\n"))

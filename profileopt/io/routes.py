@@ -84,6 +84,7 @@ def read_route(path: str | os.PathLike) -> Route:
     where = table.line_numbers
     z = values[:, columns["z"]]
     limit = values[:, columns["speed_limit"]] if "speed_limit" in columns else None
+    x = y = None
     if "s" in columns:
         s = values[:, columns["s"]]
     else:
@@ -95,4 +96,4 @@ def read_route(path: str | os.PathLike) -> Route:
                              "remove duplicate points")
         s = np.concatenate([[0.0], np.cumsum(step)])
     validate_route_arrays(name, s, z, limit, where, "line")
-    return Route(s_m=s, z_m=z, speed_limit_mps=limit, source=name, notes=notes)
+    return Route(s_m=s, z_m=z, speed_limit_mps=limit, source=name, notes=notes, x_m=x, y_m=y)
