@@ -10,7 +10,8 @@ Run from anywhere::
 
 Every route is a CSV file: a ``#`` comment block saying what the route is and how it was
 made, then the header ``s,z`` (or ``s,z,speed_limit``): distance along the path s (m),
-elevation z (m) and, where present, a speed limit (m/s) at that sample. The summaries
+elevation z (m) and, where present, a speed limit (m/s) at that sample; or ``x,y,z``, a
+3-D polyline (m) whose turns count too (mojstrovka.csv). The summaries
 below are per 5 m segment (the planner's default), RI detrended with h = 0.1 m (both
 bundled vehicles); "first" and "largest" are the allowable speeds of NOTES.md ("Which
 root"), SBEM:TF model. The script prints them again when it runs.
@@ -63,19 +64,32 @@ flat run-out. Segment RI on the rough part (100-400 m): 1 in 0.041-0.429, 2 in
 0.090-0.666, 4 in 0.104-1.300 (atv "first" down to 5.2, 3.3 and 1.7 m/s).
 ``iri_road.csv`` (544 m, 0.25 m): a measured road profile from michalsorel/iri (MIT),
 distance shifted to start at 0, absolute elevations kept. Segment RI 0.004-0.050.
+``mojstrovka.csv`` (2701 m, 0.5 m, columns ``x,y,z``): a GPS track (184 points, about
+10 m apart) of a mountain trail below Mojstrovka (Julian Alps) from tkrajina/gpxpy
+(Apache-2.0): up from about 1625 m to 2040 m and back (smoothed elevations). GPS measures the path's turns and
+grade, not the ground's roughness: the elevation is smoothed over about 50 m, so the RI is
+near zero (segment RI up to 0.06). Grade (10 m scale) median 29 %, 90th percentile 52 %,
+up to 62 %. Turns (profileopt.geometry.smooth_path): with a 3 m path tolerance the median
+radius is 70 m, the 1st percentile 1.9 m (switchbacks), the smallest 0.1 m where the GPS
+track doubles back (s = 2594 m); with the default 0.1 m the polyline's corners read as
+radii of centimetres.
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import sys
+import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 from typing import Sequence
 
 import numpy as np
+from scipy.interpolate import make_smoothing_spline
 
 from profileopt import InputError, load_vehicle, speed_bands
+from profileopt.geometry import path_grade_rad, smooth_path
 from profileopt.io import atomic_write, read_opencrg, read_xy_profile
 from profileopt.synthetic import iso8608_profile, iso8608_sections, step, washboard
 from profileopt.stations import segment_samples
@@ -98,6 +112,16 @@ TRAIL = [
     ("D", 250.0, ""),
     ("B", 300.0, "gravel road"),
 ]
+#: WGS 84 semi-major axis a (m) and flattening f (NIMA TR8350.2, 3rd ed., 2000, table 3.1).
+WGS84_A_M = 6378137.0
+WGS84_F = 1 / 298.257223563
+MOJSTROVKA_SPACING_M = 0.5  # resampled spacing of the GPS route (m)
+#: Length scale (m) over which the GPS elevations are smoothed: about 5 GPS points.
+MOJSTROVKA_Z_SCALE_M = 50.0
+#: Grade scale (m) of the summaries: twice the planner's default 5 m roughness window.
+GRADE_SCALE_M = 10.0
+#: Path tolerances (m) of the turn summary: profileopt's default and one for GPS noise.
+SUMMARY_TOLERANCES_M = (0.1, 3.0)
 TRAIL_SEED = 8608
 WASHBOARD_SEED = 8609
 CURB_SEED = 8610
@@ -125,11 +149,18 @@ class BundledRoute:
     speed_limit_mps: np.ndarray | None = None
     s_format: str = "%.4f"
     z_format: str = "%.5f"
+    x_m: np.ndarray | None = None  # given: the file has columns x,y,z (s is then not written)
+    y_m: np.ndarray | None = None
 
 
 def rounded(route: BundledRoute) -> tuple[np.ndarray, np.ndarray]:
-    """The (s, z) a reader of the CSV gets back (m): the values as written."""
-    s = np.array([float(route.s_format % x) for x in route.s_m])
+    """The (s, z) a reader of the CSV gets back (m): the values as written (for an x,y,z
+    route, s is the cumulative horizontal distance of the written x, y, as read_route has it)."""
+    if route.x_m is not None and route.y_m is not None:
+        x, y = (np.array([float(route.s_format % v) for v in c]) for c in (route.x_m, route.y_m))
+        s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
+    else:
+        s = np.array([float(route.s_format % x) for x in route.s_m])
     z = np.array([float(route.z_format % x) for x in route.z_m])
     return s, z
 
@@ -163,6 +194,23 @@ def summary(route: BundledRoute) -> list[str]:
             f"{route.vehicle} SBEM:TF bands {shown[0]} (smoothest) to {shown[1]} (roughest), "
             f"first {first.min():.2f}-{first.max():.2f} m/s"
         )
+    return lines + geometry_summary(route)
+
+
+def geometry_summary(route: BundledRoute) -> list[str]:
+    """For an x,y,z route: its grade and its tightest turns (profileopt.geometry)."""
+    if route.x_m is None or route.y_m is None:
+        return []
+    s, z = rounded(route)
+    grade = np.abs(np.tan(path_grade_rad(s, z, scale_m=GRADE_SCALE_M)))
+    lines = [f"grade ({GRADE_SCALE_M:g} m scale): median {100 * np.median(grade):.0f} %, "
+             f"90th percentile {100 * np.percentile(grade, 90):.0f} %, largest {100 * grade.max():.0f} %"]
+    x, y = (np.array([float(route.s_format % v) for v in c]) for c in (route.x_m, route.y_m))  # as written
+    for tolerance in SUMMARY_TOLERANCES_M:
+        kappa = np.abs(smooth_path(x, y, tolerance_m=tolerance).curvature_1pm)
+        lines.append(f"turn radius (path tolerance {tolerance:g} m): smallest {1 / kappa.max():.2g} m at "
+                     f"s = {s[np.argmax(kappa)]:.0f} m, 1st percentile {1 / np.percentile(kappa, 99):.1f} m, "
+                     f"median {1 / np.median(kappa):.0f} m")
     return lines
 
 
@@ -277,8 +325,81 @@ def iri_road(real: Path) -> BundledRoute:
     return BundledRoute("iri_road.csv", "atv", comments, s, z, sections)
 
 
+def mojstrovka(real: Path) -> BundledRoute:
+    """A GPS track of a mountain trail (tkrajina/gpxpy test file, Apache-2.0) as x,y,z."""
+    source = real / "gpx-tracks" / "Mojstrovka.gpx"
+    root = ElementTree.parse(source).getroot()
+    ns = {"gpx": root.tag[1:].split("}")[0]}  # the GPX namespace the file declares (1.0 here)
+    points = np.array([(float(p.get("lat")), float(p.get("lon")), float(p.find("gpx:ele", ns).text))
+                       for p in root.iterfind(".//gpx:trkpt", ns)])
+    lat, lon = np.radians(points[:, 0]), np.radians(points[:, 1])
+    # local east-north tangent plane at the track's mean position on the WGS 84 ellipsoid:
+    # meridional radius M = a (1 - e^2) / w^3 and prime-vertical radius N = a / w, with
+    # w = sqrt(1 - e^2 sin^2 lat0) (e.g. Torge and Mueller, Geodesy, 4th ed., 2012), then
+    # east = N cos(lat0) (lon - lon0), north = M (lat - lat0). Against the exact tangent plane
+    # (ECEF to ENU) this is off by 2.4 cm at most over the track's 0.5 km from the centre.
+    lat0, lon0 = float(lat.mean()), float(lon.mean())
+    e2 = WGS84_F * (2 - WGS84_F)
+    w = math.sqrt(1 - e2 * math.sin(lat0) ** 2)
+    east = WGS84_A_M / w * math.cos(lat0) * (lon - lon0)
+    north = WGS84_A_M * (1 - e2) / w**3 * (lat - lat0)
+    keep = np.concatenate([[True], np.hypot(np.diff(east), np.diff(north)) > 0])  # drop repeated points
+    east, north, ele = east[keep], north[keep], points[keep, 2]
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(east), np.diff(north)))])
+    # GPS elevations are noisy by metres: a smoothing spline of z over s, lam = (n / L) 50^4,
+    # smooths over about 50 m (5 points)
+    z_spline = make_smoothing_spline(s, ele, lam=s.size / s[-1] * MOJSTROVKA_Z_SCALE_M**4)
+    deviation = z_spline(s) - ele
+    # each GPS segment cut into equal pieces of at most 0.5 m: the GPS points are kept, so the
+    # chord lengths that read_route sums are the track's horizontal length and z(s) is kept
+    # (cutting a corner with a 0.5 m grid would shorten s there, which reads as roughness)
+    pieces = np.ceil(np.diff(s) / MOJSTROVKA_SPACING_M).astype(int)
+    s_new = np.append(np.repeat(s[:-1], pieces) + np.concatenate([np.arange(n) / n for n in pieces])
+                      * np.repeat(np.diff(s), pieces), s[-1])
+    x, y, z = np.interp(s_new, s, east), np.interp(s_new, s, north), z_spline(s_new)
+    top = int(np.argmax(z))
+    comments = [
+        "mojstrovka.csv: a GPS track of a mountain trail below Mojstrovka (Julian Alps, Slovenia),",
+        f"up from {z[0]:.0f} m to {z[top]:.0f} m and back down, {s[-1]:.0f} m: a path with turns and hills.",
+        "Source: tkrajina/gpxpy, https://github.com/tkrajina/gpxpy, test_files/Mojstrovka.gpx",
+        f"({points.shape[0]} points, median {np.median(np.diff(s)):.0f} m apart), Apache-2.0 licence;",
+        "see the LICENSE.txt of data/real/gpx-tracks/.",
+        f"Converted by `{COMMAND}` from data/real/: latitude, longitude projected to",
+        "local metres on the east-north tangent plane at the track's mean position on the WGS 84",
+        "ellipsoid (meridional and prime-vertical radii of curvature; under 3 cm from the exact",
+        "tangent plane here, far below GPS noise), x east, y north; repeated points dropped; the",
+        f"polyline resampled at {MOJSTROVKA_SPACING_M:g} m (each GPS segment cut into equal pieces of at most",
+        f"{MOJSTROVKA_SPACING_M:g} m, linear interpolation: the GPS points are kept, s is the track's length).",
+        "GPS measures the path's geometry and its grade, not the ground's roughness: the elevation",
+        "is smoothed before resampling (scipy make_smoothing_spline of z over s,",
+        f"lam = (n/L) {MOJSTROVKA_Z_SCALE_M:g}^4: smoothing over about {MOJSTROVKA_Z_SCALE_M:g} m; it departs from the",
+        f"GPS elevations by {np.sqrt(np.mean(deviation**2)):.1f} m RMS, by up to {np.max(np.abs(deviation)):.0f} m "
+        "where the log jumps),",
+        "so the route's roughness is near zero: plan it to see turns and",
+        "hills, not roughness. The GPS path is noisy by metres too: smooth it with a path",
+        "tolerance of a few metres (a 0.1 m tolerance reads the noise and the polyline's corners",
+        "as sharp turns).",
+        f"Units: x, y, z (m); a point every {MOJSTROVKA_SPACING_M:g} m or closer along the path.",
+    ]
+    sections = [Section(0.0, 5.0 * np.floor(s_new[top] / 5.0), "climb"),
+                Section(5.0 * np.ceil(s_new[top] / 5.0), 5.0 * np.floor(s_new[-1] / 5.0), "descent")]
+    return BundledRoute("mojstrovka.csv", "atv", comments, s_new, z, sections, x_m=x, y_m=y, z_format="%.4f")
+
+
 def write(route: BundledRoute, folder: Path) -> Path:
     """Write ``route`` as ``folder / route.name`` (atomically); return the path."""
+    if route.x_m is not None and route.y_m is not None:  # a 3-D polyline: x,y,z
+        path = folder / route.name
+        with atomic_write(path) as handle:
+            for line in route.comments:
+                handle.write(f"# {line}\n")
+            handle.write("x,y,z\n")
+            formats = [route.s_format, route.s_format, route.z_format]
+            # rounded first, then + 0.0: no -0.0000 in the file
+            table = np.column_stack([np.round(c, int(f[2:-1])) + 0.0
+                                     for c, f in zip((route.x_m, route.y_m, route.z_m), formats)])
+            np.savetxt(handle, table, fmt=formats, delimiter=",")
+        return path
     columns = [route.s_m, route.z_m]
     formats = [route.s_format, route.z_format]
     header = "s,z"
@@ -304,7 +425,7 @@ def synthetic_routes() -> list[BundledRoute]:
 
 def real_routes(real: Path) -> list[BundledRoute]:
     """The routes converted from measured terrain in ``real`` (data/real)."""
-    return [krc_course(real, 1), krc_course(real, 2), krc_course(real, 4), iri_road(real)]
+    return [krc_course(real, 1), krc_course(real, 2), krc_course(real, 4), iri_road(real), mojstrovka(real)]
 
 
 def main(argv: Sequence[str] | None = None) -> int:
