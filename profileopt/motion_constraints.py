@@ -25,8 +25,8 @@ Stages and segments
 -------------------
 Each function accepts two layouts, as ``force_constraints`` does:
 
-* *points*: N speeds and N values of each other argument (or one value for all stages):
-  one row per stage;
+* *points*: N speeds and N values of each other argument (any of them, the speed too, may
+  be one value for all stages): one row per stage;
 * *segments*: N + 1 boundary speeds and N values of acceleration, curvature and grade
   (or one for all): segment i runs from v_i to v_{i+1} with a_i, kappa_i and theta_i, and
   both its entry and its exit speed are constrained (2 N rows, segment by segment).
@@ -121,7 +121,7 @@ def lateral_constraints(speed_mps: Any, curvature_1pm: Any, vehicle: Vehicle) ->
 
     Parameters
     ----------
-    speed_mps : SX, MX, DM, numpy array or number, shape (N,) or (N + 1,)
+    speed_mps : SX, MX, DM, numpy array or number, shape (N,), (N + 1,) or scalar
         Stage speeds v (m/s), >= 0; N + 1 boundary speeds for the segments layout.
     curvature_1pm : SX, MX, DM, numpy array or number, shape (N,) or scalar
         Curvature kappa of each stage or segment (1/m); its sign does not matter.
@@ -159,7 +159,7 @@ def friction_constraints(speed_mps: Any, accel_mps2: Any, curvature_1pm: Any, gr
 
     Parameters
     ----------
-    speed_mps : SX, MX, DM, numpy array or number, shape (N,) or (N + 1,)
+    speed_mps : SX, MX, DM, numpy array or number, shape (N,), (N + 1,) or scalar
         Stage speeds v (m/s), >= 0; N + 1 boundary speeds for the segments layout.
     accel_mps2 : SX, MX, DM, numpy array or number, shape (N,) or scalar
         Acceleration a along the path of each stage or segment (m/s^2).
@@ -201,7 +201,7 @@ def power_constraints(speed_mps: Any, accel_mps2: Any, grade_rad: Any, vehicle: 
 
     Parameters
     ----------
-    speed_mps : SX, MX, DM, numpy array or number, shape (N,) or (N + 1,)
+    speed_mps : SX, MX, DM, numpy array or number, shape (N,), (N + 1,) or scalar
         Stage speeds v (m/s), >= 0 (forward driving); N + 1 boundary speeds for the
         segments layout.
     accel_mps2 : SX, MX, DM, numpy array or number, shape (N,) or scalar
@@ -278,7 +278,8 @@ def _column(where: str, name: str, value: Any) -> Any:
 def _stage_rows(where: str, speed: Any, **per_stage: Any) -> tuple[Any, list[Any]]:
     """Speeds and the per-stage arguments row by row for the points or segments layout
     (module docstring): N + 1 speeds and N values give 2 N rows, entry and exit of each
-    segment, ordered segment by segment; an argument of one value applies to every row."""
+    segment, ordered segment by segment; an argument of one value (the speed too) applies
+    to every stage."""
     v = _column(where, "speed_mps", speed)
     n_v = v.shape[0]
     if n_v == 0:
@@ -292,6 +293,8 @@ def _stage_rows(where: str, speed: Any, **per_stage: Any) -> tuple[Any, list[Any
         described = ", ".join(f"{name} has {n}" for name, n in lengths.items())
         raise InputError(f"{where}: {described} values; give the same number N for each (or one value for all)")
     n = next(iter(lengths.values()), n_v)
+    if n_v == 1 and n > 1:  # one speed for every stage
+        v, n_v = ca.repmat(v, n, 1), n
     if n == n_v:  # points
         return v, [col if col.shape[0] == n else ca.repmat(col, n, 1) for col in cols.values()]
     if n_v == n + 1:  # segments: both ends of segment i with the values of segment i
