@@ -294,3 +294,13 @@ def test_all_limits_together_with_force_constraints_in_opti() -> None:
     assert v_opt[2:4] == pytest.approx([10.0, 10.0], abs=1e-6) and lateral.max() == pytest.approx(0.0, abs=1e-6)
     # the last climb: the exit speed's power row binds, m (a_3 + g sin theta) v_4 = P
     assert power[-1] == pytest.approx(0.0, abs=1e-6) and a_opt[3] < vehicle.max_accel_mps2 - 0.1
+
+
+def test_constraints_module_re_exports_the_three() -> None:
+    import profileopt.constraints as constraints
+
+    assert constraints.lateral_constraints is lateral_constraints
+    assert constraints.friction_constraints is friction_constraints
+    assert constraints.power_constraints is power_constraints
+    assert constraints.MotionConstraints is MotionConstraints
+    assert {"lateral_constraints", "friction_constraints", "power_constraints"} <= set(constraints.__all__)
