@@ -41,6 +41,12 @@ Named ``casadi.Function`` objects
     for ``map``, differentiation and code generation (:mod:`profileopt.codegen`);
     :func:`jacobian_function` gives their Jacobian with the same two inputs (CasADi's own
     ``fn.jacobian()`` wants the nominal output as a third).
+Turns and hills (:mod:`profileopt.motion_constraints`)
+    :func:`lateral_constraints` (v^2 |kappa| within the lateral and rollover limit),
+    :func:`friction_constraints` (the friction circle) and :func:`power_constraints`
+    (m (a + g sin theta) v <= P) return a :class:`MotionConstraints` that unpacks as
+    ``(g, lbg, ubg)`` like :class:`ForceConstraints`, in the same *points* and *segments*
+    layouts (below), for vehicles whose file gives the optional keys they need.
 Resonance
     :func:`band_edges` (one band per terrain value, as speed bounds) and, re-exported,
     :func:`~profileopt.speeds.speed_bands` (every band) and
@@ -116,6 +122,7 @@ from ._deprecation import OldCall, old_forms
 from .errors import InputError
 from .casadi_functions import constraint_function, force_function, jacobian_function
 from .horizon import ForceConstraints, force_peak_ratio, interval_force_constraints, terrain_envelope
+from .motion_constraints import MotionConstraints, friction_constraints, lateral_constraints, power_constraints
 from .forces import (
     DEFAULT_MODEL,
     check_e_max_model,
@@ -145,6 +152,10 @@ __all__ = [
     "ForceConstraints",
     "force_constraints",
     "add_force_constraints",
+    "MotionConstraints",
+    "lateral_constraints",
+    "friction_constraints",
+    "power_constraints",
     "terrain_envelope",
     "interval_force_constraints",
     "force_peak_ratio",
