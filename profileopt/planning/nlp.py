@@ -16,6 +16,11 @@ boundaries k, k+1 (and k+2), so its entries are stage 0's shifted by k). No symb
 differentiation of the whole problem happens, which is what made building a
 10,000-segment SX problem take seconds.
 
+Optional *row families* add rows on a segment's two squared speeds with data of their own
+per segment (:data:`ROW_FAMILIES`): the friction circle and the drive power of turns and
+hills (:mod:`profileopt.motion`), each evaluated at both ends of the segment (the higher
+speed is where they are tightest) and, for friction, at both extremes of its grade.
+
 Every stage contribution is an exact term of the objective or one entry of g, so the
 gradient, Jacobian and Hessian are exactly those of the whole problem (the tests check
 them against ``casadi.jacobian``/``casadi.hessian`` of an independently written SX NLP).
@@ -34,14 +39,25 @@ from ..kinematics import boundary_jerk_mps3, jerk_squared_time, segment_accel_mp
 from ..symbolic import mx_replay
 from .options import DEFAULT_IPOPT_OPTIONS, SolverOptions
 
-__all__ = ["SPEED_EPS_MPS", "PARAMETERS", "build_nlp", "cached_nlp", "Scaling", "IpoptResult", "solve_ipopt",
-           "row_bounds", "objective_s"]
+__all__ = ["SPEED_EPS_MPS", "PARAMETERS", "ROW_FAMILIES", "build_nlp", "cached_nlp", "Scaling", "IpoptResult",
+           "solve_ipopt", "row_bounds", "objective_s", "family_rows"]
 
 #: Speed (m/s) that keeps sqrt(b) differentiable at rest in the NLP's time and jerk terms.
 SPEED_EPS_MPS = 1e-3
 
-#: The global parameters after the N scaled segment lengths, in order (see build_nlp).
+#: The global parameters after the N scaled segment lengths (and the row families' data),
+#: in order (see build_nlp).
 PARAMETERS = ("b_ref", "l_ref", "a_ref", "t_ref", "weight", "inv_jerk")
+
+#: Optional rows on each segment's two squared speeds: family -> (per-segment data, in
+#: order; number of rows per segment). Every row is normalised, g <= 1 means the limit holds.
+#: ``friction``: friction_usage(v_e, a, kappa, theta, mu) at both ends e and both grade
+#: extremes theta (rows e0-lo, e0-hi, e1-lo, e1-hi); ``power``: drive power / P at both
+#: ends at the steepest grade (rows e0, e1).
+ROW_FAMILIES: dict[str, tuple[tuple[str, ...], int]] = {
+    "friction": (("curvature_1pm", "grade_lo_rad", "grade_hi_rad", "friction_coefficient"), 4),
+    "power": (("grade_hi_rad", "mass_kg", "max_power_w"), 2),
+}
 
 # ---------------------------------------------------------------------------------------
 # The formulas, each written once (symbolic; SX or MX arguments).
@@ -104,7 +120,66 @@ def _stages() -> dict[str, ca.Function]:
     f = weight * smooth / t_ref
     g = jerk * inv_jerk
     out.update(_stage_functions("bnd", z, ds, q, f, g, lam_f, lam_g, _TRIU_3))
+
+    for family, (names, count) in ROW_FAMILIES.items():
+        z = ca.SX.sym("z", 2)
+        ds = ca.SX.sym("ds")
+        d = ca.SX.sym("d", len(names))
+        b, length = b_ref * z, l_ref * ds
+        for k, g in enumerate(_family_expressions(family, b, length, d)):
+            out.update(_row_functions(f"{family}{k}", z, ds, d, q, g, lam_g))
+        assert k + 1 == count
     return out
+
+
+def _family_expressions(family: str, b: Any, length: Any, d: Any) -> list[Any]:
+    """The normalised rows (g <= 1) of one segment of a row family (:data:`ROW_FAMILIES`),
+    from its squared speeds ``b`` (2,), length and data ``d``; symbolic or numeric."""
+    from ..motion import drive_power_w, friction_usage
+
+    a = segment_accel_mps2(b[0], b[1], length)
+    v = (speed_mps(b[0]), speed_mps(b[1]))
+    if family == "friction":
+        kappa, lo, hi, mu = d[0], d[1], d[2], d[3]
+        return [friction_usage(v[e], a, kappa, theta, mu) for e in (0, 1) for theta in (lo, hi)]
+    if family == "power":
+        hi, mass, power = d[0], d[1], d[2]
+        return [drive_power_w(mass, v[e], a, hi) / power for e in (0, 1)]
+    raise ValueError(f"unknown row family {family!r}")
+
+
+def _row_functions(name: str, z: ca.SX, ds: ca.SX, d: ca.SX, q: ca.SX, g: ca.SX, lam_g: ca.SX
+                   ) -> dict[str, ca.Function]:
+    hess = ca.hessian(lam_g * g, z)[0]
+    return {
+        f"{name}_g": ca.Function(f"{name}_g", [z, ds, d, q], [g]),
+        f"{name}_gdg": ca.Function(f"{name}_gdg", [z, ds, d, q], [g, ca.gradient(g, z)]),
+        f"{name}_h": ca.Function(f"{name}_h", [z, ds, d, lam_g, q], [ca.vertcat(*(hess[r, c] for r, c in _TRIU_2))]),
+    }
+
+
+def family_rows(family: str, b: np.ndarray, length_m: np.ndarray, data: np.ndarray) -> np.ndarray:
+    """The rows of a row family evaluated on numbers: the same expressions as the NLP's.
+
+    Parameters
+    ----------
+    family : str
+        A key of :data:`ROW_FAMILIES`.
+    b : numpy.ndarray, shape (N+1,)
+        Squared speeds at the boundaries (m^2/s^2).
+    length_m : numpy.ndarray, shape (N,)
+        Segment lengths (m).
+    data : numpy.ndarray, shape (N, D)
+        The family's per-segment data, columns as :data:`ROW_FAMILIES` names them.
+
+    Returns
+    -------
+    numpy.ndarray, shape (R, N)
+        Each row's value per segment; <= 1 where the limit holds.
+    """
+    cols = [data[:, k] for k in range(data.shape[1])]
+    rows = _family_expressions(family, (b[:-1], b[1:]), length_m, cols)
+    return np.array([np.asarray(r, dtype=float).ravel() for r in rows])
 
 
 def _stage_functions(name: str, z: ca.SX, ds: ca.SX, q: ca.SX, f: ca.SX, g: ca.SX, lam_f: ca.SX,
@@ -136,7 +211,8 @@ def _diagonal(v: ca.MX, rows: int, cols: int, offset: int) -> ca.MX:
     return ca.vertcat(ca.horzcat(ca.MX(k, offset), block, ca.MX(k, cols - offset - k)), ca.MX(rows - k, cols))
 
 
-def build_nlp(n: int, with_jerk: bool, ipopt_options: Mapping[str, Any] = DEFAULT_IPOPT_OPTIONS) -> ca.Function:
+def build_nlp(n: int, with_jerk: bool, ipopt_options: Mapping[str, Any] = DEFAULT_IPOPT_OPTIONS,
+              families: tuple[str, ...] = ()) -> ca.Function:
     """The IPOPT solver of the planner's NLP for N = n segments, in y = b / b_ref (b = v^2).
 
     Parameters
@@ -148,19 +224,23 @@ def build_nlp(n: int, with_jerk: bool, ipopt_options: Mapping[str, Any] = DEFAUL
         Whether g holds the jerk constraints (only when N >= 2).
     ipopt_options : Mapping[str, Any], default :data:`~profileopt.planning.options.DEFAULT_IPOPT_OPTIONS`
         Options of ``casadi.nlpsol`` for IPOPT.
+    families : tuple of str, default ()
+        Row families (:data:`ROW_FAMILIES`) to add, in this order.
 
     Returns
     -------
     casadi.Function
         ``casadi.nlpsol`` (IPOPT with ``ipopt_options``, exact Hessian) with x = y, shape
-        (N+1,), and parameters p, shape (N+6,): segment lengths / L_ref (N), then b_ref
+        (N+1,), and parameters p, shape (N + N D + 6,): segment lengths / L_ref (N), the
+        families' data (N per data column, family after family, D columns in all), then b_ref
         (m^2/s^2), L_ref (m), a_ref (m/s^2), T_ref (s), the smoothing weight (-) and 1/J
         (s^3/m). Constraints g: the accelerations a_i / a_ref (N), then, with jerk and
         N >= 2, jerk_j / J at the N-1 interior boundaries, jerk_j = v_j (a_j - a_{j-1}) /
         dsm_j (jerk = v da/ds, dsm_j = (ds_{j-1} + ds_j) / 2). Objective: (travel time +
         weight * integral (jerk / (1 m/s^3))^2 dt) / T_ref, with travel time = sum 2 ds_i /
         (v_i + v_{i+1}), integral jerk^2 dt = sum v_j (a_j - a_{j-1})^2 / dsm_j, and
-        v = sqrt(b + eps^2), eps = :data:`SPEED_EPS_MPS`.
+        v = sqrt(b + eps^2), eps = :data:`SPEED_EPS_MPS`. After the jerk rows, each family's
+        rows (N per row of the family, row after row), bounded above by 1.
 
     Notes
     -----
@@ -175,18 +255,35 @@ def build_nlp(n: int, with_jerk: bool, ipopt_options: Mapping[str, Any] = DEFAUL
     jerk = bool(with_jerk) and n >= 2
     nx, m = n + 1, n - 1  # variables, interior boundaries
     st = _stages()
+    unknown = [f for f in families if f not in ROW_FAMILIES]
+    if unknown:
+        raise ValueError(f"unknown row families {unknown}; choose from {sorted(ROW_FAMILIES)}")
+    n_data = sum(len(ROW_FAMILIES[f][0]) for f in families)
 
     x = ca.MX.sym("y", nx)
-    p = ca.MX.sym("p", n + len(PARAMETERS))
+    p = ca.MX.sym("p", n + n * n_data + len(PARAMETERS))
     lam_f = ca.MX.sym("lam_f")
-    q = [p[n + k] for k in range(len(PARAMETERS))]
+    q = [p[n + n * n_data + k] for k in range(len(PARAMETERS))]
+    data_cols: dict[str, list[ca.MX]] = {}
+    start = n
+    for family in families:  # each data column of each family: N entries of p
+        names = ROW_FAMILIES[family][0]
+        data_cols[family] = [p[start + k * n:start + (k + 1) * n] for k in range(len(names))]
+        start += n * len(names)
+    # (family, row, stage inputs) of every family row, in the order of g
+    fam_rows = [(family, k, [[x[:n], x[1:]], [p[:n]], data_cols[family]])
+                for family in families for k in range(ROW_FAMILIES[family][1])]
     # stage inputs: one column per scalar input, one entry per stage
     seg = [[x[:n], x[1:]], [p[:n]]]
     bnd = [[x[:m], x[1:n], x[2:]], [p[:m], p[1:n]]] if m else None
 
-    def stages(kind: str, what: str, extra: list | None = None, shared: list | None = None) -> list[list[ca.MX]]:
+    def stages(kind: str, what: str, extra: list | None = None, shared: list | None = None,
+               inputs: list | None = None) -> list[list[ca.MX]]:
         """The outputs of stage Function ``kind_what`` at every stage, as columns."""
-        inputs, count = (seg, n) if kind == "seg" else (bnd, m)
+        if inputs is None:
+            inputs, count = (seg, n) if kind == "seg" else (bnd, m)
+        else:
+            count = n
         outputs = mx_replay(st[f"{kind}_{what}"], inputs + (extra or []) + [q] + (shared or []))
         return [[_column(v, count) for v in out] for out in outputs]
 
@@ -197,6 +294,8 @@ def build_nlp(n: int, with_jerk: bool, ipopt_options: Mapping[str, Any] = DEFAUL
         f = f + ca.sum1(stages("bnd", "f")[0][0])
         if jerk:
             g_parts.append(stages("bnd", "g")[0][0])
+    for family, k, inputs in fam_rows:
+        g_parts.append(stages(f"{family}{k}", "g", inputs=inputs)[0][0])
     g = ca.vertcat(*g_parts)
     ng = g.size1()
 
@@ -218,6 +317,10 @@ def build_nlp(n: int, with_jerk: bool, ipopt_options: Mapping[str, Any] = DEFAUL
         (g_bnd,), dg_bnd = stages("bnd", "gdg")
         g_d.append(g_bnd)
         blocks.append(sum(_diagonal(dg_bnd[r], m, nx, r) for r in range(3)))
+    for family, k, inputs in fam_rows:
+        (g_fam,), dg_fam = stages(f"{family}{k}", "gdg", inputs=inputs)
+        g_d.append(g_fam)
+        blocks.append(sum(_diagonal(dg_fam[r], n, nx, r) for r in range(2)))
     jac = ca.vertcat(*blocks)
 
     # Hessian of the Lagrangian, upper triangle: entry (r, c) of stage k's local Hessian
@@ -226,15 +329,20 @@ def build_nlp(n: int, with_jerk: bool, ipopt_options: Mapping[str, Any] = DEFAUL
     (h_seg,) = stages("seg", "h", [[lam_g[:n]]], [[lam_f]])
     parts = [(h_seg[e], r, c, n) for e, (r, c) in enumerate(_TRIU_2)]
     if m:
-        lam_jerk = lam_g[n:] if jerk else ca.MX(0.0)
+        lam_jerk = lam_g[n:n + m] if jerk else ca.MX(0.0)
         (h_bnd,) = stages("bnd", "h", [[lam_jerk]], [[lam_f]])
         parts += [(h_bnd[e], r, c, m) for e, (r, c) in enumerate(_TRIU_3)]
+    first_row = n + (m if jerk else 0)
+    for j, (family, k, inputs) in enumerate(fam_rows):
+        lam_rows = lam_g[first_row + j * n:first_row + (j + 1) * n]
+        (h_fam,) = stages(f"{family}{k}", "h", [[lam_rows]], inputs=inputs)
+        parts += [(h_fam[e], r, c, n) for e, (r, c) in enumerate(_TRIU_2)]
     by_offset: dict[int, list[ca.MX]] = {}
     for v, r, c, count in parts:  # diagonal c - r, starting at row r
         by_offset.setdefault(c - r, []).append(_shifted(v, r, nx - (c - r) - r - count))
     hess = sum(_diagonal(sum(vs), nx, nx, offset) for offset, vs in sorted(by_offset.items()))
 
-    name = f"profileopt_n{n}_{'jerk' if with_jerk else 'nojerk'}"
+    name = f"profileopt_n{n}_{'jerk' if with_jerk else 'nojerk'}" + "".join(f"_{f}" for f in families)
     options = dict(ipopt_options)
     options["grad_f"] = ca.Function(f"{name}_grad_f", [x, p], [f_d, grad], ["x", "p"], ["f", "grad_f_x"])
     options["jac_g"] = ca.Function(f"{name}_jac_g", [x, p], [ca.vertcat(*g_d), jac], ["x", "p"], ["g", "jac_g_x"])
@@ -256,7 +364,8 @@ def _column(v: ca.MX | None, count: int) -> ca.MX:
 
 
 @functools.lru_cache(maxsize=8)
-def cached_nlp(n: int, with_jerk: bool, ipopt_key: tuple = SolverOptions().ipopt_key()) -> ca.Function:
+def cached_nlp(n: int, with_jerk: bool, ipopt_key: tuple = SolverOptions().ipopt_key(),
+               families: tuple[str, ...] = ()) -> ca.Function:
     """:func:`build_nlp` for N = n segments, built once per size and options and cached.
 
     Variables y = b / b_ref (b = v^2) at the N+1 boundaries; parameters: segment lengths /
@@ -272,13 +381,15 @@ def cached_nlp(n: int, with_jerk: bool, ipopt_key: tuple = SolverOptions().ipopt
         Whether the jerk rows are in g (only when n >= 2).
     ipopt_key : tuple
         The IPOPT options as :meth:`SolverOptions.ipopt_key` gives them.
+    families : tuple of str, default ()
+        Row families (:data:`ROW_FAMILIES`).
 
     Returns
     -------
     casadi.Function
         The IPOPT solver.
     """
-    return build_nlp(n, with_jerk and n >= 2, dict(ipopt_key))
+    return build_nlp(n, with_jerk and n >= 2, dict(ipopt_key), families)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -349,7 +460,7 @@ class IpoptResult:
 
 
 def solve_ipopt(solver: ca.Function, x0: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, length_scaled: np.ndarray,
-                lbg: np.ndarray, ubg: np.ndarray, p_tail: np.ndarray) -> IpoptResult:
+                lbg: np.ndarray, ubg: np.ndarray, p_tail: np.ndarray, data: np.ndarray | None = None) -> IpoptResult:
     """One IPOPT solve of a cached NLP, all in scaled units.
 
     Parameters
@@ -364,12 +475,15 @@ def solve_ipopt(solver: ca.Function, x0: np.ndarray, lbx: np.ndarray, ubx: np.nd
         Bounds of the rows (:func:`row_bounds`).
     p_tail : numpy.ndarray, shape (6,)
         :meth:`Scaling.tail`.
+    data : numpy.ndarray, shape (N, D), optional
+        The row families' data, columns in the order the NLP was built with.
 
     Returns
     -------
     IpoptResult
     """
-    result = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=np.concatenate([length_scaled, p_tail]))
+    middle = [] if data is None else [np.asarray(data, dtype=float).T.ravel()]
+    result = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=np.concatenate([length_scaled, *middle, p_tail]))
     stats = solver.stats()
     success = bool(stats.get("success", False))
     status = "optimal" if success else str(stats.get("return_status", "failed"))
@@ -377,9 +491,10 @@ def solve_ipopt(solver: ca.Function, x0: np.ndarray, lbx: np.ndarray, ubx: np.nd
                        int(stats.get("iter_count", 0)))
 
 
-def row_bounds(with_jerk: bool, decel_mps2: np.ndarray, accel_mps2: np.ndarray, a_ref: float
-               ) -> tuple[np.ndarray, np.ndarray]:
-    """Bounds on the rows of the NLP: a_i / a_ref (N), then jerk_j / J (N-1) when ``with_jerk``.
+def row_bounds(with_jerk: bool, decel_mps2: np.ndarray, accel_mps2: np.ndarray, a_ref: float,
+               families: tuple[str, ...] = ()) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds on the rows of the NLP: a_i / a_ref (N), then jerk_j / J (N-1) when
+    ``with_jerk``, then the families' rows (<= 1).
 
     Parameters
     ----------
@@ -389,16 +504,22 @@ def row_bounds(with_jerk: bool, decel_mps2: np.ndarray, accel_mps2: np.ndarray, 
         Deceleration (positive) and acceleration bounds of each segment (m/s^2).
     a_ref : float
         Acceleration scale (m/s^2).
+    families : tuple of str, default ()
+        Row families (:data:`ROW_FAMILIES`).
 
     Returns
     -------
-    lbg, ubg : numpy.ndarray, shape (N,) or (2N-1,)
+    lbg, ubg : numpy.ndarray
     """
     n = decel_mps2.size
     lbg, ubg = [-decel_mps2 / a_ref], [accel_mps2 / a_ref]
     if with_jerk and n >= 2:
         lbg.append(np.full(n - 1, -1.0))
         ubg.append(np.full(n - 1, 1.0))
+    for family in families:
+        rows = n * ROW_FAMILIES[family][1]
+        lbg.append(np.full(rows, -np.inf))
+        ubg.append(np.ones(rows))
     return np.concatenate(lbg), np.concatenate(ubg)
 
 
