@@ -14,13 +14,14 @@ import numpy as np
 
 from ..errors import InfeasibleError, PlanningError
 from ..speeds import SpeedBands
-from .bands import BandChoice, choose_bands
+from .bands import BandChoice, DrivePower, choose_bands
 
 __all__ = ["fallback_choice"]
 
 
 def fallback_choice(bands: SpeedBands, length_m: np.ndarray, boundaries_m: np.ndarray, decel_mps2: np.ndarray,
-                    accel_mps2: np.ndarray, jerk_mps3: float, v0_mps: float, vend_mps: float) -> BandChoice:
+                    accel_mps2: np.ndarray, jerk_mps3: float, v0_mps: float, vend_mps: float,
+                    power: DrivePower | None = None) -> BandChoice:
     """Bands and forward-backward profile with acceleration bounds lowered to keep the jerk bound.
 
     Parameters
@@ -37,6 +38,8 @@ def fallback_choice(bands: SpeedBands, length_m: np.ndarray, boundaries_m: np.nd
         Jerk bound (m/s^3); inf: the bounds are not lowered.
     v0_mps, vend_mps : float
         Speeds at the start and at the end (m/s).
+    power : DrivePower, optional
+        The drive power limit of the forward pass.
 
     Returns
     -------
@@ -55,6 +58,6 @@ def fallback_choice(bands: SpeedBands, length_m: np.ndarray, boundaries_m: np.nd
         a, d = np.minimum(a, cap), np.minimum(d, cap)
     try:
         return choose_bands(bands.lower_mps, bands.upper_mps, bands.count, length_m, a, d, v0_mps, vend_mps,
-                            boundaries_m)
+                            boundaries_m, power)
     except InfeasibleError as exc:
         raise PlanningError(f"IPOPT failed and no jerk-limited fallback exists ({exc})") from None
