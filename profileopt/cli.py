@@ -37,7 +37,8 @@ _COMMANDS: dict[str, tuple[str, Callable[[argparse.Namespace], int]]] = {}
 #: the command line says its flags instead. Names that are also plain words (model, band)
 #: are replaced only where a message assigns them (``model = 'x'``); a quoted name is a
 #: file's key (``key 'max_jerk_mps3'`` of a vehicle file) and stays as it is.
-API_FLAGS = {"segment_length_m": "--segment-length", "roughness_window_m": "--roughness-window", "v0_mps": "--v0",
+API_FLAGS = {"segment_length_m": "--segment-length", "roughness_window_m": "--roughness-window",
+             "path_tolerance_m": "--path-tolerance", "v0_mps": "--v0",
              "vend_mps": "--vend", "n_stages": "--stages"}
 #: max_jerk_mps3 is a vehicle file's key too: only ``max_jerk_mps3 = ...`` is the option.
 API_FLAGS_ASSIGNED = {"model": "--model", "smoothing": "--smoothing", "method": "--method", "band": "--band",

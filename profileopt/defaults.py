@@ -6,7 +6,8 @@ them from here, so ``profileopt --help`` needs none of the numerical packages.
 
 from __future__ import annotations
 
-__all__ = ["MODEL_KEYS", "DEFAULT_MODEL", "DEFAULT_SMOOTHING", "DEFAULT_SEGMENT_LENGTH_M", "DEFAULT_ROUGHNESS_WINDOW_M", "PLAN_BANDS", "MAX_C_BYTES"]
+__all__ = ["MODEL_KEYS", "DEFAULT_MODEL", "DEFAULT_SMOOTHING", "DEFAULT_SEGMENT_LENGTH_M", "DEFAULT_ROUGHNESS_WINDOW_M",
+           "DEFAULT_PATH_TOLERANCE_M", "PLAN_BANDS", "MAX_C_BYTES"]
 
 #: The four force models, in the paper's order (keys of :data:`profileopt.forces.MODELS`).
 MODEL_KEYS = ("prev_bem", "iecm", "sbem_ef", "sbem_tf")
@@ -20,6 +21,13 @@ DEFAULT_SEGMENT_LENGTH_M = 5.0
 #: is judged by its own RI (docs/paper-notes.md, "Roughness windows"); 5 m, the segment
 #: length that the RI was measured over before windows.
 DEFAULT_ROUGHNESS_WINDOW_M = 5.0
+#: How far (m) the smoothed path whose curvature limits the speed in turns may stray from a
+#: route's x, y samples (:func:`profileopt.geometry.smooth_path`): wider than the noise of a
+#: path surveyed by RTK-GNSS or LiDAR (1 cm standard deviation, about 4 cm at most over
+#: thousands of samples), well inside the path-tracking error of an off-road vehicle
+#: (decimetres), so the smoothed path is one the vehicle can follow. A consumer GPS track
+#: (metres of noise) needs a tolerance of its own noise (README, "Turns and hills").
+DEFAULT_PATH_TOLERANCE_M = 0.1
 #: The values of :func:`profileopt.plan`'s ``band``: every band of each segment (chosen over
 #: the whole route), only the band from rest, or only the highest band.
 PLAN_BANDS = ("all", "first", "largest")

@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.interpolate import BSpline, make_interp_spline, make_smoothing_spline
 
+from .defaults import DEFAULT_PATH_TOLERANCE_M  # why 0.1 m: see its comment there
 from .errors import InputError
 from .route import Route
 from .terrain import window_line_moments
@@ -28,14 +29,6 @@ from .terrain import window_line_moments
 __all__ = ["DEFAULT_PATH_TOLERANCE_M", "SmoothPath", "smooth_path", "path_grade_rad", "RouteGeometry",
            "route_geometry"]
 
-#: How far (m) the smoothed path may deviate from any sample of the route. It must exceed
-#: the noise of a LiDAR- or RTK-derived path: 1 cm of Gaussian noise on x and y gives a
-#: largest deviation of about sigma sqrt(2 ln M) = 4-5 cm over M = 5,000-100,000 samples
-#: (the largest of M Rayleigh distances), so 0.1 m leaves room for the fit to smooth that
-#: noise away. It stays well below the path-tracking error of a ground vehicle (tens of
-#: centimetres off road), so the smoothed path is one the vehicle can follow as closely as
-#: the measured one. GPS tracks (metres of noise) need a larger tolerance: a few metres.
-DEFAULT_PATH_TOLERANCE_M = 0.1
 
 #: Most points a smoothing spline is fitted to. scipy's make_smoothing_spline builds its
 #: banded system in a Python loop (about 10 us a point); longer paths are fitted to the
@@ -85,7 +78,7 @@ class SmoothPath:
 def _check_tolerance(tolerance_m: float) -> float:
     tol = float(tolerance_m)
     if not (math.isfinite(tol) and tol > 0):
-        raise InputError(f"path tolerance_m = {tolerance_m!r} m: must be a finite number > 0 "
+        raise InputError(f"path_tolerance_m = {tolerance_m!r} m: must be a finite number > 0 "
                          f"(e.g. {DEFAULT_PATH_TOLERANCE_M:g} m for LiDAR/RTK paths, a few metres for GPS)")
     return tol
 
@@ -199,7 +192,7 @@ def smooth_path(x_m: ArrayLike, y_m: ArrayLike, *, tolerance_m: float = DEFAULT_
                 lo_scale = 0.1 * float(np.min(step))
                 best = fit(lo_scale)
             if best[1] > tol:  # only rounding can leave an interpolating spline this far
-                raise InputError(f"path tolerance_m = {tol:g} m is below what the path's numbers can resolve "
+                raise InputError(f"path_tolerance_m = {tol:g} m is below what the path's numbers can resolve "
                                  f"(deviation {best[1]:.3g} m even without smoothing); raise tolerance_m")
         while hi_scale > _SCALE_RATIO_TOLERANCE * lo_scale:
             mid = math.sqrt(lo_scale * hi_scale)
@@ -295,6 +288,12 @@ class RouteGeometry:
         The path tolerance used (m).
     grade_scale_m : float
         The window over which the grade was measured (m).
+    curvature_reach_m : float
+        How far (m) the smoothing spreads a change of curvature: twice the spline's
+        smoothing scale (:attr:`SmoothPath.smoothing_scale_m`); 0 without x, y. A turn's
+        smoothed curvature reaches its full value only this far inside the turn, so a
+        limit that must hold where the route's own samples turn takes the largest
+        curvature within this reach (:func:`profileopt.planning.path.segment_path`).
     """
 
     curvature_1pm: np.ndarray
@@ -302,6 +301,7 @@ class RouteGeometry:
     max_deviation_m: float
     tolerance_m: float
     grade_scale_m: float
+    curvature_reach_m: float = 0.0
 
 
 def route_geometry(route: Route, *, tolerance_m: float = DEFAULT_PATH_TOLERANCE_M,
@@ -329,9 +329,10 @@ def route_geometry(route: Route, *, tolerance_m: float = DEFAULT_PATH_TOLERANCE_
     tol = _check_tolerance(tolerance_m)
     grade = path_grade_rad(route.s_m, route.z_m, scale_m=grade_scale_m)
     if route.x_m is None or route.y_m is None:
-        curvature, deviation = np.zeros(route.s_m.size), 0.0
+        curvature, deviation, reach = np.zeros(route.s_m.size), 0.0, 0.0
     else:
         path = smooth_path(route.x_m, route.y_m, tolerance_m=tol)
         curvature, deviation = path.curvature_1pm, path.max_deviation_m
+        reach = 2.0 * path.smoothing_scale_m if math.isfinite(path.smoothing_scale_m) else 0.0
     return RouteGeometry(curvature_1pm=curvature, grade_rad=grade, max_deviation_m=deviation, tolerance_m=tol,
-                         grade_scale_m=float(grade_scale_m))
+                         grade_scale_m=float(grade_scale_m), curvature_reach_m=reach)

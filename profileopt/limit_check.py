@@ -23,7 +23,9 @@ from .planning.limits import default_limits
 from .planning.limits.base import PlanContext
 from .planning.limits.force import max_force_over_segments
 from .planning.options import SolverOptions
-from .defaults import DEFAULT_ROUGHNESS_WINDOW_M
+from .defaults import DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M
+from .planning.nlp import family_rows
+from .planning.path import segment_path
 from .planning.segments import segments_at
 from .stations import segment_samples
 from .terrain import RoughnessWindows, roughness_windows
@@ -50,7 +52,8 @@ class LimitBreach:
     Attributes
     ----------
     quantity : str
-        ``"speed"``, ``"acceleration"``, ``"deceleration"``, ``"jerk"`` or ``"force"``.
+        ``"speed"``, ``"acceleration"``, ``"deceleration"``, ``"jerk"``, ``"friction"``,
+        ``"power"`` or ``"force"``.
     limit_name : str
         The limit broken, in words (``"the vehicle's top speed"``).
     segment : int
@@ -192,6 +195,15 @@ def _first_breach(quantity: str, limit_name: str, values: np.ndarray, limit: np.
                        count=int(np.count_nonzero(broken)), of=int(values.size), worst_ratio=worst)
 
 
+def _setting_m(profile: "Profile", key: str, default: float) -> float:
+    """A length the profile records in its settings (m), else ``default``."""
+    try:
+        value = float(profile.settings.get(key, default))
+    except (TypeError, ValueError):
+        value = default
+    return value if math.isfinite(value) and value > 0 else default
+
+
 def check_limits(
     route: "Route",
     profile: "Profile",
@@ -265,9 +277,15 @@ def check_limits(
         )
     jerk_bound, jerk_name = _jerk_bound_mps3(profile, vehicle)
     length = np.diff(s)
-    context = PlanContext(route=route, vehicle=vehicle, segments=segments)
+    from .geometry import route_geometry  # scipy: only when a profile is checked
+
+    tolerance = _setting_m(profile, "path_tolerance_m", DEFAULT_PATH_TOLERANCE_M)
+    path = segment_path(route, segments, route_geometry(route, tolerance_m=tolerance,
+                                                        grade_scale_m=2.0 * segments.roughness_window_m))
+    context = PlanContext(route=route, vehicle=vehicle, segments=segments, path=path)
     limits = default_limits(vehicle, model=force_model.key, max_jerk_mps3=jerk_bound)
-    caps = [c for c in (lim.speed_cap_mps(context) for lim in limits) if c is not None]
+    cap_limits = [(lim, c) for lim in limits if (c := lim.speed_cap_mps(context)) is not None]
+    caps = [c for _, c in cap_limits]
     accel_bounds = [b for b in (lim.accel_bounds_mps2(context) for lim in limits) if b is not None]
     jerk_limit = min(lim.jerk_bound_mps3(context) for lim in limits)
     bands = next(b for b in (lim.speed_bands(context) for lim in limits) if b is not None)
@@ -281,17 +299,28 @@ def check_limits(
         top = np.maximum(v[:-1], v[1:])
         breaches.append(_first_breach("speed", "the vehicle's top speed", top, np.array(vehicle.max_speed_mps),
                                       s[:-1], index, "m/s"))
-        lower = cap < vehicle.max_speed_mps
-        breaches.append(_first_breach("speed", "the route's speed_limit", top[lower], cap[lower], s[:-1][lower],
-                                      index[lower], "m/s"))
+        for lim, lim_cap in cap_limits:  # the route's speed_limit, then the caps of turns
+            lower = lim_cap < vehicle.max_speed_mps
+            name = {"lateral": "the lateral acceleration limit in turns",
+                    "friction": "the friction limit in turns"}.get(lim.name, "the route's speed_limit")
+            breaches.append(_first_breach("speed", name, top[lower], lim_cap[lower], s[:-1][lower], index[lower],
+                                          "m/s"))
         b = v * v
         accel = segment_accel_mps2(b[:-1], b[1:], length)
         decel_bound = np.minimum.reduce([d for d, _ in accel_bounds])
         accel_bound = np.minimum.reduce([a for _, a in accel_bounds])
-        breaches.append(_first_breach("acceleration", "the vehicle's acceleration limit", accel, accel_bound,
-                                      s[:-1], index, "m/s^2"))
-        breaches.append(_first_breach("deceleration", "the vehicle's deceleration limit", -accel, decel_bound,
-                                      s[:-1], index, "m/s^2"))
+        grades = " at the segment's grade" if path.grade_hi_rad.any() or path.grade_lo_rad.any() else ""
+        breaches.append(_first_breach("acceleration", "the vehicle's acceleration limit" + grades, accel,
+                                      accel_bound, s[:-1], index, "m/s^2"))
+        breaches.append(_first_breach("deceleration", "the vehicle's deceleration limit" + grades, -accel,
+                                      decel_bound, s[:-1], index, "m/s^2"))
+        for lim in limits:  # the friction circle and the drive power, from the same rows as the NLP's
+            found = lim.nlp_rows(context, np.full(n, np.inf), decel_bound, accel_bound)
+            if found is not None and lim.name in ("friction", "power"):
+                family, data = found
+                usage = family_rows(family, b, length, data).max(axis=0)
+                words = "the friction circle" if family == "friction" else "the vehicle's drive power"
+                breaches.append(_first_breach(family, words, usage, np.array(1.0), s[:-1], index, "of the limit"))
         if n >= 2 and math.isfinite(jerk_limit):
             jerk = boundary_jerk_mps3(v[1:-1], accel[:-1], accel[1:], length[:-1], length[1:])
             breaches.append(_first_breach("jerk", jerk_name, np.abs(jerk), np.array(jerk_limit), s[1:-1],

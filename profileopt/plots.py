@@ -49,8 +49,13 @@ def profile_figure(profile: "Profile", *, title: str | None = None, route: str |
     from matplotlib.figure import Figure
 
     s = profile.s_m
-    fig = Figure(figsize=(10, 7), layout="constrained")
-    ax_v, ax_ri = fig.subplots(2, 1, sharex=True, height_ratios=[3, 1])
+    turns = profile.binding is not None and profile.curvature_1pm is not None and profile.grade_rad is not None
+    if turns:
+        fig = Figure(figsize=(10, 11), layout="constrained")
+        ax_v, ax_ri, ax_k, ax_g, ax_b = fig.subplots(5, 1, sharex=True, height_ratios=[3, 1, 1, 1, 1.3])
+    else:
+        fig = Figure(figsize=(10, 7), layout="constrained")
+        ax_v, ax_ri = fig.subplots(2, 1, sharex=True, height_ratios=[3, 1])
     label = get_model(profile.model).label
     cap = profile.speed_cap_mps
     top_speed = profile.settings.get("max_speed_mps") if profile.settings else None
@@ -69,8 +74,10 @@ def profile_figure(profile: "Profile", *, title: str | None = None, route: str |
     if cap is not None:
         held = top_speed is not None and bool(np.any(cap < top_speed * (1 - 1e-9)))
         cap_label = (f"speed cap: top speed {top_speed:g} m/s" if top_speed is not None else "speed cap: top speed")
+        if held:
+            cap_label += "".join(f", {text}" for text in _cap_sources(profile))
         ax_v.stairs(cap, s, baseline=None, color="0.55", linewidth=3.5, linestyle=(0, (5, 2)), zorder=2,
-                    label=cap_label + (", route's speed_limit" if held else ""))
+                    label=cap_label)
     if profile.allowable_largest_mps is not None:
         ax_v.stairs(model_only(profile.allowable_largest_mps), s, baseline=None, color="tab:orange", linewidth=6.0, alpha=0.45,
                     zorder=3, label=f'allowable, {label} "largest" (may be above resonance)')
@@ -92,10 +99,65 @@ def profile_figure(profile: "Profile", *, title: str | None = None, route: str |
     ax_v.set_title(title)
     ax_ri.stairs(profile.ri[:-1], s, color="tab:green", fill=True, alpha=0.5)
     ax_ri.set_ylabel("RI (-) of the\nroughest window met")
-    ax_ri.set_xlabel("distance along the route s (m)")
     ax_ri.grid(True, alpha=0.3)
     ax_ri.set_xlim(s[0], s[-1])
+    if not turns:
+        ax_ri.set_xlabel("distance along the route s (m)")
+        return fig
+    ax_k.plot(s, profile.curvature_1pm, color="tab:purple", linewidth=1.2)
+    ax_k.axhline(0.0, color="0.6", linewidth=0.8)
+    ax_k.set_ylabel("curvature (1/m)\nleft +, right -")
+    ax_k.grid(True, alpha=0.3)
+    ax_g.plot(s, 100.0 * np.tan(profile.grade_rad), color="tab:brown", linewidth=1.2)
+    ax_g.axhline(0.0, color="0.6", linewidth=0.8)
+    ax_g.set_ylabel("grade (%)\nuphill +")
+    ax_g.grid(True, alpha=0.3)
+    _binding_panel(ax_b, s, profile.binding)
+    ax_b.set_xlabel("distance along the route s (m)")
     return fig
+
+
+def _cap_sources(profile: "Profile") -> list[str]:
+    """What, besides the top speed, lowers the speed cap somewhere (for the cap's legend)."""
+    if profile.cap_source is None or not profile.limits:
+        return ["route's speed_limit or turns"]
+    top = float(profile.settings.get("max_speed_mps", np.inf))
+    texts = []
+    for k in np.unique(profile.cap_source):
+        if k < 0:
+            continue
+        name = profile.limits[int(k)].name
+        lowered = bool(np.any((profile.cap_source == k) & (profile.speed_cap_mps < top * (1 - 1e-9))))
+        if lowered:
+            texts.append({"speed cap": "route's speed_limit", "lateral": "turns (lateral acceleration)",
+                          "friction": "turns (friction)"}.get(name, name))
+    return texts
+
+
+#: A colour per value of the binding column (tab10), so every plan shows each limit alike.
+_BINDING_COLOURS = {"force": "tab:red", "speed_limit": "tab:gray", "top_speed": "tab:olive", "lateral": "tab:purple",
+                    "friction": "tab:pink", "accel": "tab:green", "decel": "tab:orange", "power": "tab:brown",
+                    "jerk": "tab:cyan", "boundary": "black"}
+
+
+def _binding_panel(ax: object, s: np.ndarray, binding: np.ndarray) -> None:
+    """One row per limit that holds the speed somewhere, filled where it does: row j of the
+    profile stands for the half segments on either side of it."""
+    from .planning.binding import BINDING_NAMES
+
+    mid = 0.5 * (s[:-1] + s[1:])
+    left = np.concatenate([[s[0]], mid])
+    right = np.concatenate([mid, [s[-1]]])
+    present = [name for name in BINDING_NAMES if np.any(binding == name)]
+    for row, name in enumerate(present):
+        where = np.flatnonzero(binding == name)
+        ax.broken_barh(list(zip(left[where], right[where] - left[where])), (row - 0.4, 0.8),
+                       color=_BINDING_COLOURS[name])
+    ax.set_yticks(range(len(present)), present, fontsize="small")
+    ax.set_ylim(-0.6, len(present) - 0.4)
+    ax.invert_yaxis()
+    ax.set_ylabel("what holds\nthe speed")
+    ax.grid(True, axis="x", alpha=0.3)
 
 
 def plot_profile(profile: "Profile", path: str | Path, title: str | None = None, *, route: str | None = None,

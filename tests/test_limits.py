@@ -59,7 +59,7 @@ def test_a_limit_defined_in_a_test_is_kept(atv, check_profile, smoothing, jerk):
         np.testing.assert_array_equal(capped.speed_mps[early], free.speed_mps[early])
     summary = capped.summary()
     assert summary["slowest_segment"]["reason"] == "the stretch cap (3 m/s)"
-    assert set(summary["margins"]) == {"force", "accel", "decel", "jerk"}
+    assert set(summary["margins"]) == {"force", "lateral", "friction", "accel", "decel", "power", "jerk"}
 
 
 def test_two_limits_giving_speed_bands_are_refused(atv):

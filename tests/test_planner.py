@@ -144,7 +144,7 @@ def test_band_choice_near_a_stop(check_profile, atv_resonant, end_m, above):
 def test_fallback_keeps_every_limit_when_ipopt_fails(check_profile, monkeypatch, atv):
     route = read_route(ROUTES / "trail.csv")
 
-    def failing(seg, chosen, decel, accel, smoothing, jerk, options):
+    def failing(seg, chosen, decel, accel, smoothing, jerk, options, rows):
         return planner._NlpResult(chosen.greatest_b * 0.5, "Maximum_Iterations_Exceeded", 300, 1, {})
 
     monkeypatch.setattr(planner, "_solve_nlp", failing)

@@ -44,7 +44,7 @@ from profileopt.forces import MODELS, get_model
 from profileopt.planning import MIN_SAMPLES_PER_SEGMENT, plan, segment_route
 from profileopt.route import Route
 from profileopt.terrain import MIN_SAMPLES_PER_WINDOW, segment_roughness_index
-from conftest import window_ri, window_speeds
+from conftest import G, check_turns_and_hills, grade_direct, window_ri, window_speeds
 from profileopt.vehicle import Vehicle, load_vehicle
 
 RTOL = 1e-6
@@ -79,12 +79,25 @@ def routes(draw: st.DrawFn) -> Route:
     if draw(st.booleans()):  # uneven sampling (as from an x,y polyline), still increasing
         s = s + np.random.default_rng(seed).uniform(-0.3, 0.3, s.size) * spacing
     s = s + draw(st.sampled_from([0.0, 1234.5]))  # a route need not start at s = 0
+    x = y = None
+    if draw(st.booleans()):  # turns: arcs of random radius and side between straights
+        turns = draw(st.lists(st.tuples(st.floats(0.0, 1.0), st.floats(8.0, 200.0), st.sampled_from([-1, 1])),
+                              min_size=1, max_size=3))
+        kappa = np.zeros(s.size)
+        for where, radius, side in turns:
+            start = s[0] + where * 0.8 * (s[-1] - s[0])
+            kappa[(s >= start) & (s < start + radius * math.pi / 3)] = side / radius
+        heading = np.concatenate([[0.0], np.cumsum(0.5 * (kappa[1:] + kappa[:-1]) * np.diff(s))])
+        step = np.diff(s)
+        x = np.concatenate([[0.0], np.cumsum(step * np.cos(0.5 * (heading[1:] + heading[:-1])))])
+        y = np.concatenate([[0.0], np.cumsum(step * np.sin(0.5 * (heading[1:] + heading[:-1])))])
+        s = s[0] + np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])  # s is the chord length
     limit = None
     if draw(st.booleans()):
         pieces = draw(st.lists(st.floats(1.0, 25.0), min_size=1, max_size=3))
         where = (s - s[0]) / (s[-1] - s[0]) * len(pieces)
         limit = np.asarray(pieces)[np.minimum(where.astype(int), len(pieces) - 1)]
-    return Route(s_m=s, z_m=z, speed_limit_mps=limit, source=f"random-{road_class}-{feature}-{seed}")
+    return Route(s_m=s, z_m=z, speed_limit_mps=limit, source=f"random-{road_class}-{feature}-{seed}", x_m=x, y_m=y)
 
 
 @st.composite
@@ -105,6 +118,13 @@ def vehicles(draw: st.DrawFn) -> Vehicle:
         max_accel_mps2=draw(st.floats(0.5, 4.0)),
         max_decel_mps2=draw(st.floats(1.0, 8.0)),
         max_jerk_mps3=draw(st.floats(1.0, 20.0)),
+        # turns and hills: each limit on or off (all off: no grade in the acceleration bounds)
+        max_lateral_accel_mps2=draw(st.one_of(st.none(), st.floats(1.0, 8.0))),
+        track_width_m=(track := draw(st.one_of(st.none(), st.floats(0.6, 2.0)))),
+        cg_height_m=None if track is None else draw(st.floats(0.3, 1.5)),
+        friction_coefficient=draw(st.one_of(st.none(), st.floats(0.2, 1.0))),
+        mass_kg=(mass := draw(st.one_of(st.none(), st.floats(300.0, 2000.0)))),
+        max_power_w=None if mass is None else draw(st.floats(2000.0, 100000.0)),
     )
 
 
@@ -177,7 +197,7 @@ def check_plan(profile, route: Route, vehicle: Vehicle, options: dict) -> None:
     first = np.searchsorted(start_m, s[:-1] - window_m * (1 + 1e-9), side="left")
     stop = np.searchsorted(start_m, s[1:] + 1e-9 * window_m, side="right")
     np.testing.assert_allclose(profile.ri[:-1], [ri_w[a:b].max() for a, b in zip(first, stop)], rtol=1e-6,
-                               atol=1e-7)  # atol: see conftest's check_profile
+                               atol=1e-6)  # atol: see conftest's check_profile
 
     # speeds
     vmax = vehicle.max_speed_mps
@@ -189,11 +209,12 @@ def check_plan(profile, route: Route, vehicle: Vehicle, options: dict) -> None:
         v2_at_samples = np.interp(route.s_m, s, v**2)
         assert np.all(v2_at_samples <= route.speed_limit_mps**2 * (1 + RTOL) ** 2)
 
-    # acceleration from the squared speeds (constant acceleration within a segment)
+    # acceleration from the squared speeds (constant acceleration within a segment), within
+    # its bounds at the segment's grades (conftest.check_turns_and_hills recomputes the
+    # grade directly), and the lateral, friction and power limits at every speed and grade
     accel = (v[1:] ** 2 - v[:-1] ** 2) / (2 * ds)
-    assert np.all(accel <= vehicle.max_accel_mps2 * (1 + RTOL)), accel.max()
-    assert np.all(-accel <= vehicle.max_decel_mps2 * (1 + RTOL)), (-accel).max()
     np.testing.assert_allclose(profile.accel_mps2[:-1], accel, rtol=1e-9, atol=1e-9)
+    check_turns_and_hills(profile, route, vehicle, accel, RTOL)
 
     # jerk = v da/ds at the interior boundaries
     jerk_bound = vehicle.max_jerk_mps3 if options["max_jerk_mps3"] is None else options["max_jerk_mps3"]
@@ -240,6 +261,16 @@ def test_every_plan_keeps_every_limit(problem: dict) -> None:
         force_at_rest = np.asarray(get_model(options["model"]).force_n(np.zeros_like(ri), ri, vehicle))
         rest_is_admissible = bool(np.all(force_at_rest <= get_model(options["model"]).limit_n(vehicle)))
         crawl_exists = boundaries.size >= 3 and bool(np.all(allowable_speed(ri, vehicle, model=options["model"]) > 0))
+        if any(getattr(vehicle, key) is not None for key in
+               ("max_lateral_accel_mps2", "track_width_m", "friction_coefficient", "mass_kg")):
+            # on grades a crawl needs to climb the steepest grade from rest and hold the
+            # steepest descent: g sin(theta) within max_accel and max_decel (and within the grip
+            # mu g cos(theta)); the grade over twice the roughness window, recomputed directly
+            grade = grade_direct(route, 10.0)
+            grip = math.inf if vehicle.friction_coefficient is None else vehicle.friction_coefficient
+            climb, descent = G * np.sin(grade.max()), -G * np.sin(grade.min())
+            crawl_exists = crawl_exists and climb < min(vehicle.max_accel_mps2, grip * G * math.cos(grade.max())) \
+                and descent < min(vehicle.max_decel_mps2, grip * G * math.cos(grade.min()))
         try:
             profile = plan(route, vehicle, **at_rest)
         except InfeasibleError as again:
@@ -260,6 +291,9 @@ def test_braking_further_than_the_route_is_always_infeasible(problem: dict, frac
     of the route shorter than that, no profile ends at rest (whatever the terrain, vehicle
     and options), so the planner must refuse and say that v0_mps is the cause."""
     route, vehicle, options = problem["route"], problem["vehicle"], dict(problem["options"])
+    # on the level (a vehicle without the keys of turns and hills: no grade helps the brakes)
+    vehicle = vehicle.replace(max_lateral_accel_mps2=None, track_width_m=None, cg_height_m=None,
+                              friction_coefficient=None, mass_kg=None, max_power_w=None)
     decel, spacing = vehicle.max_decel_mps2, float(np.diff(route.s_m).max())
     # the longest stretch from which max_speed / 1.05 can still not stop
     cut = fraction * (vehicle.max_speed_mps / 1.05) ** 2 / (2 * decel)
@@ -310,7 +344,8 @@ def test_the_independent_check_catches_broken_plans() -> None:
     vehicle with lower limits, or with one speed raised, does not."""
     s, z = synthetic.iso8608_profile("C", 100.0, 0.1, seed=5)
     route = Route(s, z, source="check")
-    vehicle = BASES["atv-resonant"]
+    vehicle = BASES["atv-resonant"].replace(max_lateral_accel_mps2=None, track_width_m=None, cg_height_m=None,
+                                            friction_coefficient=None, mass_kg=None, max_power_w=None)
     options = {"segment_length_m": 5.0, "model": "sbem_tf", "smoothing": 0.01, "max_jerk_mps3": None,
                "v0_mps": 0.0, "vend_mps": 0.0, "band": "all", "method": "auto"}
     profile = plan(route, vehicle, **options)
@@ -336,3 +371,18 @@ def test_the_independent_check_catches_broken_plans() -> None:
     limited = Route(s, z, np.full(s.size, profile.speed_mps.max() * 0.99), source="check")
     with pytest.raises(AssertionError):
         check_plan(profile, limited, vehicle, options)
+    # turns and hills: a plan on a 20 % climb with a bend, checked against lower power,
+    # grip and lateral limits than it was planned with, and against the flat acceleration bound
+    theta = np.arange(0.0, 1.0, 0.1 / 20.0)
+    x = np.concatenate([np.arange(0.0, 40.0, 0.1), 40 + 20 * np.sin(theta), 40 + 20 * np.sin(1.0) + np.arange(0.1, 40, 0.1) * np.cos(1.0)])
+    y = np.concatenate([np.zeros(400), 20 * (1 - np.cos(theta)), 20 * (1 - np.cos(1.0)) + np.arange(0.1, 40, 0.1) * np.sin(1.0)])
+    s3 = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
+    hill = Route(s3, 0.2 * s3, source="hill", x_m=x, y_m=y)
+    full = BASES["atv"].replace(max_power_w=4000.0)  # binds above P / (m a_max) = 3.6 m/s
+    options = dict(options, smoothing=0.0, max_jerk_mps3=math.inf)
+    profile = plan(hill, full, **options)
+    check_plan(profile, hill, full, options)
+    for other in (full.replace(max_power_w=full.max_power_w * 0.9), full.replace(friction_coefficient=0.2),
+                  full.replace(max_lateral_accel_mps2=1.0), full.replace(max_accel_mps2=1.0)):
+        with pytest.raises(AssertionError):
+            check_plan(profile, hill, other, options)

@@ -294,7 +294,7 @@ def test_bundled_routes_are_what_make_routes_writes(tmp_path):
         check=True, capture_output=True, text=True, timeout=120,
     )
     synthetic = {"trail.csv", "washboard.csv", "curb.csv"}
-    real_names = {"krc_rms_1in.csv", "krc_rms_2in.csv", "krc_rms_4in.csv", "iri_road.csv"}
+    real_names = {"krc_rms_1in.csv", "krc_rms_2in.csv", "krc_rms_4in.csv", "iri_road.csv", "mojstrovka.csv"}
     made = {p.name for p in tmp_path.glob("*.csv")}
     assert made == synthetic | real_names
     for name in sorted(made):

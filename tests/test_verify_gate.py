@@ -70,8 +70,9 @@ def edited(source: Path, target: Path, *, speed=None, rows: slice = slice(None),
 def table(path: Path) -> dict[str, np.ndarray]:
     lines = path.read_text().splitlines()
     names = lines[1].split(",")
-    values = np.array([[float(x) for x in line.split(",")] for line in lines[2:]])
-    return {name: values[:, i] for i, name in enumerate(names)}
+    numeric = [i for i, name in enumerate(names) if name != "binding"]  # the one text column
+    values = np.array([[float(line.split(",")[i]) for i in numeric] for line in lines[2:]])
+    return {names[i]: values[:, k] for k, i in enumerate(numeric)}
 
 
 def verdict_line(stdout: str) -> str:

@@ -8,8 +8,8 @@ import sys
 from pathlib import Path
 
 from ..cli import command
-from ..defaults import (DEFAULT_MODEL, DEFAULT_ROUGHNESS_WINDOW_M, DEFAULT_SEGMENT_LENGTH_M, DEFAULT_SMOOTHING,
-                        MODEL_KEYS, PLAN_BANDS)
+from ..defaults import (DEFAULT_MODEL, DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M,
+                        DEFAULT_SEGMENT_LENGTH_M, DEFAULT_SMOOTHING, MODEL_KEYS, PLAN_BANDS)
 from ..io.atomic import STDOUT, OutputSet
 from ..vehicle import load_vehicle
 from ._paths import vehicle_input
@@ -42,6 +42,10 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--roughness-window", type=_float, default=DEFAULT_ROUGHNESS_WINDOW_M, metavar="M",
                         help="roughness window in m: every stretch this long, wherever it starts, is driven at "
                              f"speeds admissible for its own RI (default: {DEFAULT_ROUGHNESS_WINDOW_M:g})")
+    parser.add_argument("--path-tolerance", type=_float, default=DEFAULT_PATH_TOLERANCE_M, metavar="M",
+                        help="how far in m the smoothed path, whose curvature limits the speed in turns, may stray "
+                             "from an x,y,z route's points; give the track's noise, a few m for a consumer GPS "
+                             f"(default: {DEFAULT_PATH_TOLERANCE_M:g})")
     parser.add_argument("--model", default=DEFAULT_MODEL, choices=list(MODEL_KEYS),
                         help="force model (default: sbem_tf)")
     parser.add_argument("--smoothing", type=_float, default=DEFAULT_SMOOTHING, metavar="W",
@@ -61,7 +65,8 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--bands", dest="band", choices=list(PLAN_BANDS), action=_DeprecatedAlias,
                         help=argparse.SUPPRESS)
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
-    parser.add_argument("--plot", metavar="PNG", help="draw speed, allowable speeds and RI along the route")
+    parser.add_argument("--plot", metavar="PNG",
+                        help="draw speed, allowable speeds, RI, curvature, grade and the binding limit along the route")
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -78,7 +83,7 @@ def _run(args: argparse.Namespace) -> int:
         print(f"profileopt plan: note: {note}", file=sys.stderr)
     profile = plan(
         route, vehicle, segment_length_m=args.segment_length, roughness_window_m=args.roughness_window,
-        model=args.model, smoothing=args.smoothing,
+        path_tolerance_m=args.path_tolerance, model=args.model, smoothing=args.smoothing,
         max_jerk_mps3=args.max_jerk, v0_mps=args.v0, vend_mps=args.vend, method=args.method,
         band=args.band,
     )
@@ -116,9 +121,16 @@ def _human(summary: dict, args: argparse.Namespace) -> str:
         f"  slowest      {slow['s_start_m']:g}-{slow['s_end_m']:g} m at {slow['top_speed_mps']:.3g} m/s: "
         f"{slow['reason']}",
         f"  force        {_ratio(margins['force'])}",
+        *(f"  {name:<12} {_ratio(margins[key])}" for key, name in (("lateral", "lateral"), ("friction", "friction"))
+          if key in margins),
         f"  acceleration {_ratio(margins['accel'])}",
         f"  deceleration {_ratio(margins['decel'])}",
+        *([f"  power        {_ratio(margins['power'])}"] if "power" in margins else []),
         f"  jerk         {_ratio(margins['jerk'])}",
+        "  binding      " + ", ".join(f"{name} {100 * share:.0f} %" for name, share in summary["binding"].items())
+        + " of the distance",
+        *([f"  limits off   {', '.join(summary['limits_off'])} (not in the vehicle file)"]
+          if summary["limits_off"] else []),
         f"  solver       {solver['status']} ({solver['iterations']} IPOPT iterations"
         + (f" over {solver['pieces']} pieces" if solver["pieces"] > 1 else "")
         + f"), planned in {solver['time_s']:.3f} s",

@@ -14,7 +14,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..forces import DEFAULT_MODEL, MODELS
-from ..planning.result import PROFILE_COLUMNS, Profile
+from ..planning.result import BASE_COLUMNS, PROFILE_COLUMNS, Profile
+from ..planning.binding import BINDING_NAMES
 from .atomic import atomic_write
 from .table import read_table
 
@@ -40,12 +41,18 @@ def write_profile(profile: Profile, path: str | os.PathLike) -> None:
     path : str or os.PathLike
         Output file; it appears only when the whole file is written.
     """
-    table = np.column_stack(list(profile.columns().values()))
+    columns = profile.columns()
+    text = columns.pop("binding", None)
+    table = np.column_stack(list(columns.values()))
+    fmt: str | list[str] = "%.17g"
+    if text is not None:  # the one text column: a table of objects, each row formatted by fmt
+        table = np.column_stack([table.astype(object), np.asarray(text, dtype=object)])
+        fmt = ["%.17g"] * (table.shape[1] - 1) + ["%s"]
     meta = " ".join(f"{k}={_format_setting(v)}" for k, v in profile.settings.items())
     with atomic_write(path) as handle:
         handle.write(f"{_SETTINGS_PREFIX} {meta} status={profile.status.replace(' ', '_')}\n")
-        handle.write(",".join(PROFILE_COLUMNS) + "\n")
-        np.savetxt(handle, table, delimiter=",", fmt="%.17g")
+        handle.write(",".join(list(columns) + (["binding"] if text is not None else [])) + "\n")
+        np.savetxt(handle, table, delimiter=",", fmt=fmt)
 
 
 def read_profile(path: str | os.PathLike) -> Profile:
@@ -78,10 +85,12 @@ def read_profile(path: str | os.PathLike) -> Profile:
             for item in line[len(_SETTINGS_PREFIX):].split():
                 key, _, value = item.partition("=")
                 settings[key] = value
-    if table.header != PROFILE_COLUMNS:
+    if table.header not in (PROFILE_COLUMNS, BASE_COLUMNS):
         raise InputError(f"{name}: line {table.header_line}: header must be {','.join(PROFILE_COLUMNS)}; "
                          f"got {','.join(table.header)} (write the profile with 'profileopt plan -o')")
-    values = table.numbers(range(len(PROFILE_COLUMNS)))
+    full = table.header == PROFILE_COLUMNS
+    numeric = PROFILE_COLUMNS[:-1] if full else BASE_COLUMNS
+    values = table.numbers(range(len(numeric)))
     numbers = table.line_numbers
     if len(values) < 2:
         raise InputError(f"{name}: {len(values)} data row(s); a profile needs at least 2 (the start and the end "
@@ -100,5 +109,14 @@ def read_profile(path: str | os.PathLike) -> Profile:
     if model not in MODELS:
         raise InputError(f"{name}: line {settings_line}: model={model} is unknown; it must be one of "
                          f"{', '.join(MODELS)}")
-    return Profile(**{column: values[:, i] for i, column in enumerate(PROFILE_COLUMNS)}, model=model,
-                   settings=settings)
+    extra: dict[str, object] = {}
+    if full:
+        labels = np.array([row.rsplit(",", 1)[1].strip() for row in table.rows], dtype=object)
+        bad = np.flatnonzero(~np.isin(labels, BINDING_NAMES))
+        if bad.size:
+            i = bad[0]
+            raise InputError(f"{name}: line {numbers[i]}: binding = '{labels[i]}' is not one of "
+                             f"{', '.join(BINDING_NAMES)}; write the profile with 'profileopt plan -o'")
+        extra["binding"] = labels
+    return Profile(**{column: values[:, i] for i, column in enumerate(numeric)}, model=model,
+                   settings=settings, **extra)

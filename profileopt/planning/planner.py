@@ -22,17 +22,19 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
-from ..defaults import DEFAULT_SMOOTHING, PLAN_BANDS
+from ..defaults import DEFAULT_PATH_TOLERANCE_M, DEFAULT_SMOOTHING, PLAN_BANDS
 from ..errors import InfeasibleError, InputError, PlanningError
 from ..forces import DEFAULT_MODEL, get_model
 from ..kinematics import segment_accel_mps2, segment_time_s
 from ..speeds import SpeedBands
 from ..vehicle import PLAUSIBLE_RANGES, vehicle_reference
-from .bands import BandChoice, choose_bands, snap_to_band
+from .bands import BandChoice, DrivePower, choose_bands, snap_to_band
+from .binding import binding_labels
 from .fallback import fallback_choice
 from .limits import Limit, PlanContext, default_limits
 from .limits.force import max_force_over_segments
-from .nlp import Scaling, cached_nlp, objective_s, row_bounds, solve_ipopt
+from .nlp import Scaling, cached_nlp, family_rows, objective_s, row_bounds, solve_ipopt
+from .path import SegmentPath, segment_path
 from .options import SolverOptions
 from .pieces import choose_cuts, cut_scores, solve_pieces
 from .result import Profile
@@ -77,6 +79,7 @@ def plan(
     *,
     segment_length_m: float = DEFAULT_SEGMENT_LENGTH_M,
     roughness_window_m: float = DEFAULT_ROUGHNESS_WINDOW_M,
+    path_tolerance_m: float = DEFAULT_PATH_TOLERANCE_M,
     model: str = DEFAULT_MODEL,
     smoothing: float = DEFAULT_SMOOTHING,
     max_jerk_mps3: float | None = None,
@@ -103,7 +106,12 @@ def plan(
     roughness_window_m : float, default 5
         Roughness window length W (m): the force limit holds, for every stretch [a, a + W]
         of the route (a at every sample), at every speed driven inside it, for that
-        stretch's own RI (docs/paper-notes.md, "Roughness windows").
+        stretch's own RI (docs/paper-notes.md, "Roughness windows"). The grade is measured
+        over twice this length (:mod:`profileopt.geometry`).
+    path_tolerance_m : float, default :data:`~profileopt.defaults.DEFAULT_PATH_TOLERANCE_M`
+        How far (m) the smoothed path whose curvature limits the speed in turns may stray
+        from the route's x, y samples (:func:`profileopt.geometry.smooth_path`); give the
+        noise of the track (a few metres for a consumer GPS). Ignored for an ``s,z`` route.
     model : str, default :data:`~profileopt.forces.DEFAULT_MODEL` (``"sbem_tf"``)
         Force model: ``"sbem_tf"``, ``"sbem_ef"``, ``"iecm"`` or ``"prev_bem"``.
     smoothing : float, default :data:`DEFAULT_SMOOTHING` (0.01)
@@ -160,7 +168,14 @@ def plan(
     timings["segment"] = time.perf_counter() - t_start
 
     t = time.perf_counter()
-    context = PlanContext(route=route, vehicle=vehicle, segments=seg)
+    from ..geometry import route_geometry  # scipy: only when a plan is made
+
+    geometry = route_geometry(route, tolerance_m=path_tolerance_m, grade_scale_m=2.0 * seg.roughness_window_m)
+    path = segment_path(route, seg, geometry)
+    timings["path"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    context = PlanContext(route=route, vehicle=vehicle, segments=seg, path=path)
     speed_sets, band_source = _speed_bands(limits, context)
     cap, cap_source = _speed_caps(limits, context)
     all_bands = speed_sets.capped(cap)  # every band, for reports and messages
@@ -173,7 +188,12 @@ def plan(
     timings["bands"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    decel, accel = _accel_bounds(limits, context)
+    decel, accel, decel_source, accel_source = _accel_bounds(limits, context)
+    _check_grades(route.source, seg, path, decel, accel, limits, accel_source, decel_source)
+    rows = _nlp_rows(limits, context, cap, decel, accel)
+    # the forward pass keeps the power limit only where it can bind (it then has NLP rows);
+    # elsewhere the acceleration bounds imply it and the vectorised pass stays exact
+    power = _drive_power(limits, context) if "power" in rows else None
     jerk_bound = min(limit.jerk_bound_mps3(context) for limit in limits)
     notes = list(seg.notes)
     v0_mps, note_v0 = snap_to_band(v0_mps, usable.lower_mps[0], usable.upper_mps[0], int(usable.count[0]), "v0_mps")
@@ -182,16 +202,16 @@ def plan(
     notes += [note for note in (note_v0, note_vend) if note]
     try:
         chosen = choose_bands(usable.lower_mps, usable.upper_mps, usable.count, seg.length_m, accel, decel,
-                              v0_mps, vend_mps, seg.boundaries_m)
+                              v0_mps, vend_mps, seg.boundaries_m, power)
     except InfeasibleError as exc:  # name the route, as every input message does
-        raise InfeasibleError(f"{route.source}: {exc}") from None
+        raise InfeasibleError(f"{route.source}: {exc}{_grade_hint(exc, seg, path, decel, accel)}") from None
     timings["choose"] = time.perf_counter() - t
 
     iterations = pieces = 0
-    if method == "auto" and smoothing == 0 and not math.isfinite(jerk_bound):
+    if method == "auto" and smoothing == 0 and not math.isfinite(jerk_bound) and "friction" not in rows:
         b, status, success = chosen.greatest_b, "exact", True
     else:
-        result = _solve_nlp(seg, chosen, decel, accel, smoothing, jerk_bound, options)
+        result = _solve_nlp(seg, chosen, decel, accel, smoothing, jerk_bound, options, rows)
         b, status, iterations, pieces = result.b, result.status, result.iterations, result.pieces
         timings.update(result.timings)
         success = status == "optimal"
@@ -204,25 +224,45 @@ def plan(
         if not success:
             notes.append(f"IPOPT gave no usable solution ({status}); returning a slower profile that keeps "
                          "every limit")
-            chosen = fallback_choice(usable, seg.length_m, seg.boundaries_m, decel, accel, jerk_bound, v0_mps,
-                                     vend_mps)
+            inner_cap, inner_decel, inner_accel = cap, decel, accel
+            for limit in limits:  # tighten the caps and bounds until no NLP row is needed
+                inner = limit.inner_bounds(context, inner_cap, inner_decel, inner_accel)
+                if inner is not None:
+                    inner_cap, inner_decel, inner_accel = inner
+            inner_usable = usable.capped(inner_cap)
+            chosen = fallback_choice(inner_usable, seg.length_m, seg.boundaries_m, inner_decel, inner_accel,
+                                     jerk_bound, v0_mps, vend_mps, power)
             b = chosen.greatest_b
             status, pieces = f"fallback: {status}", 0
     b = np.clip(b, chosen.lower_b, chosen.upper_b) if success else b
     settings = {
         "vehicle": vehicle_reference(vehicle) or "unnamed", "model": model,
         "segment_length_m": float(segment_length_m), "roughness_window_m": float(roughness_window_m),
-        "smoothing": float(smoothing),
+        "path_tolerance_m": float(path_tolerance_m), "smoothing": float(smoothing),
         "max_speed_mps": vehicle.max_speed_mps, "max_accel_mps2": vehicle.max_accel_mps2,
         "max_decel_mps2": vehicle.max_decel_mps2, "max_jerk_mps3": jerk,
         # "bands" is the profile file's key for the band option (kept so files stay readable)
         "v0_mps": float(v0_mps), "vend_mps": float(vend_mps), "method": method, "bands": band,
     }
     profile = _assemble(seg, b, vehicle, model, speed_sets, all_bands, usable, chosen, cap)
+    row_values = {family: family_rows(family, b, seg.length_m, data) for family, data in rows.items()}
+    cap_label = _cap_labels(limits, context, cap, cap_source)
+    band_top = usable.upper_mps[np.arange(seg.count), chosen.band]
+    seg_label = np.where(band_top >= cap * (1 - 1e-9), cap_label, "force").astype(object)
+    binding = binding_labels(
+        b, seg.length_m, upper_b=chosen.upper_b,
+        upper_label=_boundary_labels(seg_label, chosen.upper_b, band_top),
+        accel_mps2=accel, accel_label=np.array([limits[k].binding for k in accel_source], dtype=object),
+        decel_mps2=decel,
+        decel_label=np.array(["decel" if limits[k].binding == "accel" else limits[k].binding for k in decel_source],
+                             dtype=object),
+        rows=row_values, jerk_mps3=jerk_bound,
+    )
     profile = dataclasses.replace(
         profile, status=status, success=success, objective=objective_s(b, seg.length_m, smoothing),
         iterations=iterations, pieces=pieces, notes=tuple(notes), settings=settings,
-        limits=limits, cap_source=cap_source, band_source=band_source,
+        limits=limits, cap_source=cap_source, band_source=band_source, path=path,
+        curvature_1pm=path.curvature_1pm, grade_rad=path.grade_rad, binding=binding,
     )
     for limit in limits:  # the bands promise every limit; never hand back a breach
         breach = limit.check(profile)
@@ -265,17 +305,105 @@ def _speed_caps(limits: Sequence[Limit], context: PlanContext) -> tuple[np.ndarr
     return stack[which, np.arange(n)], np.array([k for k, _ in caps])[which]
 
 
-def _accel_bounds(limits: Sequence[Limit], context: PlanContext) -> tuple[np.ndarray, np.ndarray]:
-    """The tightest deceleration (positive) and acceleration bound of each segment (m/s^2)."""
+def _accel_bounds(limits: Sequence[Limit], context: PlanContext
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The tightest deceleration (positive on the level) and acceleration bound of each
+    segment (m/s^2), and the index in ``limits`` of the limit giving each."""
     n = context.segments.count
     decel, accel = np.full(n, np.inf), np.full(n, np.inf)
-    for limit in limits:
+    decel_source, accel_source = np.zeros(n, dtype=int), np.zeros(n, dtype=int)
+    for k, limit in enumerate(limits):
         bounds = limit.accel_bounds_mps2(context)
         if bounds is not None:
-            decel, accel = np.minimum(decel, bounds[0]), np.minimum(accel, bounds[1])
+            tighter_d, tighter_a = bounds[0] < decel, bounds[1] < accel
+            decel, accel = np.where(tighter_d, bounds[0], decel), np.where(tighter_a, bounds[1], accel)
+            decel_source[tighter_d], accel_source[tighter_a] = k, k
     if not (np.all(np.isfinite(decel)) and np.all(np.isfinite(accel))):
         raise InputError("extra_limits: the plan needs finite acceleration and deceleration bounds")
-    return decel, accel
+    return decel, accel, decel_source, accel_source
+
+
+def _check_grades(source: str, seg: Segments, path: SegmentPath, decel: np.ndarray, accel: np.ndarray,
+                  limits: Sequence[Limit], accel_source: np.ndarray, decel_source: np.ndarray) -> None:
+    """Refuse a segment whose bounds leave no acceleration at all (-decel > accel)."""
+    bad = np.flatnonzero(-decel > accel + 1e-12 * np.maximum(np.abs(accel), 1.0))
+    if bad.size:
+        i = int(bad[0])
+        raise InfeasibleError(
+            f"{source}: segment {i} ({seg.boundaries_m[i]:g} to {seg.boundaries_m[i + 1]:g} m): its grade changes "
+            f"from {math.tan(path.grade_lo_rad[i]):.1%} to {math.tan(path.grade_hi_rad[i]):.1%}, so no acceleration "
+            f"keeps both the {limits[accel_source[i]].name} bound ({accel[i]:.3g} m/s^2 at most) and the "
+            f"{limits[decel_source[i]].name} bound ({-decel[i]:.3g} m/s^2 at least); use shorter segments "
+            "(segment_length_m) or a route with gentler slopes"
+        )
+
+
+def _grade_hint(exc: Exception, seg: Segments, path: SegmentPath, decel: np.ndarray, accel: np.ndarray) -> str:
+    """Where the grade makes a route impassable: a climb the drive cannot hold, a descent the
+    brakes cannot hold; appended to an infeasibility message ("" if neither)."""
+    parts = []
+    at = getattr(exc, "position_m", None)
+    climb = np.flatnonzero(accel < 0)
+    if at is not None:  # the climbs before the place where the profile fell short
+        climb = climb[seg.boundaries_m[climb] < at]
+    if climb.size:
+        i = int(climb[-1]) if at is not None else int(climb[np.argmin(accel[climb])])
+        parts.append(f"the climb at s = {seg.boundaries_m[i]:g} m (grade {math.tan(path.grade_hi_rad[i]):.1%}) "
+                     f"is steeper than the drive can hold (it slows the vehicle by {-accel[i]:.3g} m/s^2 at full "
+                     "drive; raise max_accel_mps2 or choose a gentler route)")
+    descent = np.flatnonzero(decel < 0)
+    if at is not None and parts:  # a climb explains it; name a descent only when none does
+        descent = descent[:0]
+    if descent.size:
+        i = int(descent[np.argmin(decel[descent])])
+        parts.append(f"the descent at s = {seg.boundaries_m[i]:g} m (grade {math.tan(path.grade_lo_rad[i]):.1%}) "
+                     f"is steeper than the brakes can hold (the vehicle speeds up by {-decel[i]:.3g} m/s^2 at full "
+                     "braking)")
+    return ("; " + " and ".join(parts)) if parts else ""
+
+
+def _drive_power(limits: Sequence[Limit], context: PlanContext) -> DrivePower | None:
+    """The one drive power limit of the plan, or None."""
+    found = [p for limit in limits if (p := limit.drive_power(context)) is not None]
+    if len(found) > 1:
+        raise InputError("extra_limits: only one limit may give a drive power limit")
+    return found[0] if found else None
+
+
+def _nlp_rows(limits: Sequence[Limit], context: PlanContext, cap: np.ndarray, decel: np.ndarray,
+              accel: np.ndarray) -> dict[str, np.ndarray]:
+    """The row families the NLP needs, with their per-segment data, in the limits' order."""
+    rows: dict[str, np.ndarray] = {}
+    for limit in limits:
+        found = limit.nlp_rows(context, cap, decel, accel)
+        if found is not None:
+            family, data = found
+            if family in rows:
+                raise InputError(f"extra_limits: two limits give NLP rows of the family {family!r}")
+            rows[family] = data
+    return rows
+
+
+def _cap_labels(limits: Sequence[Limit], context: PlanContext, cap: np.ndarray, cap_source: np.ndarray
+                ) -> np.ndarray:
+    """The ``binding`` name of each segment's lowest cap, shape (N,)."""
+    labels = np.full(cap.shape, "top_speed", dtype=object)
+    for k in np.unique(cap_source):
+        if k >= 0:
+            where = cap_source == k
+            labels[where] = limits[int(k)].cap_binding(context, cap)[where]
+    return labels
+
+
+def _boundary_labels(seg_label: np.ndarray, upper_b: np.ndarray, band_top_mps: np.ndarray) -> np.ndarray:
+    """The ``binding`` name of each boundary's upper bound: that of the segment beside it
+    whose band top is the lower, shape (N+1,)."""
+    top2 = band_top_mps**2
+    left = np.concatenate([[seg_label[0]], seg_label])
+    right = np.concatenate([seg_label, [seg_label[-1]]])
+    left_top = np.concatenate([[np.inf], top2])
+    right_top = np.concatenate([top2, [np.inf]])
+    return np.where(left_top <= right_top, left, right).astype(object)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -287,18 +415,26 @@ class _NlpResult:
     timings: dict[str, float]
 
 
+def _accel_scale(accel: np.ndarray, decel: np.ndarray) -> float:
+    """The NLP's acceleration scale (m/s^2): the largest acceleration bound, or, where a climb
+    leaves none positive, the largest bound in size (a scale must be > 0)."""
+    top = float(accel.max())
+    return top if top > 0 else max(float(np.max(np.abs(accel))), float(np.max(np.abs(decel))), 1e-9)
+
+
 def _solve_nlp(seg: Segments, chosen: BandChoice, decel: np.ndarray, accel: np.ndarray, smoothing: float,
-               jerk: float, options: SolverOptions) -> _NlpResult:
+               jerk: float, options: SolverOptions, rows: dict[str, np.ndarray]) -> _NlpResult:
     """IPOPT's optimum over the chosen bands: in pieces on a long route (exact, checked), or
-    whole (a short route, or a long one whose cuts do not check out)."""
+    whole (a short route, a long one whose cuts do not check out, or one with rows of turns
+    and hills, which the pieces do not carry yet)."""
     n = seg.count
     with_jerk = math.isfinite(jerk)
     scaling = Scaling(b_ref=max(float(chosen.upper_b.max()), 1e-6), l_ref=float(seg.length_m.mean()),
-                      a_ref=float(accel.max()), weight=smoothing, inv_jerk=1.0 / jerk if with_jerk else 0.0,
+                      a_ref=_accel_scale(accel, decel), weight=smoothing, inv_jerk=1.0 / jerk if with_jerk else 0.0,
                       t_whole=max(objective_s(chosen.greatest_b, seg.length_m, 0.0), 1e-6))
     timings = {"build": 0.0, "solve": 0.0}
     iterations = 0
-    if n > max(options.split_above_segments, options.piece_segments):
+    if not rows and n > max(options.split_above_segments, options.piece_segments):
         score = cut_scores(chosen.upper_b, chosen.greatest_b, seg.length_m)
         cuts = choose_cuts(score, options.piece_segments)
         if cuts.size:
@@ -308,13 +444,15 @@ def _solve_nlp(seg: Segments, chosen: BandChoice, decel: np.ndarray, accel: np.n
                 return _NlpResult(b, "optimal", iterations, pieces, timings)
 
     t = time.perf_counter()
-    solver = cached_nlp(n, with_jerk, options.ipopt_key())
+    families = tuple(rows)
+    solver = cached_nlp(n, with_jerk, options.ipopt_key(), families)
     timings["build"] += time.perf_counter() - t
     t = time.perf_counter()
     b_ref = scaling.b_ref
-    lbg, ubg = row_bounds(with_jerk, decel, accel, scaling.a_ref)
+    lbg, ubg = row_bounds(with_jerk and n >= 2, decel, accel, scaling.a_ref, families)
+    data = (np.column_stack(list(rows.values())),) if rows else ()  # the row families' data
     result = solve_ipopt(solver, chosen.greatest_b / b_ref, chosen.lower_b / b_ref, chosen.upper_b / b_ref,
-                         seg.length_m / scaling.l_ref, lbg, ubg, scaling.tail(scaling.t_whole))
+                         seg.length_m / scaling.l_ref, lbg, ubg, scaling.tail(scaling.t_whole), *data)
     timings["solve"] += time.perf_counter() - t
     return _NlpResult(result.y * b_ref, result.status, iterations + result.iterations, 1, timings)
 

@@ -17,14 +17,20 @@ import numpy as np
 
 from ..forces import DEFAULT_MODEL
 from ..kinematics import boundary_jerk_mps3
+from .binding import binding_shares
 
 if TYPE_CHECKING:
     from .limits import Limit
+    from .path import SegmentPath
 
-__all__ = ["Profile", "PROFILE_COLUMNS"]
+__all__ = ["Profile", "PROFILE_COLUMNS", "BASE_COLUMNS"]
 
-#: Columns of a profile CSV, in order.
-PROFILE_COLUMNS = ("s_m", "speed_mps", "accel_mps2", "time_s", "ri", "e_max_m", "force_n", "force_limit_n")
+#: The first eight columns of a profile CSV: all that files written before turns and hills hold.
+BASE_COLUMNS = ("s_m", "speed_mps", "accel_mps2", "time_s", "ri", "e_max_m", "force_n", "force_limit_n")
+#: Columns of a profile CSV, in order: the eight, then the path's curvature and grade at each
+#: row and the limit that holds the speed there (``binding``, text; see
+#: :mod:`profileopt.planning.binding`).
+PROFILE_COLUMNS = BASE_COLUMNS + ("curvature_1pm", "grade_rad", "binding")
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -84,6 +90,13 @@ class Profile:
         For each segment, the index in ``limits`` of the limit whose cap is lowest there.
     band_source : int
         Index in ``limits`` of the limit that gave the speed bands (-1: none).
+    curvature_1pm, grade_rad : numpy.ndarray, shape (N+1,), or None
+        The path's signed curvature (1/m, left turns positive) and grade (rad, uphill
+        positive) at each row; None for a profile read from a file without them.
+    binding : numpy.ndarray of str, shape (N+1,), or None
+        The limit that holds the speed at each row (:data:`~profileopt.planning.binding.BINDING_NAMES`).
+    path : SegmentPath or None
+        Each segment's turns and slopes, as the limits saw them (None when read from a file).
     """
 
     s_m: np.ndarray
@@ -111,6 +124,10 @@ class Profile:
     limits: tuple["Limit", ...] = ()
     cap_source: np.ndarray | None = None
     band_source: int = -1
+    curvature_1pm: np.ndarray | None = None
+    grade_rad: np.ndarray | None = None
+    binding: np.ndarray | None = None
+    path: "SegmentPath | None" = None
 
     @property
     def travel_time_s(self) -> float:
@@ -123,13 +140,16 @@ class Profile:
         return float(self.s_m[-1] - self.s_m[0])
 
     def columns(self) -> dict[str, np.ndarray]:
-        """The CSV columns by name, in order (:data:`PROFILE_COLUMNS`).
+        """The CSV columns by name, in order: :data:`PROFILE_COLUMNS`, or only the first
+        eight (:data:`BASE_COLUMNS`) for a profile read from a file written without the
+        others.
 
         Returns
         -------
         dict of str to numpy.ndarray, each shape (N+1,)
         """
-        return {name: getattr(self, name) for name in PROFILE_COLUMNS}
+        names = PROFILE_COLUMNS if self.binding is not None else BASE_COLUMNS
+        return {name: getattr(self, name) for name in names}
 
     def to_csv(self, path: str | os.PathLike) -> None:
         """Write the profile CSV atomically (:func:`profileopt.io.write_profile`).
@@ -154,6 +174,18 @@ class Profile:
         a = self.accel_mps2[:-1]
         return boundary_jerk_mps3(self.speed_mps[1:-1], a[:-1], a[1:], ds[:-1], ds[1:])
 
+    def _limits_off(self) -> list[str]:
+        """The limits of turns and hills not in :attr:`limits` (their vehicle keys missing)."""
+        if not self.limits:
+            return []
+        names = {limit.name for limit in self.limits}
+        wanted = (("lateral", "lateral and rollover (max_lateral_accel_mps2, track_width_m, cg_height_m)"),
+                  ("friction", "friction (friction_coefficient)"), ("power", "power (mass_kg, max_power_w)"))
+        off = [text for name, text in wanted if name not in names]
+        if any(getattr(limit, "grade", True) is False for limit in self.limits):
+            off.append("grade in the acceleration bounds (any of the keys above)")
+        return off
+
     def summary(self) -> dict:
         """A short account of a planned profile, for people and for ``--json``.
 
@@ -165,7 +197,10 @@ class Profile:
             and ``reason``: which limit holds the vehicle back there; of the segments whose
             top speed is held by a limit, the slowest, so not the run-up from rest);
             ``margins`` (from each of :attr:`limits`: the largest ratio of each constrained
-            quantity to its limit, and where: force, accel, decel, jerk); ``solver``
+            quantity to its limit, and where: force, lateral, friction, accel, decel, power,
+            jerk); ``binding`` (the share of the distance each limit holds the speed, 0 to
+            1, from the ``binding`` column); ``limits_off`` (the limits of turns and hills
+            the vehicle file leaves off); ``solver``
             (status, success, iterations, pieces, time_s); ``notes``. Plain Python numbers
             only.
         """
@@ -206,6 +241,8 @@ class Profile:
                 "top_speed_mps": float(top[i]), "ri": float(self.ri[i]), "reason": reason,
             },
             "margins": margins,
+            "binding": binding_shares(self.binding, self.s_m) if self.binding is not None else {},
+            "limits_off": self._limits_off(),
             "solver": {
                 "status": self.status, "success": self.success, "iterations": self.iterations,
                 "pieces": self.pieces, "time_s": float(self.timings_s.get("total", math.nan)),

@@ -2,8 +2,15 @@
 
 - :class:`ForceLimit` (``force.py``): the terrain force model's admissible speed bands;
 - :class:`SpeedLimit` (``speed.py``): the vehicle's top speed and the route's speed limits;
-- :class:`AccelLimit` (``accel.py``): acceleration and deceleration bounds;
+- :class:`LateralLimit` (``lateral.py``): lateral acceleration in turns (and rollover);
+- :class:`FrictionLimit` (``friction.py``): the friction circle;
+- :class:`AccelLimit` (``accel.py``): acceleration and deceleration bounds, on grades;
+- :class:`PowerLimit` (``power.py``): the drive power;
 - :class:`JerkLimit` (``jerk.py``): the jerk bound.
+
+The limits of turns and hills (lateral, friction, power) are in a plan only when the vehicle
+file gives their keys (:class:`profileopt.Vehicle`), and the grade enters the acceleration
+bounds only when it gives any of them: a vehicle file without them plans exactly as before.
 
 All follow :class:`Limit` (``base.py``). A new kind of limit is a new module with a
 subclass of :class:`Limit`, registered in :func:`default_limits` below; a limit of your own
@@ -15,22 +22,29 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+import math
+
+from ...motion import lateral_limit_mps2
 from .accel import AccelLimit
 from .base import Limit, PlanContext, worst_ratio
 from .force import ForceLimit
+from .friction import FrictionLimit
 from .jerk import JerkLimit
+from .lateral import LateralLimit
+from .power import PowerLimit
 from .speed import SpeedLimit
 
 if TYPE_CHECKING:
     from ...vehicle import Vehicle
 
 __all__ = ["Limit", "PlanContext", "worst_ratio", "ForceLimit", "SpeedLimit", "AccelLimit", "JerkLimit",
-           "default_limits"]
+           "LateralLimit", "FrictionLimit", "PowerLimit", "default_limits", "plans_on_grades"]
 
 
 def default_limits(vehicle: "Vehicle", *, model: str, max_jerk_mps3: float) -> tuple[Limit, ...]:
-    """The limits every plan keeps: force, speed caps, acceleration, jerk (in this order,
-    which is also the order of the summary's margins).
+    """The limits of a plan: force, speed caps, lateral, friction, acceleration, power, jerk
+    (in this order, which is also the order of the summary's margins); lateral, friction and
+    power only when the vehicle gives their keys.
 
     Parameters
     ----------
@@ -45,9 +59,33 @@ def default_limits(vehicle: "Vehicle", *, model: str, max_jerk_mps3: float) -> t
     -------
     tuple of Limit
     """
-    return (
-        ForceLimit(model=model),
-        SpeedLimit(max_speed_mps=vehicle.max_speed_mps),
-        AccelLimit(max_accel_mps2=vehicle.max_accel_mps2, max_decel_mps2=vehicle.max_decel_mps2),
-        JerkLimit(max_jerk_mps3=max_jerk_mps3),
-    )
+    limits: list[Limit] = [ForceLimit(model=model), SpeedLimit(max_speed_mps=vehicle.max_speed_mps)]
+    lateral = lateral_limit_mps2(vehicle)
+    if math.isfinite(lateral):
+        limits.append(LateralLimit(limit_mps2=lateral))
+    if vehicle.friction_coefficient is not None:
+        limits.append(FrictionLimit(friction_coefficient=vehicle.friction_coefficient))
+    limits.append(AccelLimit(max_accel_mps2=vehicle.max_accel_mps2, max_decel_mps2=vehicle.max_decel_mps2,
+                             grade=plans_on_grades(vehicle)))
+    if vehicle.max_power_w is not None and vehicle.mass_kg is not None:
+        limits.append(PowerLimit(mass_kg=vehicle.mass_kg, max_power_w=vehicle.max_power_w))
+    limits.append(JerkLimit(max_jerk_mps3=max_jerk_mps3))
+    return tuple(limits)
+
+
+def plans_on_grades(vehicle: "Vehicle") -> bool:
+    """Whether the grade enters ``vehicle``'s acceleration bounds: when its file gives any key
+    of turns and hills (it then describes the vehicle's motion on 3-D routes; without any, a
+    plan is exactly what it was before they existed).
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        The vehicle.
+
+    Returns
+    -------
+    bool
+    """
+    return any(getattr(vehicle, key) is not None for key in
+               ("max_lateral_accel_mps2", "track_width_m", "friction_coefficient", "mass_kg"))

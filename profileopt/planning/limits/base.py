@@ -10,6 +10,11 @@ returns ``None`` (or the neutral value) when the limit has nothing to say:
 - acceleration bounds of each segment (:meth:`Limit.accel_bounds_mps2`), rows of the NLP
   and slopes of the exact forward-backward pass;
 - a jerk bound (:meth:`Limit.jerk_bound_mps3`), rows of the NLP at interior boundaries;
+- a drive power limit (:meth:`Limit.drive_power`), kept exactly by the forward pass, and
+  rows of the NLP on each segment's two squared speeds (:meth:`Limit.nlp_rows`, a family
+  of :data:`profileopt.planning.nlp.ROW_FAMILIES`) where the bounds above do not imply it;
+- the name of what holds the speed, for the profile's ``binding`` column
+  (:attr:`Limit.binding`, :meth:`Limit.cap_binding`);
 - the independent checks: of IPOPT's solution before it is used
   (:meth:`Limit.violation`) and of the finished profile (:meth:`Limit.check`), and its
   margins for the summary (:meth:`Limit.margins`).
@@ -27,10 +32,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..path import SegmentPath, flat_path
+
 if TYPE_CHECKING:
     from ...route import Route
     from ...speeds import SpeedBands
     from ...vehicle import Vehicle
+    from ..bands import DrivePower
     from ..result import Profile
     from ..segments import Segments
 
@@ -49,11 +57,19 @@ class PlanContext:
         The vehicle planned for.
     segments : Segments
         The route cut into segments (N of them), with each segment's samples and roughness.
+    path : SegmentPath, optional
+        Each segment's turns and slopes; None: a straight, level route.
     """
 
     route: "Route"
     vehicle: "Vehicle"
     segments: "Segments"
+    path: SegmentPath | None = None
+
+    @property
+    def turns_and_slopes(self) -> SegmentPath:
+        """:attr:`path`, or a straight level path when there is none."""
+        return self.path if self.path is not None else flat_path(self.segments.count)
 
 
 class Limit:
@@ -65,6 +81,10 @@ class Limit:
 
     #: Short name, used in summaries and messages.
     name: str = "limit"
+    #: What the ``binding`` column says where this limit holds the speed (its cap, its
+    #: acceleration bounds or its rows): one of ``force``, ``speed_limit``, ``top_speed``,
+    #: ``lateral``, ``friction``, ``accel``, ``power``, ``jerk``.
+    binding: str = "limit"
 
     def speed_bands(self, context: PlanContext) -> "SpeedBands | None":
         """The admissible speed bands of each segment (m/s), or None.
@@ -105,6 +125,80 @@ class Limit:
         Returns
         -------
         (decel_mps2, accel_mps2) : tuple of numpy.ndarray, shape (N,), or None
+        """
+        return None
+
+    def cap_binding(self, context: PlanContext, cap_mps: np.ndarray) -> np.ndarray:
+        """The ``binding`` name of this limit's cap in each segment, shape (N,).
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+        cap_mps : numpy.ndarray, shape (N,)
+            This limit's caps (m/s).
+
+        Returns
+        -------
+        numpy.ndarray of str
+        """
+        return np.full(cap_mps.shape, self.binding, dtype=object)
+
+    def drive_power(self, context: PlanContext) -> "DrivePower | None":
+        """The drive power limit of the forward pass, or None (at most one limit gives one).
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+
+        Returns
+        -------
+        DrivePower or None
+        """
+        return None
+
+    def nlp_rows(self, context: PlanContext, cap_mps: np.ndarray, decel_mps2: np.ndarray,
+                 accel_mps2: np.ndarray) -> tuple[str, np.ndarray] | None:
+        """Rows this limit needs in the NLP, given every limit's caps and acceleration bounds.
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+        cap_mps : numpy.ndarray, shape (N,)
+            The lowest cap of each segment (m/s).
+        decel_mps2, accel_mps2 : numpy.ndarray, shape (N,)
+            The tightest acceleration bounds of each segment (m/s^2).
+
+        Returns
+        -------
+        (family, data) or None
+            A key of :data:`profileopt.planning.nlp.ROW_FAMILIES` and its data, shape
+            (N, D); None when the caps and bounds already imply the limit in every segment.
+        """
+        return None
+
+    def inner_bounds(self, context: PlanContext, cap_mps: np.ndarray, decel_mps2: np.ndarray,
+                     accel_mps2: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """Caps and acceleration bounds tight enough to keep this limit's NLP rows without them.
+
+        Used by the fallback profile when IPOPT fails: the forward-backward profile within
+        these keeps every row.
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+        cap_mps : numpy.ndarray, shape (N,)
+            The caps (m/s).
+        decel_mps2, accel_mps2 : numpy.ndarray, shape (N,)
+            The acceleration bounds (m/s^2).
+
+        Returns
+        -------
+        (cap_mps, decel_mps2, accel_mps2) or None
+            Tightened copies; None when this limit has no NLP rows.
         """
         return None
 

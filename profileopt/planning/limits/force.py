@@ -38,6 +38,7 @@ class ForceLimit(Limit):
 
     model: str = DEFAULT_MODEL
     name = "force"
+    binding = "force"
 
     def __post_init__(self) -> None:
         get_model(self.model)  # an unknown model is refused here, by name

@@ -34,6 +34,7 @@ class JerkLimit(Limit):
 
     max_jerk_mps3: float
     name = "jerk"
+    binding = "jerk"
 
     def jerk_bound_mps3(self, context: PlanContext) -> float:
         """The bound (m/s^3).

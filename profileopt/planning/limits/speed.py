@@ -31,6 +31,24 @@ class SpeedLimit(Limit):
 
     max_speed_mps: float
     name = "speed cap"
+    binding = "speed_limit"
+
+    def cap_binding(self, context: PlanContext, cap_mps: np.ndarray) -> np.ndarray:
+        """``top_speed`` where the cap is the vehicle's top speed, else ``speed_limit`` (the
+        route's own), shape (N,).
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+        cap_mps : numpy.ndarray, shape (N,)
+            This limit's caps (m/s).
+
+        Returns
+        -------
+        numpy.ndarray of str
+        """
+        return np.where(cap_mps >= self.max_speed_mps, "top_speed", "speed_limit").astype(object)
 
     def speed_cap_mps(self, context: PlanContext) -> np.ndarray:
         """The cap of each segment (m/s), shape (N,).

@@ -1,0 +1,106 @@
+"""The lateral acceleration limit in turns: the vehicle's own bound and its rollover threshold.
+
+v^2 kappa <= a_lat, where a_lat is the smaller of ``max_lateral_accel_mps2`` and the static
+rollover threshold g t / (2 h_cg) (:func:`profileopt.motion.lateral_limit_mps2`). With the
+segment's largest |kappa| it caps every speed driven inside the segment at
+sqrt(a_lat / kappa_max).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ...motion import lateral_accel_mps2, lateral_speed_cap_mps
+from .base import Limit, PlanContext, worst_ratio
+
+if TYPE_CHECKING:
+    from ..result import Profile
+
+__all__ = ["LateralLimit"]
+
+
+@dataclasses.dataclass(frozen=True)
+class LateralLimit(Limit):
+    """v^2 |kappa| <= limit_mps2 at every speed and curvature of every segment.
+
+    Attributes
+    ----------
+    limit_mps2 : float
+        Lateral acceleration limit (m/s^2), > 0.
+    """
+
+    limit_mps2: float
+    name = "lateral"
+    binding = "lateral"
+
+    def speed_cap_mps(self, context: PlanContext) -> np.ndarray:
+        """sqrt(limit / kappa_max) per segment (m/s), inf on straights, shape (N,).
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        return lateral_speed_cap_mps(self.limit_mps2, context.turns_and_slopes.curvature_max_1pm)
+
+    def check(self, profile: "Profile") -> float:
+        """How far the largest lateral acceleration in any segment exceeds the limit (relative).
+
+        Parameters
+        ----------
+        profile : Profile
+            The profile about to be returned.
+
+        Returns
+        -------
+        float
+        """
+        return max(float(np.max(_lateral(profile), initial=0.0)) / self.limit_mps2 - 1.0, 0.0)
+
+    def margins(self, profile: "Profile") -> dict[str, dict]:
+        """The largest lateral acceleration over the limit, and where.
+
+        Parameters
+        ----------
+        profile : Profile
+            A planned profile.
+
+        Returns
+        -------
+        dict
+            ``{"lateral": {...}}``.
+        """
+        return {"lateral": worst_ratio(_lateral(profile), self.limit_mps2, profile.s_m[:-1])}
+
+    def cap_reason(self, profile: "Profile", segment: int) -> str:
+        """"the lateral acceleration limit (... m/s^2) in a turn of radius ... m".
+
+        Parameters
+        ----------
+        profile : Profile
+            A planned profile.
+        segment : int
+            Index of the segment.
+
+        Returns
+        -------
+        str
+        """
+        kappa = float(profile.path.curvature_max_1pm[segment]) if profile.path is not None else 0.0
+        radius = f"{1.0 / kappa:.3g} m" if kappa > 0 else "inf"
+        return f"the lateral acceleration limit ({self.limit_mps2:.3g} m/s^2) in a turn of radius {radius}"
+
+
+def _lateral(profile: "Profile") -> np.ndarray:
+    """The largest lateral acceleration of each segment (m/s^2), shape (N,)."""
+    if profile.path is None:
+        return np.zeros(profile.s_m.size - 1)
+    top = np.maximum(profile.speed_mps[:-1], profile.speed_mps[1:])
+    return lateral_accel_mps2(top, profile.path.curvature_max_1pm)

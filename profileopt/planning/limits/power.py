@@ -1,0 +1,140 @@
+"""The drive power limit: m (a + g sin theta) v <= P at every speed and grade of a segment.
+
+In a segment of constant acceleration the power is largest at its higher speed and its
+steepest grade, so a <= P / (m max(v_i, v_{i+1})) - g sin(theta_hi)
+(:func:`profileopt.motion.power_accel_mps2`). The exact forward-backward pass keeps it
+(:class:`~profileopt.planning.bands.DrivePower`); in the NLP it is two rows per segment
+(:data:`profileopt.planning.nlp.ROW_FAMILIES`, ``power``), needed only where a speed the
+caps allow, at the acceleration the bounds allow, would need more than P.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ...motion import drive_power_w, tyre_accel_mps2
+from ..bands import DrivePower
+from ..nlp import family_rows
+from .base import Limit, PlanContext, worst_ratio
+
+if TYPE_CHECKING:
+    from ..result import Profile
+
+__all__ = ["PowerLimit"]
+
+
+@dataclasses.dataclass(frozen=True)
+class PowerLimit(Limit):
+    """m (a + g sin theta) v <= max_power_w in every segment.
+
+    Attributes
+    ----------
+    mass_kg : float
+        Mass of the whole vehicle (kg).
+    max_power_w : float
+        Largest drive power at the wheels (W).
+    """
+
+    mass_kg: float
+    max_power_w: float
+    name = "power"
+    binding = "power"
+
+    def drive_power(self, context: PlanContext) -> DrivePower:
+        """P / m and each segment's steepest grade, for the forward pass.
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+
+        Returns
+        -------
+        DrivePower
+        """
+        return DrivePower(self.max_power_w / self.mass_kg, context.turns_and_slopes.grade_hi_rad)
+
+    def _data(self, context: PlanContext) -> np.ndarray:
+        n = context.segments.count
+        return np.column_stack([context.turns_and_slopes.grade_hi_rad, np.full(n, self.mass_kg),
+                                np.full(n, self.max_power_w)])
+
+    def nlp_rows(self, context: PlanContext, cap_mps: np.ndarray, decel_mps2: np.ndarray,
+                 accel_mps2: np.ndarray) -> tuple[str, np.ndarray] | None:
+        """The ``power`` rows, or None where no segment can reach the power limit: the
+        fastest speed its caps allow times the most drive force per unit mass its bounds
+        allow, (a_max + g sin theta_hi) v_cap, is within P / m everywhere.
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+        cap_mps : numpy.ndarray, shape (N,)
+            The lowest cap of each segment (m/s).
+        decel_mps2, accel_mps2 : numpy.ndarray, shape (N,)
+            The tightest acceleration bounds of each segment (m/s^2).
+
+        Returns
+        -------
+        ("power", data) or None
+        """
+        drive = tyre_accel_mps2(accel_mps2, context.turns_and_slopes.grade_hi_rad)
+        reach = np.maximum(drive, 0.0) * cap_mps
+        if not np.any(reach * self.mass_kg > self.max_power_w * (1 - 1e-12)):
+            return None
+        return "power", self._data(context)
+
+    def violation(self, context: PlanContext, b: np.ndarray) -> float:
+        """Largest drive power over P, minus 1 (0 when the limit holds).
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+        b : numpy.ndarray, shape (N+1,)
+            Squared speeds at the boundaries (m^2/s^2).
+
+        Returns
+        -------
+        float
+        """
+        rows = family_rows("power", b, context.segments.length_m, self._data(context))
+        return max(float(rows.max()) - 1.0, 0.0)
+
+    def check(self, profile: "Profile") -> float:
+        """How far the drive power in any segment exceeds P (relative).
+
+        Parameters
+        ----------
+        profile : Profile
+            The profile about to be returned.
+
+        Returns
+        -------
+        float
+        """
+        return max(float(np.max(self._power(profile), initial=0.0)) / self.max_power_w - 1.0, 0.0)
+
+    def _power(self, profile: "Profile") -> np.ndarray:
+        """The largest drive power of each segment (W), shape (N,)."""
+        top = np.maximum(profile.speed_mps[:-1], profile.speed_mps[1:])
+        grade = profile.path.grade_hi_rad if profile.path is not None else 0.0
+        return drive_power_w(self.mass_kg, top, profile.accel_mps2[:-1], grade)
+
+    def margins(self, profile: "Profile") -> dict[str, dict]:
+        """The largest drive power over P, and where.
+
+        Parameters
+        ----------
+        profile : Profile
+            A planned profile.
+
+        Returns
+        -------
+        dict
+            ``{"power": {...}}``.
+        """
+        return {"power": worst_ratio(self._power(profile), self.max_power_w, profile.s_m[:-1])}
