@@ -261,3 +261,30 @@ def test_a_vehicle_file_without_the_keys_plans_exactly_as_before(route_name, veh
     profile = plan(read_route(ROUTES / f"{route_name}.csv"), bare)
     now = np.column_stack([profile.columns()[name] for name in PROFILE_COLUMNS[:8]])
     assert np.array_equal(now, before)
+
+
+def test_a_climb_steeper_than_the_drive_is_named_where_the_vehicle_stalls():
+    # 40 % for 100 m: g sin(atan 0.4) = 3.64 m/s^2 > max_accel 2.5 (atv); from a 30 m run-up at
+    # 2.5 m/s^2 (12.2 m/s) the vehicle loses 1.14 m/s^2 and stops after 66 m < 100 m
+    steep = ramp_route([(30.0, 0.0), (100.0, 0.4), (30.0, 0.0)], ds_m=0.25)
+    with pytest.raises(InfeasibleError, match=r"stalls at s = \d+ m on the climb from s = \d+ m \(grade up to 40\.0%\)"):
+        plan(steep, load_vehicle("atv"), **EXACT)
+    # the bundled ATV in low range (max_accel 5 m/s^2) climbs it
+    assert plan(steep, load_vehicle("atv-low-range"), **EXACT).status == "exact"
+
+
+def test_readme_turns_and_hills_mpc_snippet_reaches_the_lateral_limit():
+    """The README's snippet, run as written: from rest up a 15 % climb into a 25 m bend, the
+    speeds rise as the drive allows and settle at sqrt(a_lat R) = sqrt(4 * 25) = 10 m/s."""
+    import os
+    import re
+
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    section = readme[readme.index("### Turns and hills in your own MPC"):]
+    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])))
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd=ROOT, env=env)
+    assert run.returncode == 0, run.stderr
+    speeds = np.array([float(x) for x in run.stdout.strip().strip("[]").split()])
+    assert speeds[0] == 0.0 and speeds[-1] == pytest.approx(10.0, abs=0.01)
+    assert np.all(np.diff(speeds) >= -1e-9) and speeds.max() <= 10.0 + 0.01  # never above the bend's limit

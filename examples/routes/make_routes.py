@@ -346,10 +346,15 @@ def mojstrovka(real: Path) -> BundledRoute:
     keep = np.concatenate([[True], np.hypot(np.diff(east), np.diff(north)) > 0])  # drop repeated points
     east, north, ele = east[keep], north[keep], points[keep, 2]
     s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(east), np.diff(north)))])
+    # A reading equal to the one before it, to the 0.1 mm the log keeps, is a frozen altimeter
+    # (the log holds 1942.4904 m for 7 points over 80 m, then drops 69 m in 28 m): only the
+    # first of such a run is a measurement, the others get a weight of 1e-6 in the fit below.
+    frozen = np.concatenate([[False], np.diff(ele) == 0])
     # GPS elevations are noisy by metres: a smoothing spline of z over s, lam = (n / L) 50^4,
     # smooths over about 50 m (5 points)
-    z_spline = make_smoothing_spline(s, ele, lam=s.size / s[-1] * MOJSTROVKA_Z_SCALE_M**4)
-    deviation = z_spline(s) - ele
+    z_spline = make_smoothing_spline(s, ele, w=np.where(frozen, 1e-6, 1.0),
+                                     lam=s.size / s[-1] * MOJSTROVKA_Z_SCALE_M**4)
+    deviation = (z_spline(s) - ele)[~frozen]
     # each GPS segment cut into equal pieces of at most 0.5 m: the GPS points are kept, so the
     # chord lengths that read_route sums are the track's horizontal length and z(s) is kept
     # (cutting a corner with a 0.5 m grid would shorten s there, which reads as roughness)
@@ -372,9 +377,10 @@ def mojstrovka(real: Path) -> BundledRoute:
         f"{MOJSTROVKA_SPACING_M:g} m, linear interpolation: the GPS points are kept, s is the track's length).",
         "GPS measures the path's geometry and its grade, not the ground's roughness: the elevation",
         "is smoothed before resampling (scipy make_smoothing_spline of z over s,",
-        f"lam = (n/L) {MOJSTROVKA_Z_SCALE_M:g}^4: smoothing over about {MOJSTROVKA_Z_SCALE_M:g} m; it departs from the",
-        f"GPS elevations by {np.sqrt(np.mean(deviation**2)):.1f} m RMS, by up to {np.max(np.abs(deviation)):.0f} m "
-        "where the log jumps),",
+        f"lam = (n/L) {MOJSTROVKA_Z_SCALE_M:g}^4: smoothing over about {MOJSTROVKA_Z_SCALE_M:g} m; the {int(frozen.sum())} "
+        "readings equal to the one before them (a frozen altimeter: 1942.4904 m for 80 m, then a 69 m drop)",
+        "are given a weight of 1e-6; it departs from the other GPS elevations by",
+        f"{np.sqrt(np.mean(deviation**2)):.1f} m RMS, by up to {np.max(np.abs(deviation)):.0f} m),",
         "so the route's roughness is near zero: plan it to see turns and",
         "hills, not roughness. The GPS path is noisy by metres too: smooth it with a path",
         "tolerance of a few metres (a 0.1 m tolerance reads the noise and the polyline's corners",

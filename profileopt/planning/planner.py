@@ -204,6 +204,9 @@ def plan(
         chosen = choose_bands(usable.lower_mps, usable.upper_mps, usable.count, seg.length_m, accel, decel,
                               v0_mps, vend_mps, seg.boundaries_m, power)
     except InfeasibleError as exc:  # name the route, as every input message does
+        stall = _stall_message(exc, seg, path, accel)
+        if stall:  # a climb the drive cannot hold explains it: say that, not the generic bound
+            raise InfeasibleError(f"{route.source}: {stall}") from None
         raise InfeasibleError(f"{route.source}: {exc}{_grade_hint(exc, seg, path, decel, accel)}") from None
     timings["choose"] = time.perf_counter() - t
 
@@ -336,6 +339,25 @@ def _check_grades(source: str, seg: Segments, path: SegmentPath, decel: np.ndarr
             f"{limits[decel_source[i]].name} bound ({-decel[i]:.3g} m/s^2 at least); use shorter segments "
             "(segment_length_m) or a route with gentler slopes"
         )
+
+
+def _stall_message(exc: Exception, seg: Segments, path: SegmentPath, accel: np.ndarray) -> str:
+    """"the vehicle stalls at s = ... m on the climb ...", when the profile fell short of 0 m/s
+    after a climb the drive cannot hold ("" otherwise)."""
+    at = getattr(exc, "position_m", None)
+    if at is None or "must be at least 0 m/s" not in str(exc):
+        return ""
+    climb = np.flatnonzero((accel < 0) & (seg.boundaries_m[:-1] < at))
+    if not climb.size:
+        return ""
+    last = int(climb[-1])
+    first = last
+    while first > 0 and accel[first - 1] < 0:
+        first -= 1
+    return (f"the vehicle stalls at s = {at:g} m on the climb from s = {seg.boundaries_m[first]:g} m (grade up to "
+            f"{math.tan(path.grade_hi_rad[first:last + 1].max()):.1%}), steeper than its drive can hold: there it "
+            f"loses up to {-accel[first:last + 1].min():.3g} m/s^2 at full drive and no speed it can reach before "
+            "carries it over; raise max_accel_mps2 (a climb of grade G needs g sin(atan G)) or choose a gentler route")
 
 
 def _grade_hint(exc: Exception, seg: Segments, path: SegmentPath, decel: np.ndarray, accel: np.ndarray) -> str:
