@@ -281,10 +281,33 @@ def run_plan(route_path: Path, out_path: Path, vehicle, **options) -> Run:
                profile.travel_time_s, profile.status, out_path, stages_s=stages)
 
 
-def run_cli(route_path: Path, out_path: Path) -> Run:
-    """``python -m profileopt plan route.csv --vehicle atv -o out.csv`` in a fresh process."""
+#: The benchmark's vehicle file, written in the work folder: the bundled atv without the
+#: optional keys of turns and hills, so the acceleration bounds are the level ones that
+#: TOPP-RA and COPP are given (the peers' convex subset is then the same problem).
+LEVEL_VEHICLE_FILE = "atv-level.toml"
+
+_TURN_AND_HILL_KEYS = ("max_lateral_accel_mps2", "track_width_m", "cg_height_m", "friction_coefficient", "mass_kg",
+                       "max_power_w")
+
+
+def level_atv():
+    """The bundled atv without the keys of turns and hills."""
+    return load_vehicle("atv").replace(**{key: None for key in _TURN_AND_HILL_KEYS})
+
+
+def write_level_atv(path: Path) -> None:
+    """The bundled atv's file without the keys of turns and hills."""
+    from profileopt.vehicle import bundled_vehicles  # noqa: F401  (the bundled file is found by name)
+
+    source = Path(load_vehicle("atv").name).read_text(encoding="utf-8").splitlines()
+    kept = [line for line in source if line.split("=")[0].strip() not in _TURN_AND_HILL_KEYS]
+    path.write_text("\n".join(kept) + "\n", encoding="utf-8")
+
+
+def run_cli(route_path: Path, out_path: Path, vehicle_path: Path) -> Run:
+    """``python -m profileopt plan route.csv --vehicle V.toml -o out.csv`` in a fresh process."""
     start = time.perf_counter()
-    done = subprocess.run([sys.executable, "-m", "profileopt", "plan", str(route_path), "--vehicle", "atv",
+    done = subprocess.run([sys.executable, "-m", "profileopt", "plan", str(route_path), "--vehicle", str(vehicle_path),
                            "-o", str(out_path)], capture_output=True, text=True, check=False)
     wall = time.perf_counter() - start
     if done.returncode != 0:
@@ -617,7 +640,8 @@ def bench_size(n: int, repeats: int, workdir: Path, vehicle, spacing_m: float, s
         ("full", "plan (IPOPT)"): lambda: run_plan(route_path, workdir / "full.csv", vehicle, **full),
     }
     if cli:
-        cases[("full", "`profileopt plan` CLI process")] = lambda: run_cli(route_path, workdir / "cli.csv")
+        cases[("full", "`profileopt plan` CLI process")] = lambda: run_cli(route_path, workdir / "cli.csv",
+                                                                        workdir / LEVEL_VEHICLE_FILE)
     if has_method:
         cases[("convex", "plan auto (exact FB)")] = lambda: run_plan(
             route_path, workdir / "auto.csv", vehicle, method="auto", **convex)
@@ -735,12 +759,13 @@ def main(argv: list[str] | None = None) -> int:
     if SEGMENT_LENGTH_M / args.spacing < 8:
         parser.error("--spacing must give every 5 m segment at least 8 samples (<= 0.625 m)")
 
-    vehicle = load_vehicle("atv")
+    vehicle = level_atv()
     started = time.strftime("%Y-%m-%d %H:%M %Z")
     load_before = os.getloadavg()
     rows: list[Row] = []
     with tempfile.TemporaryDirectory(prefix="bench_plan_") as tmp:
         workdir = Path(tmp)
+        write_level_atv(workdir / LEVEL_VEHICLE_FILE)
         # warm-up: load the IPOPT plugin, TOPP-RA's and COPP's modules once, outside every timing
         bench_size(200, 1, workdir, vehicle, args.spacing, args.seed, cli=False)
         for n in sizes:
@@ -752,7 +777,8 @@ def main(argv: list[str] | None = None) -> int:
         f"Run {started} on {_machine()}.",
         f"{_versions()}; profileopt at {_commit()}.",
         f"Medians of {args.repeats} cold repeats per method (min–max in brackets), interleaved; load average "
-        f"{load_before[0]:.2f} before, {load_after[0]:.2f} after. Vehicle atv, model {MODEL}, "
+        f"{load_before[0]:.2f} before, {load_after[0]:.2f} after. Vehicle atv without the keys of turns and "
+        f"hills (the peers' problem: acceleration bounds without grade), model {MODEL}, "
         f"{SEGMENT_LENGTH_M:g} m segments, route samples every {args.spacing:g} m, seed {args.seed}.",
     ])
     text = (header + "\n\n" + markdown_table(rows) + "\n\nWhere the time of each in-process `plan` run goes "
