@@ -75,9 +75,10 @@ def test_arc_is_driven_at_the_lateral_limit_and_never_faster(atv):
     # reached mid-arc (the smoothed curvature there is within a few per cent of 1/R) ...
     np.testing.assert_allclose(profile.speed_mps[mid], v_arc, rtol=0.03)
     assert set(profile.binding[mid]) == {"lateral"}
-    # ... and never exceeded on the arc (the smoothed path cuts the corner within the tolerance,
-    # so its radius is at least R minus a little: 2 % allows a 4 % larger radius)
-    assert profile.speed_mps[arc].max() <= v_arc * 1.02
+    # ... and never exceeded on the arc: each segment takes the largest smoothed curvature within
+    # the smoothing's reach, which overshoots 1/R by a few per cent where the arc meets the
+    # straights (9.96 m/s at most on this arc)
+    assert profile.speed_mps[arc].max() <= v_arc * (1 + 1e-9)
     # the friction circle, on the true geometry: (a)^2 + (v^2 / R)^2 <= (mu g)^2 at every row
     kappa = np.interp(s, route.s_m, true_arc_curvature(route, radius, straight))
     usage = (profile.accel_mps2**2 + (profile.speed_mps**2 * kappa) ** 2) / (atv.friction_coefficient * G) ** 2
