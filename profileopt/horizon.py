@@ -45,6 +45,7 @@ if TYPE_CHECKING:
     from .vehicle import Vehicle
 
 __all__ = [
+    "ConstraintTriple",
     "ForceConstraints",
     "terrain_envelope",
     "interval_force_constraints",
@@ -53,8 +54,36 @@ __all__ = [
 ]
 
 
+class ConstraintTriple:
+    """Rows ``g`` with bounds ``lbg <= g <= ubg`` that unpack as the triple of ``casadi.nlpsol``.
+
+    ``g, lbg, ubg = cons``; ``dict(cons)`` and ``**cons`` give the same three by name;
+    ``cons[0]`` .. ``cons[2]`` index the triple. Subclasses are dataclasses with the fields
+    ``g``, ``lbg`` and ``ubg`` (and more, reached as attributes).
+    """
+
+    def __iter__(self) -> Iterator[Any]:
+        return iter((self.g, self.lbg, self.ubg))
+
+    def __len__(self) -> int:
+        return 3
+
+    def keys(self) -> tuple[str, str, str]:
+        """``("g", "lbg", "ubg")``: with :meth:`__getitem__`, ``dict(cons)`` and ``**cons``
+        give the same three as unpacking."""
+        return ("g", "lbg", "ubg")
+
+    def __getitem__(self, key: str | int) -> Any:
+        if isinstance(key, int) and not isinstance(key, bool) and -3 <= key < 3:
+            return (self.g, self.lbg, self.ubg)[key]
+        if key not in self.keys():
+            raise KeyError(f"{key!r}: a {type(self).__name__} maps 'g', 'lbg' and 'ubg' (or 0, 1, 2 as the triple; "
+                           "attributes hold the rest)")
+        return getattr(self, key)
+
+
 @dataclasses.dataclass(frozen=True)
-class ForceConstraints:
+class ForceConstraints(ConstraintTriple):
     """Force-limit (and optional acceleration) constraints lbg <= g <= ubg.
 
     Unpacks as the triple ``g, lbg, ubg = force_constraints(...)`` that
@@ -92,24 +121,6 @@ class ForceConstraints:
     model: str
     normalised: bool
 
-    def __iter__(self) -> Iterator[Any]:
-        return iter((self.g, self.lbg, self.ubg))
-
-    def __len__(self) -> int:
-        return 3
-
-    def keys(self) -> tuple[str, str, str]:
-        """``("g", "lbg", "ubg")``: with :meth:`__getitem__`, ``dict(cons)`` and ``**cons``
-        give the same three as unpacking."""
-        return ("g", "lbg", "ubg")
-
-    def __getitem__(self, key: str | int) -> Any:
-        if isinstance(key, int) and not isinstance(key, bool) and -3 <= key < 3:
-            return (self.g, self.lbg, self.ubg)[key]
-        if key not in self.keys():
-            raise KeyError(f"{key!r}: a ForceConstraints maps 'g', 'lbg' and 'ubg' (or 0, 1, 2 as the triple; "
-                           "attributes hold the rest)")
-        return getattr(self, key)
 
 
 # ---------------------------------------------------------------------------------------

@@ -48,12 +48,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Any, Iterator
+from typing import Any
 
 import casadi as ca
 import numpy as np
 
 from .errors import InputError
+from .horizon import ConstraintTriple
 from .motion import drive_power_w, friction_usage, lateral_accel_mps2, lateral_limit_mps2
 from .symbolic import is_symbolic
 from .vehicle import Vehicle
@@ -62,7 +63,7 @@ __all__ = ["MotionConstraints", "lateral_constraints", "friction_constraints", "
 
 
 @dataclasses.dataclass(frozen=True)
-class MotionConstraints:
+class MotionConstraints(ConstraintTriple):
     """Motion-limit constraints lbg <= g <= ubg (lateral, friction or power).
 
     Unpacks as the triple ``g, lbg, ubg = lateral_constraints(...)`` that
@@ -92,24 +93,6 @@ class MotionConstraints:
     limit: float
     name: str
 
-    def __iter__(self) -> Iterator[Any]:
-        return iter((self.g, self.lbg, self.ubg))
-
-    def __len__(self) -> int:
-        return 3
-
-    def keys(self) -> tuple[str, str, str]:
-        """``("g", "lbg", "ubg")``: with :meth:`__getitem__`, ``dict(cons)`` and ``**cons``
-        give the same three as unpacking."""
-        return ("g", "lbg", "ubg")
-
-    def __getitem__(self, key: str | int) -> Any:
-        if isinstance(key, int) and not isinstance(key, bool) and -3 <= key < 3:
-            return (self.g, self.lbg, self.ubg)[key]
-        if key not in self.keys():
-            raise KeyError(f"{key!r}: a MotionConstraints maps 'g', 'lbg' and 'ubg' (or 0, 1, 2 as the triple; "
-                           "attributes hold the rest)")
-        return getattr(self, key)
 
 
 def lateral_constraints(speed_mps: Any, curvature_1pm: Any, vehicle: Vehicle) -> MotionConstraints:
