@@ -216,8 +216,10 @@ def check_limits(
     The profile must cover the route exactly (its first and last boundaries are the route's
     first and last samples) and its RI column must be the route's own. The limits are the
     ones every plan keeps (:func:`profileopt.planning.default_limits`): the speed caps (the
-    vehicle's top speed and the route's ``speed_limit``), the acceleration and deceleration
-    bounds, the jerk bound the profile records in its settings (else the vehicle's), and the
+    vehicle's top speed, the route's ``speed_limit`` and, for a vehicle that gives their keys,
+    the lateral and friction caps of turns, with the path's curvature found with the profile's
+    recorded ``path_tolerance_m``), the acceleration and deceleration bounds (on the route's
+    grades, for such a vehicle), the friction circle and the drive power, the jerk bound the profile records in its settings (else the vehicle's), and the
     model's force limit. The predicted force of each segment is recomputed from the speeds:
     the largest force over every speed between its two boundary speeds, resonance peaks
     included (:func:`profileopt.planning.limits.force.max_force_over_segments`). The file's
@@ -285,7 +287,6 @@ def check_limits(
     context = PlanContext(route=route, vehicle=vehicle, segments=segments, path=path)
     limits = default_limits(vehicle, model=force_model.key, max_jerk_mps3=jerk_bound)
     cap_limits = [(lim, c) for lim in limits if (c := lim.speed_cap_mps(context)) is not None]
-    caps = [c for _, c in cap_limits]
     accel_bounds = [b for b in (lim.accel_bounds_mps2(context) for lim in limits) if b is not None]
     jerk_limit = min(lim.jerk_bound_mps3(context) for lim in limits)
     bands = next(b for b in (lim.speed_bands(context) for lim in limits) if b is not None)
@@ -294,8 +295,7 @@ def check_limits(
     breaches: list[LimitBreach | None] = []
     # numbers as large as 1e155 m/s overflow on squaring: they break the limits, silently
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        # the vehicle's top speed first, then the route's speed_limit where it is lower
-        cap = np.minimum.reduce(caps)
+        # the vehicle's top speed first, then the route's speed_limit and the caps of turns where lower
         top = np.maximum(v[:-1], v[1:])
         breaches.append(_first_breach("speed", "the vehicle's top speed", top, np.array(vehicle.max_speed_mps),
                                       s[:-1], index, "m/s"))
