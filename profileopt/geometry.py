@@ -193,7 +193,7 @@ def smooth_path(x_m: ArrayLike, y_m: ArrayLike, *, tolerance_m: float = DEFAULT_
                 best = fit(lo_scale)
             if best[1] > tol:  # only rounding can leave an interpolating spline this far
                 raise InputError(f"path_tolerance_m = {tol:g} m is below what the path's numbers can resolve "
-                                 f"(deviation {best[1]:.3g} m even without smoothing); raise tolerance_m")
+                                 f"(deviation {best[1]:.3g} m even without smoothing); raise path_tolerance_m")
         while hi_scale > _SCALE_RATIO_TOLERANCE * lo_scale:
             mid = math.sqrt(lo_scale * hi_scale)
             trial = fit(mid)

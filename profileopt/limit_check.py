@@ -19,7 +19,8 @@ import numpy as np
 from .errors import InputError
 from .forces import get_model
 from .kinematics import boundary_jerk_mps3, segment_accel_mps2
-from .planning.limits import default_limits
+from .motion import STANDARD_GRAVITY_MPS2 as G
+from .planning.limits import default_limits, plans_on_grades
 from .planning.limits.base import PlanContext
 from .planning.limits.force import max_force_over_segments
 from .planning.options import SolverOptions
@@ -89,8 +90,11 @@ class LimitBreach:
         """One line: which limit, where first, by how much, how often."""
         where = "at the boundary" if self.quantity == "jerk" else "in the segment from"
         places = "boundaries" if self.quantity == "jerk" else "segments"
-        value = f"{self.value:.4g} {self.unit}" if math.isfinite(self.value) else "too large to compute"
-        worst = f"{self.worst_ratio:.4g} times the limit" if math.isfinite(self.worst_ratio) else "beyond any number"
+        # enough digits that a breach just over the limit (LIMIT_RTOL = 1e-6) does not read as "1"
+        digits = 4 if not math.isfinite(self.worst_ratio) or self.worst_ratio > 1.001 else 8
+        value = f"{self.value:.{digits}g} {self.unit}" if math.isfinite(self.value) else "too large to compute"
+        worst = (f"{self.worst_ratio:.{digits}g} times the limit" if math.isfinite(self.worst_ratio)
+                 else "beyond any number")
         return (f"breaks {self.limit_name} ({self.limit:.4g} {self.unit}) first {where} s = {self.s_m:g} m "
                 f"(segment {self.segment}): {self.quantity} {value}; {self.count} of {self.of} {places}, "
                 f"worst {worst}")
@@ -309,16 +313,22 @@ def check_limits(
         accel = segment_accel_mps2(b[:-1], b[1:], length)
         decel_bound = np.minimum.reduce([d for d, _ in accel_bounds])
         accel_bound = np.minimum.reduce([a for _, a in accel_bounds])
-        grades = " at the segment's grade" if path.grade_hi_rad.any() or path.grade_lo_rad.any() else ""
-        breaches.append(_first_breach("acceleration", "the vehicle's acceleration limit" + grades, accel,
-                                      accel_bound, s[:-1], index, "m/s^2"))
-        breaches.append(_first_breach("deceleration", "the vehicle's deceleration limit" + grades, -accel,
-                                      decel_bound, s[:-1], index, "m/s^2"))
+        # judged as the tyres' force per unit mass, a + g sin(theta) (the grades the bounds
+        # used): its bounds stay positive where a grade makes a's own bound negative
+        on_grades = plans_on_grades(vehicle)
+        lift_hi = G * np.sin(path.grade_hi_rad) if on_grades else 0.0
+        lift_lo = G * np.sin(path.grade_lo_rad) if on_grades else 0.0
+        words = " (drive force per unit mass, a + g sin(theta))" if on_grades else ""
+        breaches.append(_first_breach("acceleration", "the vehicle's acceleration limit" + words, accel + lift_hi,
+                                      accel_bound + lift_hi, s[:-1], index, "m/s^2"))
+        breaches.append(_first_breach("deceleration", "the vehicle's deceleration limit" + words.replace(
+            "drive", "braking").replace("a + g", "-(a + g").replace("theta))", "theta)))"), -(accel + lift_lo),
+            decel_bound - lift_lo, s[:-1], index, "m/s^2"))
         for lim in limits:  # the friction circle and the drive power, from the same rows as the NLP's
             found = lim.nlp_rows(context, np.full(n, np.inf), decel_bound, accel_bound)
             if found is not None and lim.name in ("friction", "power"):
                 family, data = found
-                usage = family_rows(family, b, length, data).max(axis=0)
+                usage = family_rows(family, b, length, data, smooth=False).max(axis=0)
                 words = "the friction circle" if family == "friction" else "the vehicle's drive power"
                 breaches.append(_first_breach(family, words, usage, np.array(1.0), s[:-1], index, "of the limit"))
         if n >= 2 and math.isfinite(jerk_limit):

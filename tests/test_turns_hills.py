@@ -289,3 +289,64 @@ def test_readme_turns_and_hills_mpc_snippet_reaches_the_lateral_limit():
     speeds = np.array([float(x) for x in run.stdout.strip().strip("[]").split()])
     assert speeds[0] == 0.0 and speeds[-1] == pytest.approx(10.0, abs=0.01)
     assert np.all(np.diff(speeds) >= -1e-9) and speeds.max() <= 10.0 + 0.01  # never above the bend's limit
+
+
+def test_a_power_limited_climb_too_coarse_for_the_segments_says_which_length_plans_it():
+    # P/m = 1000/450 = 2.22 W/kg up 20 %: steady speed P / (m g sin theta) = 1.155 m/s; the forward
+    # pass is exact for segments up to (P/m)^2 / (g sin theta)^3 = 4.94 / 7.11 = 0.694 m (bands.DrivePower)
+    weak = load_vehicle("atv").replace(max_power_w=1000.0)
+    route = ramp_route([(50.0, 0.0), (60.0, 0.2)], ds_m=0.05)
+    longest = (1000.0 / 450.0) ** 2 / (G * math.sin(math.atan(0.2))) ** 3
+    with pytest.raises(InfeasibleError, match=r"too long for the power-limited climb .* <= 0\.694 m"):
+        plan(route, weak, segment_length_m=5.0, **EXACT)
+    profile = plan(route, weak, segment_length_m=0.5, **EXACT)
+    assert longest == pytest.approx(0.694, abs=5e-4) and not any("power-limited" in note for note in profile.notes)
+    climb = (profile.s_m > 80) & (profile.s_m < 105)
+    np.testing.assert_allclose(profile.speed_mps[climb], 1000.0 / (450.0 * G * math.sin(math.atan(0.2))), rtol=1e-3)
+
+
+def test_verify_finds_no_breach_in_plans_on_steep_grades_and_slow_power_climbs():
+    # the planner's own profiles, where a grade makes an acceleration bound negative (a 30 %
+    # climb for atv: 2.5 - g sin(atan 0.3) = -0.32 m/s^2; a 50 % descent: 4 - 4.39 < 0) and where
+    # the power holds a crawl (eps of the NLP's sqrt(b + eps^2) must not count against it)
+    from profileopt.limit_check import check_limits
+
+    def blended(slopes: list[tuple[float, float]], blend_m: float = 15.0) -> Route:
+        """A straight route whose slope moves linearly between pieces over blend_m (a kink in
+        z would be roughness that slows the vehicle before the climb)."""
+        s = np.arange(0.0, sum(length for length, _ in slopes) + 0.025, 0.05)
+        ends = np.cumsum([length for length, _ in slopes])
+        knots_s, knots_k = [0.0], [slopes[0][1]]
+        for end, (_, k0), (_, k1) in zip(ends[:-1], slopes[:-1], slopes[1:]):
+            knots_s += [end - blend_m / 2, end + blend_m / 2]
+            knots_k += [k0, k1]
+        knots_s.append(ends[-1])
+        knots_k.append(slopes[-1][1])
+        slope = np.interp(s, knots_s, knots_k)
+        z = np.concatenate([[0.0], np.cumsum(0.5 * (slope[1:] + slope[:-1]) * np.diff(s))])
+        return Route(s_m=s, z_m=z, source="blended")
+
+    cases = [(blended([(80.0, 0.0), (30.0, 0.3), (80.0, 0.0)]), load_vehicle("atv"), 1.0),
+             (blended([(80.0, 0.0), (30.0, -0.5), (80.0, 0.0)]), load_vehicle("atv"), 1.0),
+             (ramp_route([(50.0, 0.0), (60.0, 0.2)], ds_m=0.05), load_vehicle("atv").replace(max_power_w=500.0), 0.25)]
+    for route, vehicle, ds in cases:
+        for options in (EXACT, {}):
+            profile = plan(route, vehicle, segment_length_m=ds, **options)
+            found = check_limits(route, profile, vehicle)
+            assert not found.breaches, [b.describe() for b in found.breaches]
+    # and it does see a breach: the last profile checked against less power
+    found = check_limits(route, profile, vehicle.replace(max_power_w=450.0))
+    assert [b.quantity for b in found.breaches] == ["power"]
+
+
+def test_without_smoothing_or_jerk_bound_every_row_names_a_real_limit():
+    # the exact optimum is held everywhere by a bound, a row or an end: never by "jerk"; in
+    # particular where the power holds a slowing climb (entering faster than P / (m g sin theta))
+    weak = load_vehicle("atv").replace(max_power_w=1000.0)
+    cases = [(ramp_route([(50.0, 0.0), (100.0, 0.2), (50.0, -0.3), (50.0, 0.0)], ds_m=0.05), weak, 0.5),
+             (arc_route(), load_vehicle("atv").replace(friction_coefficient=0.3), 1.0),
+             (ramp_route([(60.0, 0.0), (200.0, 0.1)], ds_m=0.05), load_vehicle("atv").replace(max_power_w=5000.0), 5.0)]
+    for route, vehicle, ds in cases:
+        profile = plan(route, vehicle, segment_length_m=ds, **EXACT)
+        assert "jerk" not in set(profile.binding), route.source
+    assert "power" in set(plan(cases[0][0], weak, segment_length_m=0.5, **EXACT).binding)

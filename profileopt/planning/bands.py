@@ -48,6 +48,23 @@ class DrivePower:
     power_per_mass_w_per_kg: float
     grade_hi_rad: np.ndarray
 
+    def longest_exact_segment_m(self) -> np.ndarray:
+        """Per segment, the longest segment (m) for which the forward pass is exact, shape (N,).
+
+        Slowing down at the power limit over a segment of length ds, the largest exit speed
+        b_i + 2 ds (P/m / sqrt(b_i) - g sin theta) falls as the entry speed b_i rises below
+        (ds P/m)^(2/3); the steady climbing speed P / (m g sin theta) lies in that region when
+        ds (g sin theta)^3 > (P/m)^2. There, entering faster can end slower, the feasible set
+        is no longer a lattice, and the forward pass (which enters as fast as it may) can stall
+        where a slower entry would climb. Segments up to (P/m)^2 / (g sin theta)^3 keep it
+        exact (inf on the level and downhill).
+        """
+        from ..motion import STANDARD_GRAVITY_MPS2
+
+        lift = STANDARD_GRAVITY_MPS2 * np.sin(self.grade_hi_rad)
+        with np.errstate(divide="ignore"):
+            return np.where(lift > 0, self.power_per_mass_w_per_kg**2 / np.maximum(lift, 1e-300) ** 3, np.inf)
+
 
 def _power_step(b_i: float, ds: float, pm: float, gs: float) -> float:
     """The largest b_{i+1} that the power limit allows after b_i over a segment of length ds
@@ -110,9 +127,11 @@ def greatest_profile(
 
     With a drive power limit (``power``) the forward pass also keeps, in each segment,
     a <= P / (m v_max) - g sin(theta_hi) (:class:`DrivePower`), solved exactly step by step
-    (a loop in Python: about 3 us per segment). The constraint keeps the feasible set a
-    lattice (b_{i+1} <= F_i(b_i) with F_i increasing), so the greatest profile still exists
-    and is found by repeating the two passes until neither changes it (once in practice).
+    (a loop in Python: about 3 us per segment). On segments no longer than
+    :meth:`DrivePower.longest_exact_segment_m` the constraint keeps the feasible set a lattice
+    (b_{i+1} <= F_i(b_i) with F_i increasing), so the greatest profile still exists and is
+    found by repeating the two passes until neither changes it (once in practice); on longer
+    ones the result keeps every limit but may not be the fastest (the planner says so).
 
     Parameters
     ----------

@@ -5,7 +5,8 @@ active (within a relative tolerance):
 
 1. its upper bound (the chosen speed band of the segments on either side, or the lowest of
    their caps): ``force``, ``speed_limit``, ``top_speed``, ``lateral`` or ``friction``;
-2. a friction or power row of a segment beside it, at this boundary's speed: ``friction``,
+2. a friction or power row of a segment beside it that this speed makes active (the
+   segment's exit speed; for friction while braking, its entry speed): ``friction``,
    ``power``;
 3. the acceleration bound of the segment before it (arriving as fast as it may):
    ``accel`` (or ``friction`` where the friction circle gives the tighter bound);
@@ -52,9 +53,10 @@ def binding_labels(b: np.ndarray, length_m: np.ndarray, *, upper_b: np.ndarray, 
     accel_label, decel_label : numpy.ndarray of str, shape (N,)
         Which limit gives each.
     rows : dict of str to numpy.ndarray, shape (R, N)
-        Values of the ``friction`` and ``power`` rows (<= 1), each row evaluated at one end
-        of the segment: the first half of the rows at its start, the second at its end
-        (:data:`profileopt.planning.nlp.ROW_FAMILIES`).
+        Values of the ``friction`` and ``power`` rows (<= 1) of each segment
+        (:data:`profileopt.planning.nlp.ROW_FAMILIES`). An active row holds the segment's
+        exit speed (more speed there means more drive force and more lateral acceleration),
+        a friction row while braking its entry speed.
     jerk_mps3 : float
         Jerk bound (m/s^3), inf for none.
     rtol : float, default 1e-5
@@ -76,12 +78,15 @@ def binding_labels(b: np.ndarray, length_m: np.ndarray, *, upper_b: np.ndarray, 
 
     b_scale = max(float(np.max(upper_b[np.isfinite(upper_b)], initial=0.0)), 1e-12)
     mark(b >= upper_b - rtol * b_scale, upper_label)
-    for family, values in rows.items():
-        half = values.shape[0] // 2
-        at_start = np.any(values[:half] >= 1.0 - rtol, axis=0)  # segment i, at boundary i
-        at_end = np.any(values[half:] >= 1.0 - rtol, axis=0)  # segment i, at boundary i + 1
-        mark(np.concatenate([at_start, [False]]) | np.concatenate([[False], at_end]), family)
     a = segment_accel_mps2(b[:-1], b[1:], length_m)
+    for family, values in rows.items():
+        # an active row of segment i bounds the speed that would make it larger: the exit
+        # speed b_{i+1} (more drive force, and more speed in the turn), except for friction
+        # while braking, where a higher entry speed b_i means harder braking
+        active = np.any(values >= 1.0 - rtol, axis=0)
+        holds_entry = active & (a < 0) if family == "friction" else np.zeros_like(active)
+        holds_exit = active & ~holds_entry
+        mark(np.concatenate([holds_entry, [False]]) | np.concatenate([[False], holds_exit]), family)
     a_scale = max(float(np.max(np.abs(np.concatenate([accel_mps2, decel_mps2])))), 1e-12)
     arriving = np.concatenate([[False], a >= accel_mps2 - rtol * a_scale])
     mark(arriving, np.concatenate([[""], accel_label]).astype(object))

@@ -132,13 +132,15 @@ def _stages() -> dict[str, ca.Function]:
     return out
 
 
-def _family_expressions(family: str, b: Any, length: Any, d: Any) -> list[Any]:
+def _family_expressions(family: str, b: Any, length: Any, d: Any, smooth: bool = True) -> list[Any]:
     """The normalised rows (g <= 1) of one segment of a row family (:data:`ROW_FAMILIES`),
-    from its squared speeds ``b`` (2,), length and data ``d``; symbolic or numeric."""
+    from its squared speeds ``b`` (2,), length and data ``d``; symbolic or numeric. ``smooth``:
+    the NLP's speed sqrt(b + eps^2) (differentiable at rest), else the exact sqrt(b)."""
     from ..motion import drive_power_w, friction_usage
 
     a = segment_accel_mps2(b[0], b[1], length)
-    v = (speed_mps(b[0]), speed_mps(b[1]))
+    v = (speed_mps(b[0]), speed_mps(b[1])) if smooth else (np.sqrt(np.maximum(b[0], 0.0)),
+                                                           np.sqrt(np.maximum(b[1], 0.0)))
     if family == "friction":
         kappa, lo, hi, mu = d[0], d[1], d[2], d[3]
         return [friction_usage(v[e], a, kappa, theta, mu) for e in (0, 1) for theta in (lo, hi)]
@@ -158,7 +160,8 @@ def _row_functions(name: str, z: ca.SX, ds: ca.SX, d: ca.SX, q: ca.SX, g: ca.SX,
     }
 
 
-def family_rows(family: str, b: np.ndarray, length_m: np.ndarray, data: np.ndarray) -> np.ndarray:
+def family_rows(family: str, b: np.ndarray, length_m: np.ndarray, data: np.ndarray, *, smooth: bool = True
+                ) -> np.ndarray:
     """The rows of a row family evaluated on numbers: the same expressions as the NLP's.
 
     Parameters
@@ -171,6 +174,9 @@ def family_rows(family: str, b: np.ndarray, length_m: np.ndarray, data: np.ndarr
         Segment lengths (m).
     data : numpy.ndarray, shape (N, D)
         The family's per-segment data, columns as :data:`ROW_FAMILIES` names them.
+    smooth : bool, default True
+        True: the NLP's speed sqrt(b + eps^2) (what IPOPT kept); False: the exact speed
+        sqrt(b), for judging a finished profile (the eps would add eps^2 / (2 b) at a crawl).
 
     Returns
     -------
@@ -178,7 +184,7 @@ def family_rows(family: str, b: np.ndarray, length_m: np.ndarray, data: np.ndarr
         Each row's value per segment; <= 1 where the limit holds.
     """
     cols = [data[:, k] for k in range(data.shape[1])]
-    rows = _family_expressions(family, (b[:-1], b[1:]), length_m, cols)
+    rows = _family_expressions(family, (b[:-1], b[1:]), length_m, cols, smooth)
     return np.array([np.asarray(r, dtype=float).ravel() for r in rows])
 
 

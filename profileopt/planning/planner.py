@@ -200,15 +200,24 @@ def plan(
     vend_mps, note_vend = snap_to_band(vend_mps, usable.lower_mps[-1], usable.upper_mps[-1], int(usable.count[-1]),
                                        "vend_mps")
     notes += [note for note in (note_v0, note_vend) if note]
+    coarse = _coarse_power_segments(power, seg)
     try:
         chosen = choose_bands(usable.lower_mps, usable.upper_mps, usable.count, seg.length_m, accel, decel,
                               v0_mps, vend_mps, seg.boundaries_m, power)
     except InfeasibleError as exc:  # name the route, as every input message does
+        if coarse:
+            raise InfeasibleError(f"{route.source}: no profile found, but the segments are too long for the "
+                                  f"power-limited climb {coarse}: use segment_length_m <= "
+                                  f"{_shortest_exact(power, seg):.3g} m there and plan again") from None
         stall = _stall_message(exc, seg, path, accel)
         if stall:  # a climb the drive cannot hold explains it: say that, not the generic bound
             raise InfeasibleError(f"{route.source}: {stall}") from None
         raise InfeasibleError(f"{route.source}: {exc}{_grade_hint(exc, seg, path, decel, accel)}") from None
     timings["choose"] = time.perf_counter() - t
+    if coarse:
+        notes.append(f"the segments are longer than the power-limited climb {coarse} resolves exactly: the plan "
+                     f"keeps every limit but may be slower than the optimum; segment_length_m <= "
+                     f"{_shortest_exact(power, seg):.3g} m plans it exactly")
 
     iterations = pieces = 0
     if method == "auto" and smoothing == 0 and not math.isfinite(jerk_bound) and "friction" not in rows:
@@ -382,6 +391,22 @@ def _grade_hint(exc: Exception, seg: Segments, path: SegmentPath, decel: np.ndar
                      f"is steeper than the brakes can hold (the vehicle speeds up by {-decel[i]:.3g} m/s^2 at full "
                      "braking)")
     return ("; " + " and ".join(parts)) if parts else ""
+
+
+def _coarse_power_segments(power: DrivePower | None, seg: Segments) -> str:
+    """Where segments are too long for the power forward pass to be exact ("at s = a to b m"),
+    or "" (:meth:`DrivePower.longest_exact_segment_m`)."""
+    if power is None:
+        return ""
+    coarse = np.flatnonzero(seg.length_m > power.longest_exact_segment_m())
+    if not coarse.size:
+        return ""
+    return f"at s = {seg.boundaries_m[coarse[0]]:g} to {seg.boundaries_m[coarse[-1] + 1]:g} m"
+
+
+def _shortest_exact(power: DrivePower, seg: Segments) -> float:
+    """The longest segment length (m) that keeps the power forward pass exact everywhere."""
+    return float(np.min(power.longest_exact_segment_m()))
 
 
 def _drive_power(limits: Sequence[Limit], context: PlanContext) -> DrivePower | None:

@@ -96,6 +96,31 @@ class AccelLimit(Limit):
         over = max(np.max(a - accel), np.max(-decel - a), 0.0)
         return float(over) / self.max_accel_mps2
 
+    def _tyre(self, profile: "Profile") -> tuple[np.ndarray, np.ndarray]:
+        """Each segment's largest drive and braking force per unit mass (m/s^2), (N,) each."""
+        accel = profile.accel_mps2[:-1]
+        path = profile.path if self.grade else None
+        drive = accel if path is None else tyre_accel_mps2(accel, path.grade_hi_rad)
+        brake = -(accel if path is None else tyre_accel_mps2(accel, path.grade_lo_rad))
+        return drive, brake
+
+    def check(self, profile: "Profile") -> float:
+        """How far the drive or braking force per unit mass of any segment exceeds its bound,
+        over max_accel_mps2 (0 if none).
+
+        Parameters
+        ----------
+        profile : Profile
+            The profile about to be returned.
+
+        Returns
+        -------
+        float
+        """
+        drive, brake = self._tyre(profile)
+        over = max(float(np.max(drive - self.max_accel_mps2)), float(np.max(brake - self.max_decel_mps2)), 0.0)
+        return over / self.max_accel_mps2
+
     def margins(self, profile: "Profile") -> dict[str, dict]:
         """The largest drive and braking force per unit mass, a + g sin(theta) at the
         segment's steepest grade either way, over their bounds, and where.
@@ -110,10 +135,7 @@ class AccelLimit(Limit):
         dict
             ``{"accel": {...}, "decel": {...}}``.
         """
-        accel = profile.accel_mps2[:-1]
         where = profile.s_m[:-1]
-        path = profile.path if self.grade else None
-        drive = accel if path is None else tyre_accel_mps2(accel, path.grade_hi_rad)
-        brake = -(accel if path is None else tyre_accel_mps2(accel, path.grade_lo_rad))
+        drive, brake = self._tyre(profile)
         return {"accel": worst_ratio(drive, self.max_accel_mps2, where),
                 "decel": worst_ratio(brake, self.max_decel_mps2, where)}
