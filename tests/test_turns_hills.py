@@ -343,10 +343,12 @@ def test_without_smoothing_or_jerk_bound_every_row_names_a_real_limit():
     # the exact optimum is held everywhere by a bound, a row or an end: never by "jerk"; in
     # particular where the power holds a slowing climb (entering faster than P / (m g sin theta))
     weak = load_vehicle("atv").replace(max_power_w=1000.0)
-    cases = [(ramp_route([(50.0, 0.0), (100.0, 0.2), (50.0, -0.3), (50.0, 0.0)], ds_m=0.05), weak, 0.5),
+    # (1 m segments: longer than the 0.69 m that plan the 20 % climb exactly, so the forward pass
+    # slows down at the power limit at the higher, entry speed of some segments)
+    cases = [(ramp_route([(50.0, 0.0), (100.0, 0.2), (50.0, -0.3), (50.0, 0.0)], ds_m=0.05), weak, 1.0),
              (arc_route(), load_vehicle("atv").replace(friction_coefficient=0.3), 1.0),
              (ramp_route([(60.0, 0.0), (200.0, 0.1)], ds_m=0.05), load_vehicle("atv").replace(max_power_w=5000.0), 5.0)]
     for route, vehicle, ds in cases:
         profile = plan(route, vehicle, segment_length_m=ds, **EXACT)
         assert "jerk" not in set(profile.binding), route.source
-    assert "power" in set(plan(cases[0][0], weak, segment_length_m=0.5, **EXACT).binding)
+    assert "power" in set(plan(cases[0][0], weak, segment_length_m=1.0, **EXACT).binding)
