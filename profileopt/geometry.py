@@ -16,15 +16,18 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.interpolate import BSpline, make_interp_spline, make_smoothing_spline
 
 from .defaults import DEFAULT_PATH_TOLERANCE_M  # why 0.1 m: see its comment there
 from .errors import InputError
 from .route import Route
 from .terrain import window_line_moments
+
+if TYPE_CHECKING:
+    from scipy.interpolate import BSpline
 
 __all__ = ["DEFAULT_PATH_TOLERANCE_M", "SmoothPath", "smooth_path", "path_grade_rad", "RouteGeometry",
            "route_geometry"]
@@ -132,6 +135,9 @@ def smooth_path(x_m: ArrayLike, y_m: ArrayLike, *, tolerance_m: float = DEFAULT_
         A tolerance that is not a finite number > 0, coordinates of different shapes, fewer
         than 2 samples, non-finite values or a repeated point.
     """
+    # scipy.interpolate takes 0.4 s to import: only a route with turns pays it
+    from scipy.interpolate import make_interp_spline, make_smoothing_spline
+
     tol = _check_tolerance(tolerance_m)
     x = np.asarray(x_m, dtype=float)
     y = np.asarray(y_m, dtype=float)
@@ -172,7 +178,7 @@ def smooth_path(x_m: ArrayLike, y_m: ArrayLike, *, tolerance_m: float = DEFAULT_
         count, s_fit, r_fit = np.ones(m), sc, residual
     density = m / s[-1]  # samples per metre: lam = density scale^4 smooths over about `scale`
 
-    def fit(scale_m: float) -> tuple[BSpline, float]:
+    def fit(scale_m: float) -> tuple["BSpline", float]:
         spline = make_smoothing_spline(s_fit, r_fit, w=count, lam=density * scale_m**4)
         deviation = spline(sc) - residual
         return spline, float(np.max(np.hypot(deviation[:, 0], deviation[:, 1])))
