@@ -255,3 +255,71 @@ def test_wrong_cuts():
     # 1: a negative multiplier; 2: within tolerance; 3: a speed its band fixes anyway;
     # 4: the acceleration between the pair is at a bound
     assert _pieces.wrong_cuts(lam_x, scale, free, inactive).tolist() == [1, 4]
+
+
+def winding_hilly_route() -> Route:
+    """1.5 km of alternating 30-60 m radius bends between straights, on rolling 6 % hills, as
+    x, y, z every 0.25 m: turns and grades that need the friction and power rows."""
+    s = np.arange(0.0, 1500.0, 0.25)
+    kappa = np.zeros(s.size)
+    for k, start in enumerate(np.arange(60.0, 1400.0, 150.0)):
+        radius = 30.0 + 10.0 * (k % 4)
+        kappa[(s >= start) & (s < start + 50.0)] = (-1) ** k / radius
+    heading = np.concatenate([[0.0], np.cumsum(0.5 * (kappa[1:] + kappa[:-1]) * np.diff(s))])
+    mid = 0.5 * (heading[1:] + heading[:-1])
+    x = np.concatenate([[0.0], np.cumsum(np.diff(s) * np.cos(mid))])
+    y = np.concatenate([[0.0], np.cumsum(np.diff(s) * np.sin(mid))])
+    chord = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
+    return Route(s_m=chord, z_m=0.06 * 80.0 / (2 * np.pi) * np.sin(2 * np.pi * chord / 80.0), x_m=x, y_m=y,
+                 source="winding")
+
+
+@pytest.mark.parametrize("options", [{}, {"smoothing": 0.0, "max_jerk_mps3": float("inf")}])
+def test_pieces_carry_the_friction_and_power_rows(check_profile, monkeypatch, options):
+    route = winding_hilly_route()
+    # mu g = 4.9 m/s^2 > the 4 m/s^2 lateral limit: the bends are capped by the lateral limit
+    # (good cuts, whose own rows are inactive) and the friction circle binds braking into them
+    vehicle = load_vehicle("atv").replace(friction_coefficient=0.5, max_power_w=6000.0)
+    whole = solve(monkeypatch, route, vehicle, 10**9, **options)
+    split = solve(monkeypatch, route, vehicle, 80, **options)
+    assert "power" in set(whole.binding)  # the power rows hold the speed somewhere
+    if options:  # minimum time brakes hard into the bends: the friction rows hold it there
+        assert whole.status == "optimal" and "friction" in set(whole.binding)
+    assert whole.pieces == 1 and split.pieces >= 2
+    assert_same_optimum(split, whole)
+    check_profile(split, route, vehicle, jerk=options.get("max_jerk_mps3"))
+
+
+def test_cut_check_reproduces_ipopts_multipliers_with_friction_and_power_rows(monkeypatch):
+    """lam_x = -(grad f + J^T lam_g) holds at every variable of a KKT point, so cut_multipliers,
+    given the whole solve's multipliers of every row (friction and power included), gives
+    IPOPT's own bound multipliers at every boundary pair, active rows or not."""
+    route = winding_hilly_route()
+    vehicle = load_vehicle("atv").replace(friction_coefficient=0.5, max_power_w=6000.0)
+    calls = []
+    original = planner.solve_ipopt
+
+    def spy(solver, *args):
+        calls.append((solver, args))
+        return original(solver, *args)
+
+    monkeypatch.setattr(planner, "solve_ipopt", spy)
+    solve(monkeypatch, route, vehicle, 10**9, smoothing=0.0, max_jerk_mps3=float("inf"))
+    monkeypatch.setattr(planner, "solve_ipopt", original)
+    (solver, (x0, lbx, ubx, length, lbg, ubg, p_tail, data)), = calls
+    result = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=np.concatenate([length, data.T.ravel(), p_tail]))
+    y, lam_x, lam_g = (np.asarray(result[k]).ravel() for k in ("x", "lam_x", "lam_g"))
+    n = length.size
+    lam_rows = lam_g[n:].reshape(-1, n)  # no jerk rows; then friction (4 rows) and power (2), n each
+    assert lam_rows.shape == (6, n) and np.abs(lam_rows).max() > 1e-3  # the rows hold somewhere
+    check = nlp.cached_nlp(5, False, families=("friction", "power"))
+    pairs = np.arange(2, n - 3)
+    got, scale = _pieces.cut_multipliers(check.get_function("nlp_grad_f"), check.get_function("nlp_jac_g"), y,
+                                         p_tail, length, lam_g[:n], None, pairs, data=data, lam_rows=lam_rows)
+    expected = np.stack([lam_x[pairs], lam_x[pairs + 1]], axis=1)
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-7 * scale.max())
+    # and without the rows' multipliers it is wrong where they are active
+    wrong, _ = _pieces.cut_multipliers(check.get_function("nlp_grad_f"), check.get_function("nlp_jac_g"), y,
+                                       p_tail, length, lam_g[:n], None, pairs, data=data,
+                                       lam_rows=np.zeros_like(lam_rows))
+    assert np.abs(wrong - expected).max() > 1e-3 * np.abs(expected).max()

@@ -39,7 +39,7 @@ from ..kinematics import boundary_jerk_mps3, jerk_squared_time, segment_accel_mp
 from ..symbolic import mx_replay
 from .options import DEFAULT_IPOPT_OPTIONS, SolverOptions
 
-__all__ = ["SPEED_EPS_MPS", "PARAMETERS", "ROW_FAMILIES", "build_nlp", "cached_nlp", "Scaling", "IpoptResult",
+__all__ = ["SPEED_EPS_MPS", "PARAMETERS", "ROW_FAMILIES", "NEUTRAL_DATA", "build_nlp", "cached_nlp", "Scaling", "IpoptResult",
            "solve_ipopt", "row_bounds", "objective_s", "family_rows"]
 
 #: Speed (m/s) that keeps sqrt(b) differentiable at rest in the NLP's time and jerk terms.
@@ -57,6 +57,13 @@ PARAMETERS = ("b_ref", "l_ref", "a_ref", "t_ref", "weight", "inv_jerk")
 ROW_FAMILIES: dict[str, tuple[tuple[str, ...], int]] = {
     "friction": (("curvature_1pm", "grade_lo_rad", "grade_hi_rad", "friction_coefficient"), 4),
     "power": (("grade_hi_rad", "mass_kg", "max_power_w"), 2),
+}
+
+#: Data that keeps a family's rows far from their bound, for padding segments of a piece
+#: (whose rows are unbounded anyway): no turn, no grade, ample grip or power.
+NEUTRAL_DATA: dict[str, tuple[float, ...]] = {
+    "friction": (0.0, 0.0, 0.0, 1e3),
+    "power": (0.0, 1.0, 1e12),
 }
 
 # ---------------------------------------------------------------------------------------

@@ -38,7 +38,7 @@ import casadi as ca
 import numpy as np
 
 from ..kinematics import boundary_jerk_mps3, segment_accel_mps2
-from .nlp import cached_nlp, objective_s, solve_ipopt
+from .nlp import NEUTRAL_DATA, ROW_FAMILIES, cached_nlp, family_rows, objective_s, solve_ipopt
 
 if TYPE_CHECKING:
     from .bands import BandChoice
@@ -254,7 +254,8 @@ def piece_bounds(cuts: np.ndarray, n: int) -> list[tuple[int, int]]:
 
 def cut_multipliers(grad_f: ca.Function, jac_g: ca.Function, y: np.ndarray, p_tail: np.ndarray,
                     length_scaled: np.ndarray, lam_accel: np.ndarray, lam_jerk: np.ndarray | None,
-                    cuts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                    cuts: np.ndarray, data: np.ndarray | None = None, lam_rows: np.ndarray | None = None,
+                    ) -> tuple[np.ndarray, np.ndarray]:
     """The whole NLP's bound multipliers on the fixed pairs of a joined piecewise solution.
 
     Parameters
@@ -275,6 +276,10 @@ def cut_multipliers(grad_f: ca.Function, jac_g: ca.Function, y: np.ndarray, p_ta
         Multipliers of the jerk rows by boundary j (entries 0 and N unused); None without
         jerk rows.
     cuts : numpy.ndarray of int, shape (K,)
+    data : numpy.ndarray, shape (N, D), optional
+        The row families' data of every segment (the NLP's ``families``).
+    lam_rows : numpy.ndarray, shape (R, N), optional
+        Multipliers of the families' rows, row after row of the families.
 
     Returns
     -------
@@ -296,10 +301,13 @@ def cut_multipliers(grad_f: ca.Function, jac_g: ca.Function, y: np.ndarray, p_ta
     for row, k in enumerate(cuts):
         window = slice(k - 2, k + 4)
         x = y[window]
-        p = np.concatenate([length_scaled[k - 2:k + 3], p_tail])
+        middle = [] if data is None else [data[k - 2:k + 3].T.ravel()]
+        p = np.concatenate([length_scaled[k - 2:k + 3], *middle, p_tail])
         lam = [lam_accel[k - 2:k + 3]]
         if lam_jerk is not None:
             lam.append(lam_jerk[k - 1:k + 3])
+        if lam_rows is not None:
+            lam.extend(lam_rows[:, k - 2:k + 3])
         lam_g = np.concatenate(lam)
         grad = np.asarray(grad_f(x, p)[1]).ravel()[2:4]
         jac = np.asarray(ca.DM(jac_g(x, p)[1]).full())[:, 2:4]
@@ -312,7 +320,8 @@ def cut_multipliers(grad_f: ca.Function, jac_g: ca.Function, y: np.ndarray, p_ta
 
 def solve_pieces(length_m: np.ndarray, chosen: "BandChoice", decel_mps2: np.ndarray, accel_mps2: np.ndarray,
                  scaling: "Scaling", with_jerk: bool, score: np.ndarray, cuts: np.ndarray,
-                 options: "SolverOptions", timings: dict[str, float]) -> tuple[np.ndarray | None, int, int]:
+                 options: "SolverOptions", timings: dict[str, float], rows: dict[str, np.ndarray] | None = None,
+                 ) -> tuple[np.ndarray | None, int, int]:
     """The NLP solved piece by piece between the fixed pairs at ``cuts``, each piece in the
     one NLP of ``options.piece_segments`` segments: the piece's boundaries, then (behind it, or in front of the last piece)
     padding boundaries fixed at the neighbouring fixed speed, whose rows are unbounded and
@@ -342,6 +351,10 @@ def solve_pieces(length_m: np.ndarray, chosen: "BandChoice", decel_mps2: np.ndar
         Piece size, rounds and IPOPT options.
     timings : dict
         ``build`` and ``solve`` seconds are added here.
+    rows : dict of str to numpy.ndarray, shape (N, D_f), optional
+        Row families of the NLP and their per-segment data (:data:`~.nlp.ROW_FAMILIES`):
+        padding segments get :data:`~.nlp.NEUTRAL_DATA`, a cut's own rows must be inactive
+        (as its acceleration row), and their multipliers enter the cut check.
 
     Returns
     -------
@@ -349,10 +362,15 @@ def solve_pieces(length_m: np.ndarray, chosen: "BandChoice", decel_mps2: np.ndar
         b (m^2/s^2), shape (N+1,), or None.
     """
     n, w = length_m.size, options.piece_segments
+    rows = rows or {}
+    families = tuple(rows)
+    data = np.column_stack(list(rows.values())) if rows else None
+    neutral = np.concatenate([NEUTRAL_DATA[f] for f in families]) if rows else None
+    n_family = sum(ROW_FAMILIES[f][1] for f in families)  # family rows per segment
     t = time.perf_counter()
-    solver = cached_nlp(w, with_jerk, options.ipopt_key())
+    solver = cached_nlp(w, with_jerk, options.ipopt_key(), families)
     nlp_with_jerk = with_jerk and w >= 2
-    check = cached_nlp(5, with_jerk, options.ipopt_key())
+    check = cached_nlp(5, with_jerk, options.ipopt_key(), families)
     grad_f, jac_g = check.get_function("nlp_grad_f"), check.get_function("nlp_jac_g")
     timings["build"] += time.perf_counter() - t
     t = time.perf_counter()
@@ -361,8 +379,10 @@ def solve_pieces(length_m: np.ndarray, chosen: "BandChoice", decel_mps2: np.ndar
     length = length_m / l_ref
     t_whole = scaling.t_whole
     lbg_route, ubg_route = -decel_mps2 / scaling.a_ref, accel_mps2 / scaling.a_ref  # the route's accel rows
-    rows = w + (w - 1 if nlp_with_jerk else 0)
-    solved: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+    n_rows = w + (w - 1 if nlp_with_jerk else 0)
+    first_family = n_rows
+    n_rows += n_family * w
+    solved: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]] = {}
     iterations, cuts, tried = 0, cuts.copy(), set()
 
     def solve(first: int, last: int) -> bool:
@@ -377,23 +397,35 @@ def solve_pieces(length_m: np.ndarray, chosen: "BandChoice", decel_mps2: np.ndar
             lbx[offset + k - first] = ubx[offset + k - first] = x0[offset + k - first] = upper[k]
         p_length = np.ones(w)
         p_length[offset:offset + count] = length[first:last]
-        lbg, ubg = np.full(rows, -np.inf), np.full(rows, np.inf)  # padding rows: unbounded
+        lbg, ubg = np.full(n_rows, -np.inf), np.full(n_rows, np.inf)  # padding rows: unbounded
         accel_rows = slice(offset, offset + count)
         jerk_rows = slice(w + offset, w + offset + count - 1)  # interior boundaries offset+1 .. offset+count-1
         lbg[accel_rows], ubg[accel_rows] = lbg_route[first:last], ubg_route[first:last]
         if nlp_with_jerk:
             lbg[jerk_rows], ubg[jerk_rows] = -1.0, 1.0
+        family_rows_real = [slice(first_family + r * w + offset, first_family + r * w + offset + count)
+                            for r in range(n_family)]  # each family row's entries of the real segments
+        extra = ()
+        if data is not None:
+            piece_data = np.tile(neutral, (w, 1))
+            piece_data[offset:offset + count] = data[first:last]
+            extra = (piece_data,)
+            for real_rows in family_rows_real:
+                ubg[real_rows] = 1.0
         t_ref = max(objective_s(chosen.greatest_b[first:last + 1], length_m[first:last], 0.0), 1e-6)
-        result = solve_ipopt(solver, x0, lbx, ubx, p_length, lbg, ubg, scaling.tail(t_ref))
+        result = solve_ipopt(solver, x0, lbx, ubx, p_length, lbg, ubg, scaling.tail(t_ref), *extra)
         iterations += result.iterations
         if result.success:
             rescale = t_ref / t_whole  # multipliers of f / t_ref, expressed for f / t_whole
+            lam_family = (np.array([result.lam_g[r] for r in family_rows_real]) * rescale if n_family else None)
             solved[first, last] = (result.y[real], result.lam_g[accel_rows] * rescale,
-                                   result.lam_g[jerk_rows] * rescale)
+                                   result.lam_g[jerk_rows] * rescale, lam_family)
         return result.success
 
     a_cut = segment_accel_mps2(chosen.upper_b[:-1], chosen.upper_b[1:], length_m)  # between fixed pairs
     row_inside = (a_cut < accel_mps2 * (1 - 1e-9)) & (-a_cut < decel_mps2 * (1 - 1e-9))
+    for family, family_data in rows.items():  # a cut's own family rows, constant there, inactive too
+        row_inside &= family_rows(family, chosen.upper_b, length_m, family_data).max(axis=0) < 1 - 1e-9
     try:
         for round_ in range(options.cut_rounds + 1):
             pieces = piece_bounds(cuts, n)
@@ -403,13 +435,19 @@ def solve_pieces(length_m: np.ndarray, chosen: "BandChoice", decel_mps2: np.ndar
             else:
                 y, lam_accel = np.empty(n + 1), np.zeros(n)
                 lam_jerk = np.zeros(n + 1) if nlp_with_jerk else None
+                lam_rows = np.zeros((n_family, n)) if n_family else None
                 for first, last in pieces:
-                    y[first:last + 1], lam_accel[first:last], lam_piece_jerk = solved[first, last]
+                    y[first:last + 1], lam_accel[first:last], lam_piece_jerk, lam_piece_rows = solved[first, last]
                     if lam_jerk is not None:
                         lam_jerk[first + 1:last] = lam_piece_jerk
+                    if lam_rows is not None:
+                        lam_rows[:, first:last] = lam_piece_rows
                 lam_accel[cuts] = 0.0  # the rows between fixed pairs (checked inactive below)
+                if lam_rows is not None:
+                    lam_rows[:, cuts] = 0.0
+                with_rows = {"data": data, "lam_rows": lam_rows} if rows else {}
                 lam_x, scale = cut_multipliers(grad_f, jac_g, y, scaling.tail(t_whole), length, lam_accel,
-                                               lam_jerk, cuts)
+                                               lam_jerk, cuts, **with_rows)
                 pair = np.stack([cuts, cuts + 1], axis=1)
                 wrong = wrong_cuts(lam_x, scale, lower[pair] < upper[pair], row_inside[cuts])
                 if wrong.size == 0:

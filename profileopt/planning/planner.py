@@ -472,8 +472,7 @@ def _accel_scale(accel: np.ndarray, decel: np.ndarray) -> float:
 def _solve_nlp(seg: Segments, chosen: BandChoice, decel: np.ndarray, accel: np.ndarray, smoothing: float,
                jerk: float, options: SolverOptions, rows: dict[str, np.ndarray]) -> _NlpResult:
     """IPOPT's optimum over the chosen bands: in pieces on a long route (exact, checked), or
-    whole (a short route, a long one whose cuts do not check out, or one with rows of turns
-    and hills, which the pieces do not carry yet)."""
+    whole (a short route, or a long one whose cuts do not check out)."""
     n = seg.count
     with_jerk = math.isfinite(jerk)
     scaling = Scaling(b_ref=max(float(chosen.upper_b.max()), 1e-6), l_ref=float(seg.length_m.mean()),
@@ -481,12 +480,12 @@ def _solve_nlp(seg: Segments, chosen: BandChoice, decel: np.ndarray, accel: np.n
                       t_whole=max(objective_s(chosen.greatest_b, seg.length_m, 0.0), 1e-6))
     timings = {"build": 0.0, "solve": 0.0}
     iterations = 0
-    if not rows and n > max(options.split_above_segments, options.piece_segments):
+    if n > max(options.split_above_segments, options.piece_segments):
         score = cut_scores(chosen.upper_b, chosen.greatest_b, seg.length_m)
         cuts = choose_cuts(score, options.piece_segments)
         if cuts.size:
             b, iterations, pieces = solve_pieces(seg.length_m, chosen, decel, accel, scaling, with_jerk, score, cuts,
-                                                 options, timings)
+                                                 options, timings, rows)
             if b is not None:
                 return _NlpResult(b, "optimal", iterations, pieces, timings)
 
