@@ -8,8 +8,8 @@ evaluations included). Pieces of a few thousand segments keep every solve in cac
 long route costs N times a constant.
 
 Why this is exact: the planner's NLP (:func:`profileopt.planning.nlp.build_nlp`) is a chain. Its
-terms and rows act on two consecutive squared speeds (a segment's travel time and
-acceleration) or three (a boundary's smoothing term and jerk). If two consecutive boundary
+terms and rows act on two consecutive squared speeds (a segment's travel time,
+acceleration, friction and power rows) or three (a boundary's smoothing term and jerk). If two consecutive boundary
 speeds b_k, b_{k+1} are held fixed, every term or row that involves a free variable left of
 k lies wholly in boundaries 0..k+1, and every one that involves a free variable right of
 k+1 lies wholly in k..N: the problem splits into two independent NLPs that share only the
@@ -20,7 +20,8 @@ Which pairs the optimum holds at their caps is known only after solving, so cuts
 is the lowest of the caps around them, which the greatest profile reaches without a sharp
 corner) and *checked* after (:func:`cut_multipliers`). The joined solution is a KKT point
 of the whole NLP when each piece's solution is a KKT point of the piece, segment k's
-acceleration row is inactive (a_k = 0 between equal caps), and at every cut the whole
+acceleration row is inactive (a_k = 0 between equal caps), so are its friction and power
+rows, and at every cut the whole
 problem's Lagrangian gradient w.r.t. the two fixed variables has the sign of an active
 upper bound: bound multiplier lam_x = -(grad f + J^T lam_g) >= 0, CasADi's sign
 convention. That is the same optimality IPOPT certifies for the whole problem solved at
