@@ -39,7 +39,7 @@ __all__ = ["DEFAULT_PATH_TOLERANCE_M", "SmoothPath", "smooth_path", "path_grade_
 #: still measured at every sample.
 _MAX_FIT_POINTS = 10_000
 
-#: Bisection on the smoothing scale stops when its bracket is this narrow (ratio).
+#: The search for the smoothing scale stops when its bracket is this narrow (ratio).
 _SCALE_RATIO_TOLERANCE = 1.01
 
 #: Fewest samples scipy's make_smoothing_spline accepts.
@@ -188,6 +188,7 @@ def smooth_path(x_m: ArrayLike, y_m: ArrayLike, *, tolerance_m: float = DEFAULT_
     lo_scale = 0.1 * float(np.min(np.diff(s_fit)))
     hi_scale = float(s[-1])
     best = fit(hi_scale)
+    fit_hi_deviation = best[1]
     if best[1] <= tol:
         lo_scale = hi_scale
     else:
@@ -200,13 +201,28 @@ def smooth_path(x_m: ArrayLike, y_m: ArrayLike, *, tolerance_m: float = DEFAULT_
             if best[1] > tol:  # only rounding can leave an interpolating spline this far
                 raise InputError(f"path_tolerance_m = {tol:g} m is below what the path's numbers can resolve "
                                  f"(deviation {best[1]:.3g} m even without smoothing); raise path_tolerance_m")
-        while hi_scale > _SCALE_RATIO_TOLERANCE * lo_scale:
-            mid = math.sqrt(lo_scale * hi_scale)
-            trial = fit(mid)
-            if trial[1] <= tol:
-                lo_scale, best = mid, trial
+        # the largest scale within the tolerance: regula falsi (Illinois) on
+        # log(deviation / tol) against log(scale), each step kept inside the middle 96 % of
+        # the bracket (so it never does worse than a slowed bisection): about 6 fits where
+        # bisection took 11 to reach the same 1 % bracket
+        g_lo = math.log(max(best[1], 1e-300) / tol)
+        g_hi = math.log(max(fit_hi_deviation, 1e-300) / tol)
+        u_lo, u_hi = math.log(lo_scale), math.log(hi_scale)
+        side = 0
+        while u_hi - u_lo > math.log(_SCALE_RATIO_TOLERANCE):
+            u = u_lo - g_lo * (u_hi - u_lo) / (g_hi - g_lo) if g_hi > g_lo else 0.5 * (u_lo + u_hi)
+            u = min(max(u, u_lo + 0.02 * (u_hi - u_lo)), u_hi - 0.02 * (u_hi - u_lo))
+            trial = fit(math.exp(u))
+            g = math.log(max(trial[1], 1e-300) / tol)
+            if g <= 0:
+                u_lo, g_lo, best = u, g, trial
+                g_hi = g_hi / 2 if side == -1 else g_hi  # Illinois: halve the end kept twice
+                side = -1
             else:
-                hi_scale = mid
+                u_hi, g_hi = u, g
+                g_lo = g_lo / 2 if side == 1 else g_lo
+                side = 1
+        lo_scale = math.exp(u_lo)
     spline, deviation = best
     fitted = line + spline(sc)
     curvature = _curvature(spline(sc, 1) + slope, spline(sc, 2))  # the line adds slope to x', y'
