@@ -84,6 +84,7 @@ import numpy as np
 
 import profileopt
 from profileopt import load_vehicle
+from profileopt.vehicle import OPTIONAL_KEYS
 from profileopt.forces import get_model
 from profileopt.io import read_profile, read_route
 from profileopt.kinematics import boundary_jerk_mps3
@@ -286,8 +287,7 @@ def run_plan(route_path: Path, out_path: Path, vehicle, **options) -> Run:
 #: TOPP-RA and COPP are given (the peers' convex subset is then the same problem).
 LEVEL_VEHICLE_FILE = "atv-level.toml"
 
-_TURN_AND_HILL_KEYS = ("max_lateral_accel_mps2", "track_width_m", "cg_height_m", "friction_coefficient", "mass_kg",
-                       "max_power_w")
+_TURN_AND_HILL_KEYS = OPTIONAL_KEYS
 
 
 def level_atv():
@@ -297,8 +297,6 @@ def level_atv():
 
 def write_level_atv(path: Path) -> None:
     """The bundled atv's file without the keys of turns and hills."""
-    from profileopt.vehicle import bundled_vehicles  # noqa: F401  (the bundled file is found by name)
-
     source = Path(load_vehicle("atv").name).read_text(encoding="utf-8").splitlines()
     kept = [line for line in source if line.split("=")[0].strip() not in _TURN_AND_HILL_KEYS]
     path.write_text("\n".join(kept) + "\n", encoding="utf-8")

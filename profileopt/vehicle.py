@@ -17,7 +17,7 @@ from pathlib import Path
 
 from .errors import InputError
 
-__all__ = ["Vehicle", "load_vehicle", "bundled_vehicles", "vehicle_reference", "PLAUSIBLE_RANGES"]
+__all__ = ["Vehicle", "load_vehicle", "bundled_vehicles", "vehicle_reference", "PLAUSIBLE_RANGES", "OPTIONAL_KEYS"]
 
 # key -> (unit, what it is). Order is the order of the dataclass fields and of the files.
 _UNITS: dict[str, tuple[str, str]] = {
@@ -46,6 +46,10 @@ _OPTIONAL_UNITS: dict[str, tuple[str, str]] = {
     "mass_kg": ("kg", "mass of the whole vehicle"),
     "max_power_w": ("W", "largest drive power at the wheels"),
 }
+
+#: The optional keys of turns and hills, in file order: a vehicle without any of them plans
+#: as before they existed (:func:`profileopt.planning.limits.plans_on_grades`).
+OPTIONAL_KEYS: tuple[str, ...] = tuple(_OPTIONAL_UNITS)
 
 #: Optional keys that only make sense together: rollover needs both track width and centre of
 #: gravity height, the power limit needs the whole vehicle's mass.

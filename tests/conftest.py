@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from profileopt import force_n, load_vehicle
+from profileopt.vehicle import OPTIONAL_KEYS
 
 #: the repository (this file is tests/conftest.py)
 ROOT = Path(__file__).resolve().parents[1]
@@ -135,8 +136,7 @@ def check_turns_and_hills(profile, route, vehicle, accel: np.ndarray, rtol: floa
     segment: the grade recomputed by :func:`grade_direct` over twice the roughness window, the
     curvature the plan's own (its estimate is tested in tests/test_geometry.py)."""
     s, v = profile.s_m, profile.speed_mps
-    on_grades = any(getattr(vehicle, key) is not None for key in
-                    ("max_lateral_accel_mps2", "track_width_m", "friction_coefficient", "mass_kg"))
+    on_grades = any(getattr(vehicle, key) is not None for key in OPTIONAL_KEYS)  # any key of turns and hills
     n = s.size - 1
     lo = hi = np.zeros(n)
     if on_grades:

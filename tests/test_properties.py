@@ -44,6 +44,7 @@ from profileopt.forces import MODELS, get_model
 from profileopt.planning import MIN_SAMPLES_PER_SEGMENT, plan, segment_route
 from profileopt.route import Route
 from profileopt.terrain import MIN_SAMPLES_PER_WINDOW, segment_roughness_index
+from profileopt.vehicle import OPTIONAL_KEYS
 from conftest import G, check_turns_and_hills, grade_direct, window_ri, window_speeds
 from profileopt.vehicle import Vehicle, load_vehicle
 
@@ -261,8 +262,7 @@ def test_every_plan_keeps_every_limit(problem: dict) -> None:
         force_at_rest = np.asarray(get_model(options["model"]).force_n(np.zeros_like(ri), ri, vehicle))
         rest_is_admissible = bool(np.all(force_at_rest <= get_model(options["model"]).limit_n(vehicle)))
         crawl_exists = boundaries.size >= 3 and bool(np.all(allowable_speed(ri, vehicle, model=options["model"]) > 0))
-        if any(getattr(vehicle, key) is not None for key in
-               ("max_lateral_accel_mps2", "track_width_m", "friction_coefficient", "mass_kg")):
+        if any(getattr(vehicle, key) is not None for key in OPTIONAL_KEYS):
             # on grades a crawl needs to climb the steepest grade from rest and hold the
             # steepest descent: g sin(theta) within max_accel and max_decel (and within the grip
             # mu g cos(theta)); the grade over twice the roughness window, recomputed directly

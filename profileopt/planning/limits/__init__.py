@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING
 import math
 
 from ...motion import lateral_limit_mps2
+from ...vehicle import OPTIONAL_KEYS
 from .accel import AccelLimit
 from .base import Limit, PlanContext, worst_ratio
 from .force import ForceLimit
@@ -87,5 +88,4 @@ def plans_on_grades(vehicle: "Vehicle") -> bool:
     -------
     bool
     """
-    return any(getattr(vehicle, key) is not None for key in
-               ("max_lateral_accel_mps2", "track_width_m", "friction_coefficient", "mass_kg"))
+    return any(getattr(vehicle, key) is not None for key in OPTIONAL_KEYS)

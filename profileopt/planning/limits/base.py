@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..nlp import family_rows
 from ..path import SegmentPath, flat_path
 
 if TYPE_CHECKING:
@@ -42,7 +43,7 @@ if TYPE_CHECKING:
     from ..result import Profile
     from ..segments import Segments
 
-__all__ = ["PlanContext", "Limit", "worst_ratio"]
+__all__ = ["PlanContext", "Limit", "RowLimit", "worst_ratio"]
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -299,6 +300,69 @@ class Limit:
         str
         """
         return f"the {self.name} limit"
+
+
+class RowLimit(Limit):
+    """A limit that a family of NLP rows keeps on each segment's two squared speeds
+    (:data:`profileopt.planning.nlp.ROW_FAMILIES`), where it can bind.
+
+    The family's expressions are evaluated once for every use: on IPOPT's solution
+    (:meth:`violation`), and on a finished profile at its exact speeds (:meth:`row_values`,
+    for a subclass's :meth:`check` and :meth:`margins`). A subclass names its ``family`` and
+    gives its per-segment data (:meth:`row_data`).
+    """
+
+    #: The key of :data:`profileopt.planning.nlp.ROW_FAMILIES` of this limit's rows.
+    family: str = ""
+
+    def row_data(self, path: SegmentPath) -> np.ndarray:
+        """The family's data of each segment, shape (N, D), columns as ROW_FAMILIES names them.
+
+        Parameters
+        ----------
+        path : SegmentPath
+            Each segment's turns and slopes.
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        raise NotImplementedError
+
+    def violation(self, context: PlanContext, b: np.ndarray) -> float:
+        """Largest row over 1, minus 1 (0 when the limit holds), as IPOPT's rows see it.
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+        b : numpy.ndarray, shape (N+1,)
+            Squared speeds at the boundaries (m^2/s^2).
+
+        Returns
+        -------
+        float
+        """
+        rows = family_rows(self.family, b, context.segments.length_m, self.row_data(context.turns_and_slopes))
+        return max(float(rows.max()) - 1.0, 0.0)
+
+    def row_values(self, profile: "Profile") -> np.ndarray:
+        """The largest of the family's rows in each segment of a profile, at its exact speeds
+        (<= 1 where the limit holds), shape (N,).
+
+        Parameters
+        ----------
+        profile : Profile
+            A planned profile.
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        n = profile.s_m.size - 1
+        path = profile.path if profile.path is not None else flat_path(n)
+        return family_rows(self.family, profile.speed_mps**2, np.diff(profile.s_m), self.row_data(path),
+                           smooth=False).max(axis=0)
 
 
 def worst_ratio(values: np.ndarray, limit: float, where: np.ndarray) -> dict:

@@ -23,9 +23,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ...motion import friction_radius_mps2, friction_usage, lateral_accel_mps2, lateral_speed_cap_mps, tyre_accel_mps2
-from ..nlp import family_rows
-from .base import Limit, PlanContext, worst_ratio
+from ...motion import friction_radius_mps2, lateral_accel_mps2, lateral_speed_cap_mps, tyre_accel_mps2
+from ..path import SegmentPath
+from .base import PlanContext, RowLimit, worst_ratio
 
 if TYPE_CHECKING:
     from ..result import Profile
@@ -34,7 +34,7 @@ __all__ = ["FrictionLimit"]
 
 
 @dataclasses.dataclass(frozen=True)
-class FrictionLimit(Limit):
+class FrictionLimit(RowLimit):
     """The friction circle at every speed, curvature and grade of every segment.
 
     Attributes
@@ -46,6 +46,7 @@ class FrictionLimit(Limit):
     friction_coefficient: float
     name = "friction"
     binding = "friction"
+    family = "friction"
 
     def _radius(self, context: PlanContext) -> np.ndarray:
         """The smallest friction circle of each segment, mu g cos(max |theta|) (m/s^2), (N,)."""
@@ -84,9 +85,19 @@ class FrictionLimit(Limit):
         radius = self._radius(context)
         return tyre_accel_mps2(radius, path.grade_lo_rad), -tyre_accel_mps2(-radius, path.grade_hi_rad)
 
-    def _data(self, context: PlanContext) -> np.ndarray:
-        path = context.turns_and_slopes
-        n = context.segments.count
+    def row_data(self, path: SegmentPath) -> np.ndarray:
+        """Each segment's largest |curvature|, its grade range and mu, shape (N, 4).
+
+        Parameters
+        ----------
+        path : SegmentPath
+            Each segment's turns and slopes.
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        n = path.curvature_max_1pm.size
         return np.column_stack([path.curvature_max_1pm, path.grade_lo_rad, path.grade_hi_rad,
                                 np.full(n, self.friction_coefficient)])
 
@@ -123,7 +134,7 @@ class FrictionLimit(Limit):
         """
         if not np.any(self._needs_rows(context, cap_mps, decel_mps2, accel_mps2)):
             return None
-        return "friction", self._data(context)
+        return "friction", self.row_data(context.turns_and_slopes)
 
     def inner_bounds(self, context: PlanContext, cap_mps: np.ndarray, decel_mps2: np.ndarray,
                      accel_mps2: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
@@ -153,33 +164,6 @@ class FrictionLimit(Limit):
         accel = np.where(need, np.minimum(accel_mps2, -tyre_accel_mps2(-share, path.grade_hi_rad)), accel_mps2)
         return cap, decel, accel
 
-    def violation(self, context: PlanContext, b: np.ndarray) -> float:
-        """Largest friction usage over 1, minus 1 (0 when the limit holds).
-
-        Parameters
-        ----------
-        context : PlanContext
-            The route, vehicle and segments of the plan.
-        b : numpy.ndarray, shape (N+1,)
-            Squared speeds at the boundaries (m^2/s^2).
-
-        Returns
-        -------
-        float
-        """
-        rows = family_rows("friction", b, context.segments.length_m, self._data(context))
-        return max(float(rows.max()) - 1.0, 0.0)
-
-    def _usage(self, profile: "Profile") -> np.ndarray:
-        """The largest friction usage of each segment (-), shape (N,)."""
-        path = profile.path
-        if path is None:
-            return np.zeros(profile.s_m.size - 1)
-        top = np.maximum(profile.speed_mps[:-1], profile.speed_mps[1:])
-        a = profile.accel_mps2[:-1]
-        return np.maximum.reduce([friction_usage(top, a, path.curvature_max_1pm, theta, self.friction_coefficient)
-                                  for theta in (path.grade_lo_rad, path.grade_hi_rad)])
-
     def check(self, profile: "Profile") -> float:
         """How far the friction usage of any segment exceeds 1.
 
@@ -192,7 +176,7 @@ class FrictionLimit(Limit):
         -------
         float
         """
-        return max(float(np.max(self._usage(profile), initial=0.0)) - 1.0, 0.0)
+        return max(float(np.max(self.row_values(profile), initial=0.0)) - 1.0, 0.0)
 
     def margins(self, profile: "Profile") -> dict[str, dict]:
         """The largest share of the friction circle used (the tyre force over mu times the
@@ -208,4 +192,4 @@ class FrictionLimit(Limit):
         dict
             ``{"friction": {...}}``.
         """
-        return {"friction": worst_ratio(np.sqrt(self._usage(profile)), 1.0, profile.s_m[:-1])}
+        return {"friction": worst_ratio(np.sqrt(np.maximum(self.row_values(profile), 0.0)), 1.0, profile.s_m[:-1])}

@@ -15,10 +15,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ...motion import drive_power_w, tyre_accel_mps2
+from ...motion import tyre_accel_mps2
 from ..bands import DrivePower
-from ..nlp import family_rows
-from .base import Limit, PlanContext, worst_ratio
+from ..path import SegmentPath
+from .base import PlanContext, RowLimit, worst_ratio
 
 if TYPE_CHECKING:
     from ..result import Profile
@@ -27,7 +27,7 @@ __all__ = ["PowerLimit"]
 
 
 @dataclasses.dataclass(frozen=True)
-class PowerLimit(Limit):
+class PowerLimit(RowLimit):
     """m (a + g sin theta) v <= max_power_w in every segment.
 
     Attributes
@@ -42,6 +42,7 @@ class PowerLimit(Limit):
     max_power_w: float
     name = "power"
     binding = "power"
+    family = "power"
 
     def drive_power(self, context: PlanContext) -> DrivePower:
         """P / m and each segment's steepest grade, for the forward pass.
@@ -57,10 +58,20 @@ class PowerLimit(Limit):
         """
         return DrivePower(self.max_power_w / self.mass_kg, context.turns_and_slopes.grade_hi_rad)
 
-    def _data(self, context: PlanContext) -> np.ndarray:
-        n = context.segments.count
-        return np.column_stack([context.turns_and_slopes.grade_hi_rad, np.full(n, self.mass_kg),
-                                np.full(n, self.max_power_w)])
+    def row_data(self, path: SegmentPath) -> np.ndarray:
+        """Each segment's steepest grade, the mass and the power, shape (N, 3).
+
+        Parameters
+        ----------
+        path : SegmentPath
+            Each segment's turns and slopes.
+
+        Returns
+        -------
+        numpy.ndarray
+        """
+        n = path.grade_hi_rad.size
+        return np.column_stack([path.grade_hi_rad, np.full(n, self.mass_kg), np.full(n, self.max_power_w)])
 
     def nlp_rows(self, context: PlanContext, cap_mps: np.ndarray, decel_mps2: np.ndarray,
                  accel_mps2: np.ndarray) -> tuple[str, np.ndarray] | None:
@@ -85,24 +96,7 @@ class PowerLimit(Limit):
         reach = np.maximum(drive, 0.0) * cap_mps
         if not np.any(reach * self.mass_kg > self.max_power_w * (1 - 1e-12)):
             return None
-        return "power", self._data(context)
-
-    def violation(self, context: PlanContext, b: np.ndarray) -> float:
-        """Largest drive power over P, minus 1 (0 when the limit holds).
-
-        Parameters
-        ----------
-        context : PlanContext
-            The route, vehicle and segments of the plan.
-        b : numpy.ndarray, shape (N+1,)
-            Squared speeds at the boundaries (m^2/s^2).
-
-        Returns
-        -------
-        float
-        """
-        rows = family_rows("power", b, context.segments.length_m, self._data(context))
-        return max(float(rows.max()) - 1.0, 0.0)
+        return "power", self.row_data(context.turns_and_slopes)
 
     def check(self, profile: "Profile") -> float:
         """How far the drive power in any segment exceeds P (relative).
@@ -116,13 +110,7 @@ class PowerLimit(Limit):
         -------
         float
         """
-        return max(float(np.max(self._power(profile), initial=0.0)) / self.max_power_w - 1.0, 0.0)
-
-    def _power(self, profile: "Profile") -> np.ndarray:
-        """The largest drive power of each segment (W), shape (N,)."""
-        top = np.maximum(profile.speed_mps[:-1], profile.speed_mps[1:])
-        grade = profile.path.grade_hi_rad if profile.path is not None else 0.0
-        return drive_power_w(self.mass_kg, top, profile.accel_mps2[:-1], grade)
+        return max(float(np.max(self.row_values(profile), initial=0.0)) - 1.0, 0.0)
 
     def margins(self, profile: "Profile") -> dict[str, dict]:
         """The largest drive power over P, and where.
@@ -137,4 +125,4 @@ class PowerLimit(Limit):
         dict
             ``{"power": {...}}``.
         """
-        return {"power": worst_ratio(self._power(profile), self.max_power_w, profile.s_m[:-1])}
+        return {"power": worst_ratio(self.row_values(profile), 1.0, profile.s_m[:-1])}
