@@ -325,8 +325,9 @@ def check_limits(
             "drive", "braking").replace("a + g", "-(a + g").replace("theta))", "theta)))"), -(accel + lift_lo),
             decel_bound - lift_lo, s[:-1], index, "m/s^2"))
         for lim in limits:  # the friction circle and the drive power, from the same rows as the NLP's
+            # (uncapped: rows wherever some speed could reach the limit, whatever the caps)
             found = lim.nlp_rows(context, np.full(n, np.inf), decel_bound, accel_bound)
-            if found is not None and lim.name in ("friction", "power"):
+            if found is not None:
                 family, data = found
                 usage = family_rows(family, b, length, data, smooth=False).max(axis=0)
                 words = "the friction circle" if family == "friction" else "the vehicle's drive power"
