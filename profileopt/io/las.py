@@ -20,7 +20,7 @@ import numpy as np
 
 from ..errors import InputError
 from . import inputs
-from .geo import require_geo
+from .geo import length_units_m, require_geo
 
 __all__ = ["LasHeader", "PointCloud", "read_las", "LAS_GROUND", "LINEAR_UNITS_M", "UNCLASSIFIED_CODES"]
 
@@ -308,6 +308,10 @@ def _geokey_units(directory: bytes, doubles: bytes) -> tuple[float, float, str, 
     epsg = value(3072)
     crs = f"EPSG:{epsg}" if epsg not in (None, _USER_DEFINED) else ""
     code = value(3076)
+    if code is None and crs:  # the EPSG projected CRS defines its unit (laspy's add_crs writes no key 3076)
+        units = _epsg_units(epsg)
+        if units is not None:
+            return units[0], units[1], crs, f"GeoKeys: ProjectedCSTypeGeoKey (3072) {epsg} (its unit: {units[0]:g} m)"
     if code is None:
         raise _Bad(f"the GeoKeyDirectory {('(' + crs + ') ') if crs else ''}has no ProjLinearUnitsGeoKey "
                    "(3076), so the horizontal unit is unknown; pass units_m (metres per file unit)")
@@ -326,6 +330,17 @@ def _geokey_units(directory: bytes, doubles: bytes) -> tuple[float, float, str, 
         v_name, vertical_m = _unit_m(v_code, "VerticalUnitsGeoKey (4099)")
         v_note = f"VerticalUnitsGeoKey {v_code} ({v_name})"
     return horizontal_m, vertical_m, crs, f"GeoKeys: ProjLinearUnitsGeoKey {code} ({h_name}), {v_note}"
+
+
+def _epsg_units(epsg: int) -> tuple[float, float] | None:
+    """(horizontal, vertical) metres per unit of an EPSG projected CRS, None if pyproj is
+    missing or does not know it as a projected CRS."""
+    try:
+        pyproj = require_geo("pyproj", "reading LAS/LAZ")
+        crs = pyproj.CRS.from_epsg(epsg)
+        return length_units_m(crs, "") if crs.is_projected else None
+    except (InputError, Exception):  # pyproj's CRSError, or not projected
+        return None
 
 
 _WKT_TOKEN = re.compile(r'\s*("(?:[^"]|"")*"|[\[\](),]|[^\[\](),"\s]+)')
