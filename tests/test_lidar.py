@@ -167,7 +167,7 @@ def _write_las(
     signature: bytes = b"LASF",
     point_count: int | None = None,
 ) -> None:
-    """A LAS file laid out by the ASPRS specification (1.2 Table 3, 1.4 Table 3), with
+    """A LAS file laid out by the ASPRS specification (independently of laspy, which reads it) (1.2 Table 3, 1.4 Table 3), with
     point format 0 (20 bytes) or 6 (30 bytes) records followed by ``extra_bytes`` zeros."""
     n = len(counts_xyz)
     header_bytes = {2: 227, 3: 235, 4: 375}[minor]
@@ -242,13 +242,13 @@ def test_hand_built_las_14_format_6_with_wkt(tmp_path: Path) -> None:
     "options, words",
     [
         ({"signature": b"LASX"}, "LASF"),
-        ({"point_format": 0x80}, "LAZ"),
+        ({"point_format": 0x80}, "damaged"),  # the LAZ bit without LAZ data: laspy finds no LasZip record
         ({"point_count": 9}, "truncated"),
         ({"scale": (0.0, 0.01, 0.01)}, "scale factors"),
         ({"vlrs": ()}, "units_m"),
         ({"vlrs": (("LASF_Projection", 34735, _geokeys((1024, 0, 1, 2), (2048, 0, 1, 4326))),)}, "geographic"),
         ({"vlrs": (("LASF_Projection", 34735, _geokeys((1024, 0, 1, 1), (3076, 0, 1, 9036))),)}, "9036"),
-        ({"vlrs": (("LASF_Projection", 34735, _geokeys((1024, 0, 1, 1), (3072, 0, 1, 32642))),)}, "3076"),
+        ({"vlrs": (("LASF_Projection", 34735, _geokeys((1024, 0, 1, 1), (3072, 0, 1, 32767))),)}, "3076"),
     ],
 )
 def test_bad_files_raise_one_line_naming_the_file(tmp_path: Path, options: dict, words: str) -> None:
@@ -268,12 +268,24 @@ def test_unsupported_version_and_format_and_missing_file(tmp_path: Path) -> None
     path.write_bytes(bytes(raw))
     with pytest.raises(InputError, match="version 1.7"):
         read_las(path)
-    raw[25], raw[104] = 2, 4  # point format 4 (waveform)
+    raw[25], raw[104] = 2, 4  # point format 4 (57-byte records) with the 20-byte records of format 0
     path.write_bytes(bytes(raw))
-    with pytest.raises(InputError, match="format 4"):
+    with pytest.raises(InputError, match="damaged"):
         read_las(path)
     with pytest.raises(InputError, match="cannot read"):
         read_las(tmp_path / "absent.las")
+
+
+def test_epsg_code_without_unit_key_takes_the_unit_of_that_crs(tmp_path: Path) -> None:
+    # laspy's add_crs writes ProjectedCSTypeGeoKey (3072) without ProjLinearUnitsGeoKey (3076):
+    # the EPSG CRS defines the unit (EPSG:2903: US survey foot; EPSG:32642: metre).
+    for epsg, unit in ((2903, US_SURVEY_FOOT_M), (32642, 1.0)):
+        path = tmp_path / f"{epsg}.las"
+        _write_las(path, COUNTS, [2, 2, 2, 2], vlrs=(("LASF_Projection", 34735,
+                                                       _geokeys((1024, 0, 1, 1), (3072, 0, 1, epsg))),))
+        cloud = read_las(path)
+        assert cloud.header.horizontal_unit_m == cloud.header.vertical_unit_m == pytest.approx(unit, rel=1e-12)
+        assert cloud.header.crs == f"EPSG:{epsg}" and "3072" in cloud.header.units_source
 
 
 def test_units_m_reads_a_file_without_crs(tmp_path: Path) -> None:

@@ -5,7 +5,12 @@
 - :mod:`~profileopt.io.profiles`: profile files (:func:`read_profile`, :func:`write_profile`);
 - :mod:`~profileopt.io.atomic`: outputs that appear whole or not at all
   (:func:`atomic_write`, :func:`atomic_path`, :func:`check_output_paths`);
-- :mod:`~profileopt.io.las`: ASPRS LAS point clouds (:func:`read_las`);
+- :mod:`~profileopt.io.las`: ASPRS LAS and LAZ point clouds (:func:`read_las`, via laspy);
+- :mod:`~profileopt.io.tracks`: GPS tracks from GPX, GeoJSON and CSV (:func:`read_track`,
+  :func:`project_track`, :func:`local_projected_crs`);
+- :mod:`~profileopt.io.terrain_maps`: raster DEMs and OpenCRG surfaces
+  (:func:`read_geotiff`, :func:`read_crg_surface`, :func:`read_terrain`);
+- :mod:`~profileopt.io.geo`: the optional ``geo`` packages and CRS helpers (:func:`parse_crs`);
 - :mod:`~profileopt.io.elevation`: measured elevation profiles (:func:`read_opencrg`,
   :func:`read_xy_profile`).
 """
@@ -20,6 +25,10 @@ _LAZY = {
     "check_output_paths": "atomic",
     "read_opencrg": "elevation", "read_xy_profile": "elevation",
     "LAS_GROUND": "las", "LasHeader": "las", "PointCloud": "las", "read_las": "las",
+    "parse_crs": "geo",
+    "Track": "tracks", "read_track": "tracks", "project_track": "tracks", "local_projected_crs": "tracks",
+    "ElevationGrid": "terrain_maps", "CrgSurface": "terrain_maps", "read_geotiff": "terrain_maps",
+    "read_crg_surface": "terrain_maps", "read_terrain": "terrain_maps",
     "PROFILE_COLUMNS": "profiles", "read_profile": "profiles", "write_profile": "profiles",
     "read_route": "routes",
     "Table": "table", "read_table": "table", "split_lines": "table",
@@ -42,6 +51,9 @@ __all__ = [
     "atomic_path", "atomic_write", "check_output_path", "check_output_paths", "OutputSet",
     "read_opencrg", "read_xy_profile",
     "LAS_GROUND", "LasHeader", "PointCloud", "read_las",
+    "parse_crs",
+    "Track", "read_track", "project_track", "local_projected_crs",
+    "ElevationGrid", "CrgSurface", "read_geotiff", "read_crg_surface", "read_terrain",
     "PROFILE_COLUMNS", "read_profile", "write_profile",
     "read_route",
     "Table", "read_table", "split_lines",

@@ -9,6 +9,7 @@ names the file (and the line), what is wrong and what would fix it.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import re
@@ -21,7 +22,7 @@ from . import inputs
 from ..synthetic import ElevationProfile
 from .table import split_lines
 
-__all__ = ["read_opencrg", "read_xy_profile"]
+__all__ = ["read_opencrg", "read_xy_profile", "parse_opencrg", "OpenCrgData"]
 
 #: OpenCRG binary data formats this reader understands: numpy dtype of one value.
 #: KRBI: 4-byte IEEE float, big-endian; KDBI: 8-byte IEEE float, big-endian.
@@ -33,16 +34,160 @@ _CRG_RECORD_BYTES = 80
 _HEADER_END = re.compile(rb"^\$\$\$\$+[ \t\r]*$", re.MULTILINE)
 
 
-def read_opencrg(path: str | os.PathLike, track: int | None = None) -> ElevationProfile:
-    """Read one longitudinal track of an OpenCRG road file (binary data formats).
+@dataclasses.dataclass(frozen=True, eq=False)
+class OpenCrgData:
+    """An OpenCRG file's header keys, column definitions and data, as stored.
+
+    Attributes
+    ----------
+    path : pathlib.Path
+        The file read.
+    keys : dict of str to str
+        The ``$ROAD_CRG`` block's ``key = value`` lines, keys in lower case.
+    definitions : list of str
+        The ``D:`` lines of the ``$KD_DEFINITION`` block without ``D:`` (e.g.
+        ``"long section at v = -1.500,m"``), one per data column.
+    data_format : str
+        The ``#:`` line (``KRBI`` or ``KDBI``).
+    u_m : numpy.ndarray, shape (rows,)
+        Distance along the reference line of each data row (m):
+        ``reference_line_start_u + i * reference_line_increment``.
+    values : numpy.ndarray, shape (rows, len(definitions))
+        The data, as floats (NaN where the file has no data).
+    """
+
+    path: Path
+    keys: dict[str, str]
+    definitions: list[str]
+    data_format: str
+    u_m: np.ndarray
+    values: np.ndarray
+
+    @property
+    def columns(self) -> list[str]:
+        """The name of each data column: its ``D:`` line up to the first comma."""
+        return [text.split(",", 1)[0].strip() for text in self.definitions]
+
+    def number(self, key: str, default: float | None = None) -> float:
+        """A ``$ROAD_CRG`` key as a finite number.
+
+        Parameters
+        ----------
+        key : str
+            The key, lower case (``"reference_line_start_x"``).
+        default : float, optional
+            The value of a missing key; None makes a missing key an error.
+
+        Returns
+        -------
+        float
+
+        Raises
+        ------
+        InputError
+            The key is missing (without a default), not a number, or not finite.
+        """
+        if key not in self.keys:
+            if default is not None:
+                return default
+            raise InputError(f"{self.path}: header key {key!r} is missing; the reader needs it to place the samples")
+        try:
+            value = float(self.keys[key])
+        except ValueError:
+            raise InputError(f"{self.path}: header key {key!r} = {self.keys[key]!r} is not a number") from None
+        if not math.isfinite(value):
+            raise InputError(f"{self.path}: header key {key!r} = {self.keys[key]!r} is not finite")
+        return value
+
+
+def parse_opencrg(path: str | os.PathLike) -> OpenCrgData:
+    """Read an OpenCRG file (binary data formats): its header and its data grid.
 
     An OpenCRG file is a text header that ends in a line of ``$`` characters, followed by
     the data: one row per step along the reference line, one value per ``D:`` line of the
-    ``$KD_DEFINITION`` block (a lateral track, "long section i"), as big-endian IEEE
-    floats (format ``#:KRBI``, 4 bytes; ``#:KDBI``, 8 bytes), padded with NaN to whole
-    80-byte records. Distance along the reference line is
-    ``reference_line_start_u + i * reference_line_increment`` (``$ROAD_CRG`` block), up
-    to ``reference_line_end_u``.
+    ``$KD_DEFINITION`` block, as big-endian IEEE floats (format ``#:KRBI``, 4 bytes;
+    ``#:KDBI``, 8 bytes), padded with NaN to whole 80-byte records. Distance along the
+    reference line is ``reference_line_start_u + i * reference_line_increment``
+    (``$ROAD_CRG`` block), up to ``reference_line_end_u``. The readers of profiles
+    (:func:`read_opencrg`) and of surfaces
+    (:func:`~profileopt.io.terrain_maps.read_crg_surface`) share it.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.crg`` file.
+
+    Returns
+    -------
+    OpenCrgData
+
+    Raises
+    ------
+    InputError
+        No header end line, a missing or non-numeric ``reference_line_*`` key, an
+        unsupported data format, no ``D:`` lines, or too few data bytes.
+    """
+    path = Path(path)
+    raw = inputs.read_input(path, "OpenCRG file", inputs.MAX_BINARY_BYTES)
+    end = _HEADER_END.search(raw)
+    if end is None:
+        raise InputError(f"{path}: no line of '$' characters ends the header; is this an OpenCRG file?")
+    header = split_lines(raw[: end.start()].decode("latin-1"))
+    data_start = end.end() + 1  # the newline after the '$$$$' line
+
+    keys: dict[str, str] = {}
+    definitions: list[str] = []
+    data_format = None
+    block = ""
+    for line in header:
+        text = line.split("!", 1)[0].strip()  # '!' starts a comment in OpenCRG headers
+        if text.startswith("$"):
+            block = text[1:].strip().upper()  # "$ROAD_CRG", "$KD_DEFINITION", "$" ends one
+        elif block == "ROAD_CRG" and "=" in text:
+            key, _, value = text.partition("=")
+            keys[key.strip().lower()] = value.strip()
+        elif block == "KD_DEFINITION" and text.startswith("D:"):
+            definitions.append(text[2:].strip())
+        elif block == "KD_DEFINITION" and text.startswith("#:"):
+            data_format = text[2:].strip().upper()
+    crg = OpenCrgData(path, keys, definitions, data_format or "", np.empty(0), np.empty((0, 0)))
+
+    start_u = crg.number("reference_line_start_u")
+    end_u = crg.number("reference_line_end_u")
+    step_u = crg.number("reference_line_increment")
+    if not step_u > 0 or not end_u > start_u:
+        raise InputError(
+            f"{path}: reference_line_increment = {step_u:g} must be > 0 and reference_line_end_u = {end_u:g} "
+            f"greater than reference_line_start_u = {start_u:g}"
+        )
+    if data_format not in _CRG_FORMATS:
+        raise InputError(
+            f"{path}: data format {data_format!r} (the '#:' line) is not supported; "
+            f"only binary {', '.join(_CRG_FORMATS)} can be read, convert the file with OpenCRG's tools"
+        )
+    if not definitions:
+        raise InputError(f"{path}: the $KD_DEFINITION block names no data columns ('D:' lines)")
+
+    rows = int(math.floor((end_u - start_u) / step_u + 0.5)) + 1
+    dtype = np.dtype(_CRG_FORMATS[data_format])
+    needed = rows * len(definitions) * dtype.itemsize
+    if len(raw) - data_start < needed:
+        raise InputError(
+            f"{path}: {len(raw) - data_start} data bytes, but {rows} rows of {len(definitions)} "
+            f"{data_format} values need {needed}; the file is truncated"
+        )
+    values = np.frombuffer(raw, dtype=dtype, count=rows * len(definitions), offset=data_start)
+    return dataclasses.replace(crg, u_m=start_u + np.arange(rows) * step_u,
+                               values=values.reshape(rows, len(definitions)).astype(float))
+
+
+def read_opencrg(path: str | os.PathLike, track: int | None = None) -> ElevationProfile:
+    """Read one longitudinal track of an OpenCRG road file (binary data formats).
+
+    The file is read by :func:`parse_opencrg`: one row per step along the reference line,
+    one value per ``D:`` line of the ``$KD_DEFINITION`` block (a lateral track, "long
+    section i"); distance along the reference line is ``reference_line_start_u + i *
+    reference_line_increment``, up to ``reference_line_end_u``.
 
     Parameters
     ----------
@@ -65,77 +210,19 @@ def read_opencrg(path: str | os.PathLike, track: int | None = None) -> Elevation
         unsupported data format, too few data bytes, a track index out of range, or NaN
         (no data) on the chosen track.
     """
-    path = Path(path)
-    raw = inputs.read_input(path, "OpenCRG file", inputs.MAX_BINARY_BYTES)
-    end = _HEADER_END.search(raw)
-    if end is None:
-        raise InputError(f"{path}: no line of '$' characters ends the header; is this an OpenCRG file?")
-    header = split_lines(raw[: end.start()].decode("latin-1"))
-    data_start = end.end() + 1  # the newline after the '$$$$' line
-
-    keys: dict[str, str] = {}
-    columns: list[str] = []
-    data_format = None
-    block = ""
-    for line in header:
-        text = line.split("!", 1)[0].strip()  # '!' starts a comment in OpenCRG headers
-        if text.startswith("$"):
-            block = text[1:].strip().upper()  # "$ROAD_CRG", "$KD_DEFINITION", "$" ends one
-        elif block == "ROAD_CRG" and "=" in text:
-            key, _, value = text.partition("=")
-            keys[key.strip().lower()] = value.strip()
-        elif block == "KD_DEFINITION" and text.startswith("D:"):
-            columns.append(text[2:].split(",", 1)[0].strip())
-        elif block == "KD_DEFINITION" and text.startswith("#:"):
-            data_format = text[2:].strip().upper()
-
-    def number(key: str) -> float:
-        if key not in keys:
-            raise InputError(f"{path}: header key {key!r} is missing; the reader needs it to place the samples")
-        try:
-            value = float(keys[key])
-        except ValueError:
-            raise InputError(f"{path}: header key {key!r} = {keys[key]!r} is not a number") from None
-        if not math.isfinite(value):
-            raise InputError(f"{path}: header key {key!r} = {keys[key]!r} is not finite")
-        return value
-
-    start_u = number("reference_line_start_u")
-    end_u = number("reference_line_end_u")
-    step_u = number("reference_line_increment")
-    if not step_u > 0 or not end_u > start_u:
-        raise InputError(
-            f"{path}: reference_line_increment = {step_u:g} must be > 0 and reference_line_end_u = {end_u:g} "
-            f"greater than reference_line_start_u = {start_u:g}"
-        )
-    if data_format not in _CRG_FORMATS:
-        raise InputError(
-            f"{path}: data format {data_format!r} (the '#:' line) is not supported; "
-            f"only binary {', '.join(_CRG_FORMATS)} can be read, convert the file with OpenCRG's tools"
-        )
-    if not columns:
-        raise InputError(f"{path}: the $KD_DEFINITION block names no data columns ('D:' lines)")
+    crg = parse_opencrg(path)
+    columns = crg.columns
     index = len(columns) // 2 if track is None else int(track)
     if not 0 <= index < len(columns):
-        raise InputError(f"{path}: track {track} does not exist; the file has tracks 0..{len(columns) - 1}")
-
-    rows = int(math.floor((end_u - start_u) / step_u + 0.5)) + 1
-    dtype = np.dtype(_CRG_FORMATS[data_format])
-    needed = rows * len(columns) * dtype.itemsize
-    if len(raw) - data_start < needed:
-        raise InputError(
-            f"{path}: {len(raw) - data_start} data bytes, but {rows} rows of {len(columns)} "
-            f"{data_format} values need {needed}; the file is truncated"
-        )
-    values = np.frombuffer(raw, dtype=dtype, count=rows * len(columns), offset=data_start)
-    z = values.reshape(rows, len(columns))[:, index].astype(float)
+        raise InputError(f"{crg.path}: track {track} does not exist; the file has tracks 0..{len(columns) - 1}")
+    z = crg.values[:, index]
     if not np.all(np.isfinite(z)):
         bad = int(np.flatnonzero(~np.isfinite(z))[0])
         raise InputError(
-            f"{path}: track {index} ({columns[index]!r}) has no data (NaN) at row {bad} "
-            f"(u = {start_u + bad * step_u:g} m); choose another track"
+            f"{crg.path}: track {index} ({columns[index]!r}) has no data (NaN) at row {bad} "
+            f"(u = {crg.u_m[bad]:g} m); choose another track"
         )
-    return ElevationProfile(start_u + np.arange(rows) * step_u, z)
+    return ElevationProfile(crg.u_m.copy(), z.copy())
 
 
 def read_xy_profile(path: str | os.PathLike) -> ElevationProfile:

@@ -1,9 +1,9 @@
-"""ASPRS LAS point clouds (LAS 1.0-1.4, point formats 0-3, 6, 7), read with numpy.
+"""ASPRS LAS and LAZ point clouds, read with laspy (LAZ through its lazrs backend).
 
 :func:`read_las` returns a :class:`PointCloud` in metres; the units come from the file's
 CRS (GeoTIFF keys or WKT). A file that cannot be read raises
 :class:`~profileopt.errors.InputError` whose one-line message names the file, what is wrong
-and what would fix it.
+and what would fix it. laspy (the ``geo`` extra) is imported only when a file is read.
 """
 
 from __future__ import annotations
@@ -11,45 +11,25 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-import re
 import struct
+import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ..errors import InputError
 from . import inputs
+from .geo import length_units_m, require_geo
 
-__all__ = ["LasHeader", "PointCloud", "read_las", "LAS_GROUND", "LINEAR_UNITS_M"]
+__all__ = ["LasHeader", "PointCloud", "read_las", "LAS_GROUND", "LINEAR_UNITS_M", "UNCLASSIFIED_CODES"]
 
 #: ASPRS standard class code of ground points (LAS 1.4 R15, Table 17).
 LAS_GROUND = 2
 
-#: Standard point record layouts (ASPRS LAS 1.4 R15, Tables 7-14): numpy field name, type
-#: and byte offset within the record. Formats 0-5 keep the class in the low 5 bits of byte
-#: 15 (the top 3 bits are the synthetic, key-point and withheld flags); formats 6-10 have a
-#: whole byte for it at offset 16. Waveform formats 4, 5, 8, 9, 10 are not supported.
-_XYZ = [("X", "<i4", 0), ("Y", "<i4", 4), ("Z", "<i4", 8), ("intensity", "<u2", 12)]
-_LEGACY = _XYZ + [("return_bits", "u1", 14), ("class_bits", "u1", 15), ("scan_angle_rank", "i1", 16),
-                  ("user_data", "u1", 17), ("point_source_id", "<u2", 18)]
-_EXTENDED = _XYZ + [("return_bits", "u1", 14), ("flag_bits", "u1", 15), ("class_bits", "u1", 16),
-                    ("user_data", "u1", 17), ("scan_angle", "<i2", 18), ("point_source_id", "<u2", 20),
-                    ("gps_time", "<f8", 22)]
-_LAS_POINT_FIELDS: dict[int, list[tuple[str, str, int]]] = {
-    0: _LEGACY,
-    1: _LEGACY + [("gps_time", "<f8", 20)],
-    2: _LEGACY + [("red", "<u2", 20), ("green", "<u2", 22), ("blue", "<u2", 24)],
-    3: _LEGACY + [("gps_time", "<f8", 20), ("red", "<u2", 28), ("green", "<u2", 30), ("blue", "<u2", 32)],
-    6: _EXTENDED,
-    7: _EXTENDED + [("red", "<u2", 30), ("green", "<u2", 32), ("blue", "<u2", 34)],
-}
-_LAS_POINT_BYTES = {0: 20, 1: 28, 2: 26, 3: 34, 6: 30, 7: 36}
-_LAS_CLASS_MASK = {0: 0x1F, 1: 0x1F, 2: 0x1F, 3: 0x1F, 6: 0xFF, 7: 0xFF}
-
-#: Size of the public header block by minor version (1.0-1.2: 227 bytes, 1.3 adds the
-#: waveform offset, 1.4 the extended VLRs and 64-bit point counts).
-_LAS_HEADER_BYTES = {0: 227, 1: 227, 2: 227, 3: 235, 4: 375}
-_VLR_HEADER_BYTES = 54
+#: Class codes that say "no class": 0 created, never classified; 1 unassigned (LAS 1.4 R15,
+#: Table 17). A cloud with no other code is not classified at all.
+UNCLASSIFIED_CODES = (0, 1)
 
 #: EPSG linear unit codes (GeoTIFF 1.0, section 6.3.1.3) and their length in metres.
 #: The US survey foot is exactly 1200/3937 m; the international foot exactly 0.3048 m.
@@ -127,6 +107,10 @@ class PointCloud:
         ASPRS class code of each point (2 = ground, :data:`LAS_GROUND`).
     header : LasHeader
         Point count, bounds, scale and offset as stored, and the units found.
+    crs : pyproj.CRS or None
+        The file's coordinate reference system as laspy parses it (GeoTIFF keys or WKT), or
+        the one the caller supplied (:func:`~profileopt.io.terrain_maps.read_terrain`'s
+        ``terrain_crs``); None if neither states one or pyproj cannot parse it.
     """
 
     x_m: np.ndarray
@@ -134,6 +118,12 @@ class PointCloud:
     z_m: np.ndarray
     classification: np.ndarray
     header: LasHeader
+    crs: Any = None
+
+    @property
+    def is_classified(self) -> bool:
+        """Whether any point has a class other than 0 (never classified) or 1 (unassigned)."""
+        return bool(np.any(~np.isin(self.classification, UNCLASSIFIED_CODES)))
 
     def __len__(self) -> int:
         return int(self.x_m.size)
@@ -167,16 +157,16 @@ class _Bad(Exception):
 
 
 def read_las(path: str | os.PathLike, units_m: float | tuple[float, float] | None = None) -> PointCloud:
-    """Read an uncompressed ASPRS LAS 1.0-1.4 point cloud (point formats 0-3, 6, 7).
+    """Read an ASPRS LAS 1.0-1.4 point cloud, uncompressed (``.las``) or compressed (``.laz``).
 
-    The public header block gives the point format, record length, point count, scale
-    factors, offsets and bounds; the records are read with a numpy structured dtype and
-    ``x = X * scale + offset`` (likewise y, z) is converted to metres.
+    laspy reads the file (``laspy.read``; LAZ through the lazrs backend): the public header
+    block gives the point format, record length, point count, scale factors, offsets and
+    bounds, and ``x = X * scale + offset`` (likewise y, z) is converted to metres.
 
     Units. LAS itself does not fix a unit: the CRS in the variable length records does.
     Without ``units_m`` they are taken from the CRS that the header's global encoding
     marks as authoritative (WKT for LAS 1.4 with the WKT bit, else the GeoTIFF
-    GeoKeyDirectory; the other one if that is missing):
+    GeoKeyDirectory; the other one if that is missing; a LAS 1.4 extended VLR counts):
 
     * GeoKeys: ProjLinearUnitsGeoKey (3076) for x and y, VerticalUnitsGeoKey (4099) for z;
       codes 9001 metre, 9002 foot, 9003 US survey foot (1200/3937 m), or 32767 with
@@ -191,22 +181,24 @@ def read_las(path: str | os.PathLike, units_m: float | tuple[float, float] | Non
     Parameters
     ----------
     path : str or os.PathLike
-        The ``.las`` file.
+        The ``.las`` or ``.laz`` file.
     units_m : float or (float, float), optional
         Metres per file unit, for all three axes or as (horizontal, vertical), e.g.
-        ``1200 / 3937`` for US survey feet. If given, the file's CRS is not consulted.
+        ``1200 / 3937`` for US survey feet. If given, the file's CRS is not consulted for
+        the units (:attr:`PointCloud.crs` is still what the file states).
 
     Returns
     -------
     PointCloud
-        Coordinates (m) and classification of every point record, and the header.
+        Coordinates (m) and classification of every point record, the header and the CRS.
 
     Raises
     ------
     InputError
-        Not a LAS file, an unsupported version or point format, a compressed (LAZ) file,
-        inconsistent header fields, a truncated file, zero or non-finite scale factors, or
-        units that cannot be established (each names the file and the fix).
+        Not a LAS file, an unsupported version, a truncated or damaged file (what laspy
+        says), fewer point records than the header counts, zero or non-finite scale
+        factors, units that cannot be established, or laspy missing (each names the file
+        and the fix).
     """
     path = Path(path)
     try:
@@ -216,62 +208,38 @@ def read_las(path: str | os.PathLike, units_m: float | tuple[float, float] | Non
 
 
 def _read_las(path: Path, units_m: float | tuple[float, float] | None) -> PointCloud:
-    # a regular file only (not /dev/zero, not a FIFO); its size is checked against its header
-    # below, and the point records are read in one piece: memory is proportional to the file
-    if os.path.exists(path):  # (a missing file is said below, as before)
-        inputs.check_regular_input(path, "LAS file")
+    laspy = require_geo("laspy", "reading LAS/LAZ")
     try:
-        size = path.stat().st_size
+        # a regular file only (not /dev/zero, not a FIFO): laspy would read it until memory runs out
+        if os.path.exists(path):
+            inputs.check_regular_input(path, "LAS file")
         with open(path, "rb") as handle:
-            head = handle.read(_LAS_HEADER_BYTES[4])
+            head = handle.read(26)
     except OSError as exc:
         raise _Bad(f"cannot read the LAS file ({exc.strerror}); check the path") from None
     if head[:4] != b"LASF":
-        raise _Bad("does not start with 'LASF'; is this an ASPRS LAS file?")
-    if len(head) < _LAS_HEADER_BYTES[0]:
-        raise _Bad(f"{len(head)} bytes, shorter than a LAS header (227 bytes); the file is truncated")
-    major, minor = head[24], head[25]
-    if major != 1 or minor not in _LAS_HEADER_BYTES:
-        raise _Bad(f"LAS version {major}.{minor} is not supported; this reader handles 1.0-1.4")
-    (header_bytes, point_offset, vlr_count, point_format, record_length,
-     legacy_count) = struct.unpack_from("<HIIBHI", head, 94)
-    scale = struct.unpack_from("<3d", head, 131)
-    offset = struct.unpack_from("<3d", head, 155)
-    max_x, min_x, max_y, min_y, max_z, min_z = struct.unpack_from("<6d", head, 179)
-    global_encoding = struct.unpack_from("<H", head, 6)[0] if minor >= 2 else 0
-
-    if header_bytes < _LAS_HEADER_BYTES[minor]:
-        raise _Bad(f"header size {header_bytes} bytes is below the {_LAS_HEADER_BYTES[minor]} of LAS 1.{minor}; "
-                   "the header is corrupt")
-    if point_format & 0xC0:
-        raise _Bad(f"point format byte {point_format} has the compression bit set (LAZ); "
-                   "decompress it first, e.g. 'pdal translate in.laz out.las'")
-    if point_format not in _LAS_POINT_FIELDS:
-        raise _Bad(f"point data format {point_format} is not supported (only 0-3, 6, 7); "
-                   "convert it, e.g. 'pdal translate in.las out.las --writers.las.dataformat_id=3'")
-    if record_length < _LAS_POINT_BYTES[point_format]:
-        raise _Bad(f"point record length {record_length} bytes is below the {_LAS_POINT_BYTES[point_format]} "
-                   f"bytes of point format {point_format}; the header is corrupt")
-    count = legacy_count
-    if minor >= 4:
-        count = struct.unpack_from("<Q", head, 247)[0]
-        if legacy_count not in (0, count):
-            raise _Bad(f"legacy point count {legacy_count} differs from the 64-bit point count {count}; "
-                       "the header is corrupt")
+        raise _Bad("does not start with 'LASF'; is this an ASPRS LAS or LAZ file?")
+    if len(head) == 26 and (head[24] != 1 or head[25] > 4):
+        raise _Bad(f"LAS version {head[24]}.{head[25]} is not supported; this reader handles 1.0-1.4")
+    try:
+        las = laspy.read(path)
+    except Exception as exc:  # laspy, lazrs, struct and numpy errors alike: the file is not whole
+        reason = " ".join(str(exc).split())[:160] or type(exc).__name__
+        if "LazBackend" in reason or "lazrs" in reason.lower() and "install" in reason.lower():
+            raise _Bad("reading LAZ needs the lazrs backend of the geo extra: pip install 'profileopt[geo]'") from None
+        raise _Bad(f"is truncated or damaged (laspy: {reason}); download it again") from None
+    head = las.header
+    count = int(head.point_count)
+    if len(las.points) != count:
+        raise _Bad(f"holds {len(las.points)} point records, the header says {count}; it is truncated, "
+                   "download it again")
+    scale, offset = tuple(map(float, head.scales)), tuple(map(float, head.offsets))
     if not (all(math.isfinite(v) and v != 0.0 for v in scale) and all(math.isfinite(v) for v in offset)):
         raise _Bad(f"scale factors {scale} must be finite and non-zero and offsets {offset} finite")
-    if not header_bytes <= point_offset <= size:
-        raise _Bad(f"offset to point data {point_offset} lies outside the file ({size} bytes) or inside "
-                   f"the header ({header_bytes} bytes)")
-    if point_offset + count * record_length > size:
-        raise _Bad(f"{count} points of {record_length} bytes from byte {point_offset} need "
-                   f"{point_offset + count * record_length} bytes, the file has {size}; it is truncated")
-
-    with open(path, "rb") as handle:
-        preamble = handle.read(point_offset)
-    vlrs = _las_vlrs(preamble, header_bytes, vlr_count)
+    vlrs = {(v.user_id, v.record_id): v.record_data_bytes() for v in list(head.vlrs) + list(las.evlrs or [])}
+    minor = int(head.version.minor)
     if units_m is None:
-        wkt_first = minor >= 4 and bool(global_encoding & 0x10)
+        wkt_first = minor >= 4 and bool(head.global_encoding.wkt)
         horizontal_m, vertical_m, crs, source = _las_units(vlrs, wkt_first)
     else:
         pair = (units_m, units_m) if isinstance(units_m, (int, float)) else tuple(units_m)
@@ -279,49 +247,25 @@ def _read_las(path: Path, units_m: float | tuple[float, float] | None) -> PointC
             raise _Bad(f"units_m = {units_m!r} must be a number > 0 or a pair (horizontal, vertical) of them")
         horizontal_m, vertical_m = (float(u) for u in pair)
         crs, source = "", f"units_m argument ({horizontal_m:g} m, {vertical_m:g} m per file unit)"
-
-    fields = _LAS_POINT_FIELDS[point_format]
-    dtype = np.dtype({"names": [f[0] for f in fields], "formats": [f[1] for f in fields],
-                      "offsets": [f[2] for f in fields], "itemsize": record_length})
-    records = np.fromfile(path, dtype=dtype, count=count, offset=point_offset)
-    if records.size != count:  # the file shrank between the checks and the read
-        raise _Bad(f"holds {records.size} point records, the header says {count}; it is truncated")
-
-    def coordinate(axis: int, name: str, unit_m: float) -> np.ndarray:
-        return (records[name] * scale[axis] + offset[axis]) * unit_m
+    try:
+        parsed = head.parse_crs()
+    except Exception:  # pyproj missing, or keys it cannot turn into a CRS: the units above still hold
+        parsed = None
 
     header = LasHeader(
-        path=str(path), version=(major, minor), point_format=point_format, record_length_bytes=record_length,
-        point_count=count, scale=scale, offset=offset, min_xyz=(min_x, min_y, min_z),
-        max_xyz=(max_x, max_y, max_z), horizontal_unit_m=horizontal_m, vertical_unit_m=vertical_m,
-        crs=crs, units_source=source,
+        path=str(path), version=(int(head.version.major), minor), point_format=int(head.point_format.id),
+        record_length_bytes=int(head.point_format.size), point_count=count, scale=scale, offset=offset,
+        min_xyz=tuple(map(float, head.mins)), max_xyz=tuple(map(float, head.maxs)),
+        horizontal_unit_m=horizontal_m, vertical_unit_m=vertical_m, crs=crs, units_source=source,
     )
     return PointCloud(
-        x_m=coordinate(0, "X", horizontal_m),
-        y_m=coordinate(1, "Y", horizontal_m),
-        z_m=coordinate(2, "Z", vertical_m),
-        classification=(records["class_bits"] & _LAS_CLASS_MASK[point_format]).astype(np.uint8),
+        x_m=np.asarray(las.x, dtype=float) * horizontal_m,
+        y_m=np.asarray(las.y, dtype=float) * horizontal_m,
+        z_m=np.asarray(las.z, dtype=float) * vertical_m,
+        classification=np.asarray(las.classification, dtype=np.uint8),
         header=header,
+        crs=parsed,
     )
-
-
-def _las_vlrs(preamble: bytes, start: int, count: int) -> dict[tuple[str, int], bytes]:
-    """The variable length records between the header and the points: {(user id, record
-    id): payload}."""
-    vlrs: dict[tuple[str, int], bytes] = {}
-    at = start
-    for index in range(count):
-        if at + _VLR_HEADER_BYTES > len(preamble):
-            raise _Bad(f"variable length record {index} of {count} runs into the point data; the header is corrupt")
-        user_id, record_id, length = struct.unpack_from("<2x16sHH", preamble, at)
-        at += _VLR_HEADER_BYTES
-        if at + length > len(preamble):
-            raise _Bad(f"variable length record {index} ({length} bytes) runs into the point data; "
-                       "the header is corrupt")
-        key = (user_id.split(b"\0", 1)[0].decode("latin-1"), record_id)
-        vlrs.setdefault(key, preamble[at:at + length])
-        at += length
-    return vlrs
 
 
 def _las_units(vlrs: dict[tuple[str, int], bytes], wkt_first: bool) -> tuple[float, float, str, str]:
@@ -364,6 +308,10 @@ def _geokey_units(directory: bytes, doubles: bytes) -> tuple[float, float, str, 
     epsg = value(3072)
     crs = f"EPSG:{epsg}" if epsg not in (None, _USER_DEFINED) else ""
     code = value(3076)
+    if code is None and crs:  # the EPSG projected CRS defines its unit (laspy's add_crs writes no key 3076)
+        units = _epsg_units(epsg)
+        if units is not None:
+            return units[0], units[1], crs, f"GeoKeys: ProjectedCSTypeGeoKey (3072) {epsg} (its unit: {units[0]:g} m)"
     if code is None:
         raise _Bad(f"the GeoKeyDirectory {('(' + crs + ') ') if crs else ''}has no ProjLinearUnitsGeoKey "
                    "(3076), so the horizontal unit is unknown; pass units_m (metres per file unit)")
@@ -382,6 +330,17 @@ def _geokey_units(directory: bytes, doubles: bytes) -> tuple[float, float, str, 
         v_name, vertical_m = _unit_m(v_code, "VerticalUnitsGeoKey (4099)")
         v_note = f"VerticalUnitsGeoKey {v_code} ({v_name})"
     return horizontal_m, vertical_m, crs, f"GeoKeys: ProjLinearUnitsGeoKey {code} ({h_name}), {v_note}"
+
+
+def _epsg_units(epsg: int) -> tuple[float, float] | None:
+    """(horizontal, vertical) metres per unit of an EPSG projected CRS, None if pyproj is
+    missing or does not know it as a projected CRS."""
+    try:
+        pyproj = require_geo("pyproj", "reading LAS/LAZ")
+        crs = pyproj.CRS.from_epsg(epsg)
+        return length_units_m(crs, "") if crs.is_projected else None
+    except (InputError, Exception):  # pyproj's CRSError, or not projected
+        return None
 
 
 _WKT_TOKEN = re.compile(r'\s*("(?:[^"]|"")*"|[\[\](),]|[^\[\](),"\s]+)')
