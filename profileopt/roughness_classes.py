@@ -24,7 +24,6 @@ import math
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy import integrate
 
 from .errors import InputError
 from .synthetic import ISO8608_GD0_M3, ISO8608_N0_CPM, ISO8608_N_MAX_CPM, ISO8608_N_MIN_CPM
@@ -121,6 +120,8 @@ def iso8608_expected_variance_m2(road_class: str, *, window_m: float, n_min_cpm:
     InputError
         An unknown class, a window that is not > 0 or a bad band.
     """
+    from scipy import integrate  # only when a class's RI is derived: reading a route needs no SciPy
+
     gd0 = ISO8608_GD0_M3[iso8608_class_key(road_class)]
     width = _positive("window_m", window_m)
     n_min, n_max = _positive("n_min_cpm", n_min_cpm), _positive("n_max_cpm", n_max_cpm)

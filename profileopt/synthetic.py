@@ -24,7 +24,6 @@ import math
 from typing import NamedTuple, Sequence
 
 import numpy as np
-import scipy.fft
 from numpy.typing import ArrayLike
 
 from .errors import InputError
@@ -153,6 +152,8 @@ def _unit_iso8608(n_samples: int, spacing_m: float, seed: int, n_min: float, n_m
     :func:`iso8608_variance_m2`. The cosine sum sum_k a_k cos(2 pi n_k s - phi_k) at
     s = j spacing is then one inverse real FFT: O(L log L) instead of O(K M).
     """
+    import scipy.fft  # only when a profile is synthesised: reading a route needs no SciPy
+
     n_fft = scipy.fft.next_fast_len(max(n_samples, math.ceil(8.0 / (n_min * spacing_m))), real=True)
     dn = 1.0 / (n_fft * spacing_m)
     k = np.arange(n_fft // 2 + 1, dtype=float)

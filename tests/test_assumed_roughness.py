@@ -15,7 +15,10 @@ import math
 import numpy as np
 import pytest
 
+from profileopt.assumed_roughness import AssumedRoughness
 from profileopt.errors import InputError
+from profileopt.io import read_route
+from profileopt.io.routes import route_metadata_lines
 from profileopt.roughness_classes import (detrending_gain, iso8608_expected_rms_m, iso8608_expected_variance_m2,
                                           iso8608_ri)
 from profileopt.synthetic import ISO8608_GD0_M3, iso8608_profile, iso8608_variance_m2
@@ -107,3 +110,61 @@ def test_unknown_class_is_one_line(bad) -> None:
 def test_bad_window_is_refused(window_m: float) -> None:
     with pytest.raises(InputError, match="window_m"):
         iso8608_expected_rms_m("C", window_m=window_m)
+
+
+# --- the assumed roughness of a route -------------------------------------------------------
+
+
+
+def test_assumed_roughness_gives_the_class_ri_or_the_given_one() -> None:
+    by_class = AssumedRoughness(road_class="d")
+    assert by_class.road_class == "D" and by_class.label == "ISO 8608 class D"
+    assert by_class.ri_for(clearance_m=0.1, window_m=5.0) == iso8608_ri("D", window_m=5.0, clearance_m=0.1)
+    given = AssumedRoughness(ri=0.05)
+    assert given.label == "RI 0.05 given"
+    assert given.ri_for(clearance_m=0.3, window_m=2.0) == 0.05
+
+
+@pytest.mark.parametrize("fields", [{}, {"road_class": "C", "ri": 0.1}, {"road_class": "Z"}, {"ri": -0.01},
+                                    {"ri": math.nan}, {"ri": math.inf}, {"ri": 2.5}, {"ri": "lots"}])
+def test_assumed_roughness_refuses_bad_fields_in_one_line(fields: dict) -> None:
+    with pytest.raises(InputError) as info:
+        AssumedRoughness(**fields)
+    assert "\n" not in str(info.value)
+
+
+def write_route(tmp_path, comments: str, name: str = "route.csv"):
+    path = tmp_path / name
+    s = np.arange(0.0, 20.0001, 0.05)
+    path.write_text(comments + "s,z\n" + "".join(f"{a:.2f},{0.01 * a:.4f}\n" for a in s), encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize("assumed", [AssumedRoughness(road_class="C"), AssumedRoughness(ri=0.0123456789012),
+                                     AssumedRoughness(ri=0.0)])
+def test_route_files_carry_the_assumed_roughness_both_ways(tmp_path, assumed) -> None:
+    lines = route_metadata_lines(assumed)
+    assert len(lines) == 1
+    path = write_route(tmp_path, "# from a DEM\n" + "\n".join(lines) + "\n# another comment\n")
+    assert read_route(path).assumed_roughness == assumed
+
+
+def test_route_file_reads_the_documented_spellings(tmp_path) -> None:
+    assert read_route(write_route(tmp_path, "#roughness_class=e\n")).assumed_roughness == AssumedRoughness(road_class="E")
+    assert read_route(write_route(tmp_path, "# roughness_ri = 0.05\n")).assumed_roughness == AssumedRoughness(ri=0.05)
+    assert read_route(write_route(tmp_path, "# roughness classes are not measured here\n")).assumed_roughness is None
+    assert route_metadata_lines(None) == []
+
+
+@pytest.mark.parametrize("comments, line, says", [
+    ("# a\n# roughness_class = Q\n", 2, "roughness_class = 'Q'"),
+    ("# roughness_ri = 0.05 m\n", 1, "roughness_ri = '0.05 m'"),
+    ("# roughness_ri = 20\n", 1, "roughness_ri = '20'"),
+    ("# roughness_class = C\n# roughness_ri = 0.1\n", 2, "a second roughness line"),
+])
+def test_bad_roughness_lines_are_one_line_naming_file_and_line(tmp_path, comments, line, says) -> None:
+    path = write_route(tmp_path, comments)
+    with pytest.raises(InputError) as info:
+        read_route(path)
+    message = str(info.value)
+    assert message.startswith(f"{path}: line {line}: ") and says in message and "\n" not in message
