@@ -11,6 +11,7 @@ import dataclasses
 
 import numpy as np
 
+from .assumed_roughness import AssumedRoughness
 from .errors import InputError
 
 __all__ = ["Route", "validate_route_arrays", "MAX_ABS_ELEVATION_M", "MAX_ELEVATION_STEP_M", "MIN_SPEED_LIMIT_MPS"]
@@ -44,6 +45,10 @@ class Route:
         The path in the horizontal plane (m), for a route given as ``x,y,z``: its turns
         (:mod:`profileopt.geometry`). None for a route given as ``s,z`` (a straight path).
         Given, s must be the cumulative horizontal distance between the points.
+    assumed_roughness : AssumedRoughness or None
+        The roughness assumed for the route (an ISO 8608 class or an RI) when its elevation
+        cannot measure it (a DEM or GPS profile): every roughness window then has that RI
+        (docs/paper-notes.md, "Assumed roughness: ISO 8608 classes"). None: measured from z.
     """
 
     s_m: np.ndarray
@@ -53,8 +58,12 @@ class Route:
     notes: tuple[str, ...] = ()
     x_m: np.ndarray | None = None
     y_m: np.ndarray | None = None
+    assumed_roughness: AssumedRoughness | None = None
 
     def __post_init__(self) -> None:
+        if self.assumed_roughness is not None and not isinstance(self.assumed_roughness, AssumedRoughness):
+            raise InputError(f"{self.source}: assumed_roughness must be an AssumedRoughness (or None), got "
+                             f"{type(self.assumed_roughness).__name__}")
         s = np.ascontiguousarray(self.s_m, dtype=float)
         z = np.ascontiguousarray(self.z_m, dtype=float)
         object.__setattr__(self, "s_m", s)

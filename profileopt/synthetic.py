@@ -24,7 +24,6 @@ import math
 from typing import NamedTuple, Sequence
 
 import numpy as np
-import scipy.fft
 from numpy.typing import ArrayLike
 
 from .errors import InputError
@@ -33,6 +32,8 @@ __all__ = [
     "ElevationProfile",
     "ISO8608_GD0_M3",
     "ISO8608_N0_CPM",
+    "ISO8608_N_MIN_CPM",
+    "ISO8608_N_MAX_CPM",
     "iso8608_variance_m2",
     "iso8608_profile",
     "iso8608_sections",
@@ -43,6 +44,13 @@ __all__ = [
 
 #: Reference spatial frequency n0 of ISO 8608 (cycles/m).
 ISO8608_N0_CPM = 0.1
+
+#: Default spatial-frequency band of the synthesised profiles (cycles/m): waves from about
+#: 90 m (longer ones are grade, which the roughness windows detrend away) down to 0.25 m
+#: (shorter ones a wheel bridges; sampled routes resolve them at spacings below 0.125 m).
+#: The expected RI of a class (:mod:`profileopt.roughness_classes`) integrates the same band.
+ISO8608_N_MIN_CPM = 0.011
+ISO8608_N_MAX_CPM = 4.0
 
 #: Geometric-mean displacement PSD Gd(n0) of each ISO 8608 class (m^3 = m^2 / (cycles/m)).
 #: Class limits are a factor 2 either side (docs/paper-notes.md).
@@ -144,6 +152,8 @@ def _unit_iso8608(n_samples: int, spacing_m: float, seed: int, n_min: float, n_m
     :func:`iso8608_variance_m2`. The cosine sum sum_k a_k cos(2 pi n_k s - phi_k) at
     s = j spacing is then one inverse real FFT: O(L log L) instead of O(K M).
     """
+    import scipy.fft  # only when a profile is synthesised: reading a route needs no SciPy
+
     n_fft = scipy.fft.next_fast_len(max(n_samples, math.ceil(8.0 / (n_min * spacing_m))), real=True)
     dn = 1.0 / (n_fft * spacing_m)
     k = np.arange(n_fft // 2 + 1, dtype=float)
@@ -167,8 +177,8 @@ def iso8608_profile(
     length_m: float,
     spacing_m: float,
     seed: int,
-    n_min_cpm: float = 0.011,
-    n_max_cpm: float = 4.0,
+    n_min_cpm: float = ISO8608_N_MIN_CPM,
+    n_max_cpm: float = ISO8608_N_MAX_CPM,
 ) -> ElevationProfile:
     """A random road profile of one ISO 8608 class.
 
@@ -222,8 +232,8 @@ def iso8608_sections(
     spacing_m: float,
     seed: int,
     transition_m: float = 10.0,
-    n_min_cpm: float = 0.011,
-    n_max_cpm: float = 4.0,
+    n_min_cpm: float = ISO8608_N_MIN_CPM,
+    n_max_cpm: float = ISO8608_N_MAX_CPM,
 ) -> ElevationProfile:
     """A random profile whose ISO 8608 class changes along it, without steps at the joins.
 

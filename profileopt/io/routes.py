@@ -12,19 +12,39 @@ A route file is a CSV with a header row; lines starting with ``#`` are comments.
 The unit-suffixed names ``s_m``, ``x_m``, ``y_m``, ``z_m`` and ``speed_limit_mps`` are
 accepted as well. Other columns are ignored with a note. Every problem is reported as one
 :class:`~profileopt.errors.InputError` line naming the file, the line and what to fix.
+
+One comment line may record an assumed roughness (issue 12), for a route whose elevation
+comes from a terrain model too coarse to measure wheel-scale roughness:
+
+``# roughness_class = C``
+    an ISO 8608 class, one letter A to H (case-insensitive): every roughness window gets
+    the class's expected RI (:mod:`profileopt.roughness_classes`), or
+``# roughness_ri = 0.05``
+    the RI (dimensionless, 0 to :data:`~profileopt.assumed_roughness.MAX_ASSUMED_RI`) of
+    every roughness window.
+
+Blanks around ``=`` are optional. At most one such line; a bad value or a second line is
+one InputError naming the file and the line. Every other ``#`` line stays a comment.
+:func:`route_metadata_lines` writes the line.
 """
 
 from __future__ import annotations
 
 import os
+import re
 
 import numpy as np
 
+from ..assumed_roughness import MAX_ASSUMED_RI, AssumedRoughness
 from ..errors import InputError
 from ..route import Route, validate_route_arrays
-from .table import read_table
+from .table import Table, read_table
 
-__all__ = ["read_route", "ROUTE_COLUMN_ALIASES"]
+__all__ = ["read_route", "route_metadata_lines", "ROUTE_COLUMN_ALIASES", "ROUGHNESS_KEYS"]
+
+#: The keys of a route file's assumed-roughness comment line and the AssumedRoughness field each sets.
+ROUGHNESS_KEYS = {"roughness_class": "road_class", "roughness_ri": "ri"}
+_ROUGHNESS_LINE = re.compile(r"#\s*(roughness_class|roughness_ri)\s*=(.*)$", re.IGNORECASE)
 
 #: Accepted column names (lower case) and the quantity each one gives.
 ROUTE_COLUMN_ALIASES = {
@@ -96,4 +116,78 @@ def read_route(path: str | os.PathLike) -> Route:
                              "remove duplicate points")
         s = np.concatenate([[0.0], np.cumsum(step)])
     validate_route_arrays(name, s, z, limit, where, "line")
-    return Route(s_m=s, z_m=z, speed_limit_mps=limit, source=name, notes=notes, x_m=x, y_m=y)
+    return Route(s_m=s, z_m=z, speed_limit_mps=limit, source=name, notes=notes, x_m=x, y_m=y,
+                 assumed_roughness=_assumed_roughness(table))
+
+
+def _assumed_roughness(table: Table) -> AssumedRoughness | None:
+    """The assumed roughness a route file's comment lines record (module docstring), if any.
+
+    Parameters
+    ----------
+    table : Table
+        The route file, read by :func:`~profileopt.io.table.read_table`.
+
+    Returns
+    -------
+    AssumedRoughness or None
+
+    Raises
+    ------
+    InputError
+        A second roughness line, or a value that is not a class A to H (``roughness_class``)
+        or a number in range (``roughness_ri``); the message names the file and the line.
+    """
+    found: AssumedRoughness | None = None
+    first = 0
+    for number, line in table.comments:
+        match = _ROUGHNESS_LINE.match(line)
+        if match is None:
+            continue
+        key, value = match.group(1).lower(), match.group(2).strip()
+        if found is not None:
+            raise InputError(f"{table.source}: line {number}: a second roughness line ('{line}'; the first is line "
+                             f"{first}); keep one of them")
+        try:
+            found = AssumedRoughness(**{ROUGHNESS_KEYS[key]: value if key == "roughness_class" else _number(value)})
+        except InputError as exc:
+            fix = ("give one ISO 8608 class letter A to H, e.g. '# roughness_class = C'" if key == "roughness_class"
+                   else f"give the RI (RMS roughness / ground clearance) as a number in [0, {MAX_ASSUMED_RI:g}], "
+                   "e.g. '# roughness_ri = 0.05'")
+            raise InputError(f"{table.source}: line {number}: {key} = '{value}' is not usable "
+                             f"({_reason(exc)}); {fix}") from None
+        first = number
+    return found
+
+
+def _number(text: str) -> float | str:
+    try:
+        return float(text)
+    except ValueError:
+        return text  # AssumedRoughness says it is not a number
+
+
+def _reason(exc: InputError) -> str:
+    """The part of an AssumedRoughness message that says what is wrong."""
+    return str(exc).removeprefix("assumed roughness: ").split("; ")[0]
+
+
+def route_metadata_lines(assumed: AssumedRoughness | None) -> list[str]:
+    """The comment lines a route file needs to carry ``assumed`` (none for None).
+
+    Parameters
+    ----------
+    assumed : AssumedRoughness or None
+        The route's assumed roughness.
+
+    Returns
+    -------
+    list of str
+        ``["# roughness_class = C"]``, ``["# roughness_ri = 0.05"]`` (the RI's shortest
+        repr, read back to the same float) or ``[]``; without line ends.
+    """
+    if assumed is None:
+        return []
+    if assumed.road_class is not None:
+        return [f"# roughness_class = {assumed.road_class}"]
+    return [f"# roughness_ri = {assumed.ri!r}"]
