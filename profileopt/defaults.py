@@ -7,7 +7,8 @@ them from here, so ``profileopt --help`` needs none of the numerical packages.
 from __future__ import annotations
 
 __all__ = ["MODEL_KEYS", "DEFAULT_MODEL", "DEFAULT_SMOOTHING", "DEFAULT_SEGMENT_LENGTH_M", "DEFAULT_ROUGHNESS_WINDOW_M",
-           "DEFAULT_PATH_TOLERANCE_M", "PLAN_BANDS", "MAX_C_BYTES"]
+           "DEFAULT_PATH_TOLERANCE_M", "PLAN_BANDS", "MAX_C_BYTES", "DEFAULT_TRACK_SPACING_M",
+           "DEFAULT_CORRIDOR_M", "DEFAULT_MAX_GAP_M", "MIN_POINTS_PER_BIN"]
 
 #: The four force models, in the paper's order (keys of :data:`profileopt.forces.MODELS`).
 MODEL_KEYS = ("prev_bem", "iecm", "sbem_ef", "sbem_tf")
@@ -28,6 +29,27 @@ DEFAULT_ROUGHNESS_WINDOW_M = 5.0
 #: (decimetres), so the smoothed path is one the vehicle can follow. A consumer GPS track
 #: (metres of noise) needs a tolerance of its own noise (README, "Turns and hills").
 DEFAULT_PATH_TOLERANCE_M = 0.1
+#: Spacing (m) of the route samples taken along a track over a terrain map
+#: (:func:`profileopt.ground_track.route_from_track`): half the 0.1 m wheel radius of the
+#: bundled vehicles. Eq. (2) saturates a step's width at the wheel radius r, so the force
+#: models see no detail narrower than r; two samples per r resolve every feature they do
+#: see (the KRC ride courses are measured at this spacing too). A vehicle with larger
+#: wheels may use r / 2.
+DEFAULT_TRACK_SPACING_M = 0.05
+#: Half-width (m) of the strip around the wheel path whose ground points give each sample's
+#: elevation: the strip (0.3 m) is about the width of one ATV tyre, the ground one tyre rolls
+#: on. Its median moves with a rock under half the tyre, not with a stray point (noise, a
+#: twig). A wider strip averages ground the tyre does not touch; a narrower one needs a
+#: denser cloud (:data:`MIN_POINTS_PER_BIN`).
+DEFAULT_CORRIDOR_M = 0.15
+#: Longest run (m) of samples with no ground point that is filled by a straight line
+#: (and reported); a longer one is refused with its position. Twice the bundled wheels'
+#: radius: a hole shorter than the wheel's diameter cannot swallow the wheel.
+DEFAULT_MAX_GAP_M = 0.2
+#: Ground points a sample's bin must expect on average (density x strip width x spacing)
+#: for the cloud to measure roughness: with Poisson-scattered points, 3 expected leave 5 %
+#: of the bins empty (e^-3), which the gap filling bridges.
+MIN_POINTS_PER_BIN = 3.0
 #: The values of :func:`profileopt.plan`'s ``band``: every band of each segment (chosen over
 #: the whole route), only the band from rest, or only the highest band.
 PLAN_BANDS = ("all", "first", "largest")

@@ -32,15 +32,17 @@ from __future__ import annotations
 
 import os
 import re
+from typing import Sequence
 
 import numpy as np
 
 from ..assumed_roughness import MAX_ASSUMED_RI, AssumedRoughness
 from ..errors import InputError
 from ..route import Route, validate_route_arrays
+from .atomic import atomic_write
 from .table import Table, read_table
 
-__all__ = ["read_route", "route_metadata_lines", "ROUTE_COLUMN_ALIASES", "ROUGHNESS_KEYS"]
+__all__ = ["read_route", "write_route", "route_metadata_lines", "ROUTE_COLUMN_ALIASES", "ROUGHNESS_KEYS"]
 
 #: The keys of a route file's assumed-roughness comment line and the AssumedRoughness field each sets.
 ROUGHNESS_KEYS = {"roughness_class": "road_class", "roughness_ri": "ri"}
@@ -191,3 +193,36 @@ def route_metadata_lines(assumed: AssumedRoughness | None) -> list[str]:
     if assumed.road_class is not None:
         return [f"# roughness_class = {assumed.road_class}"]
     return [f"# roughness_ri = {assumed.ri!r}"]
+
+
+def write_route(route: Route, path: str | os.PathLike, *, comments: Sequence[str] = ()) -> None:
+    """Write a route CSV atomically, in the form :func:`read_route` reads back exactly.
+
+    Columns ``x_m,y_m,z_m`` (a route with a path in the plane) or ``s_m,z_m``, then
+    ``speed_limit_mps`` if the route has one; each number as the shortest decimal that reads
+    back as the same float, so that the route read back is this one, float for float. The comment lines come first, each
+    prefixed with ``# ``, then the assumed roughness's metadata line, if any.
+
+    Parameters
+    ----------
+    route : Route
+        The route to write.
+    path : str or os.PathLike
+        The output file; it appears only when the whole file is written.
+    comments : sequence of str, default ()
+        Lines recording where the route came from (sources, CRS, what was done), without
+        the ``#``; each must be a single line.
+    """
+    names = ["x_m", "y_m", "z_m"] if route.x_m is not None else ["s_m", "z_m"]
+    columns = [getattr(route, name) for name in names]
+    if route.speed_limit_mps is not None:
+        names.append("speed_limit_mps")
+        columns.append(route.speed_limit_mps)
+    lines = [f"# {line}" for line in comments]
+    lines += route_metadata_lines(route.assumed_roughness)
+    with atomic_write(path) as handle:
+        for line in lines:
+            handle.write(line.replace("\n", " ") + "\n")
+        handle.write(",".join(names) + "\n")
+        # repr: the shortest decimal that reads back as the same float (300.437, not 300.43700000000001)
+        handle.writelines(",".join(map(repr, row)) + "\n" for row in np.column_stack(columns).tolist())
