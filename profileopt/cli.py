@@ -39,10 +39,12 @@ _COMMANDS: dict[str, tuple[str, Callable[[argparse.Namespace], int]]] = {}
 #: file's key (``key 'max_jerk_mps3'`` of a vehicle file) and stays as it is.
 API_FLAGS = {"segment_length_m": "--segment-length", "roughness_window_m": "--roughness-window",
              "path_tolerance_m": "--path-tolerance", "v0_mps": "--v0",
-             "vend_mps": "--vend", "n_stages": "--stages"}
+             "vend_mps": "--vend", "n_stages": "--stages", "spacing_m": "--spacing", "corridor_m": "--corridor",
+             "max_gap_m": "--max-gap", "track_crs": "--track-crs", "terrain_crs": "--terrain-crs",
+             "track_index": "--track-index", "roughness_class": "--roughness-class"}
 #: max_jerk_mps3 is a vehicle file's key too: only ``max_jerk_mps3 = ...`` is the option.
 API_FLAGS_ASSIGNED = {"model": "--model", "smoothing": "--smoothing", "method": "--method", "band": "--band",
-                      "max_jerk_mps3": "--max-jerk"}
+                      "max_jerk_mps3": "--max-jerk", "ri": "--ri"}
 _FLAG_PATTERN = re.compile(r"(?<![\w'])(" + "|".join(API_FLAGS) + r")(?![\w'])")
 _ASSIGNED_PATTERN = re.compile(r"(?<![\w.'-])(" + "|".join(API_FLAGS_ASSIGNED) + r")(?= = )")
 

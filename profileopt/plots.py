@@ -24,7 +24,8 @@ if TYPE_CHECKING:
     from .planning.result import Profile
     from .verification import Verification
 
-__all__ = ["profile_figure", "plot_profile", "verification_figure", "plot_verification", "plot_figure"]
+__all__ = ["profile_figure", "plot_profile", "verification_figure", "plot_verification", "plot_figure",
+           "BINDING_COLOURS"]
 
 
 def profile_figure(profile: "Profile", *, title: str | None = None, route: str | None = None,
@@ -135,7 +136,7 @@ def _cap_sources(profile: "Profile") -> list[str]:
 
 
 #: A colour per value of the binding column (tab10), so every plan shows each limit alike.
-_BINDING_COLOURS = {"force": "tab:red", "speed_limit": "tab:gray", "top_speed": "tab:olive", "lateral": "tab:purple",
+BINDING_COLOURS = {"force": "tab:red", "speed_limit": "tab:gray", "top_speed": "tab:olive", "lateral": "tab:purple",
                     "friction": "tab:pink", "accel": "tab:green", "decel": "tab:orange", "power": "tab:brown",
                     "jerk": "tab:cyan", "boundary": "black"}
 
@@ -152,7 +153,7 @@ def _binding_panel(ax: object, s: np.ndarray, binding: np.ndarray) -> None:
     for row, name in enumerate(present):
         where = np.flatnonzero(binding == name)
         ax.broken_barh(list(zip(left[where], right[where] - left[where])), (row - 0.4, 0.8),
-                       color=_BINDING_COLOURS[name])
+                       color=BINDING_COLOURS[name])
     ax.set_yticks(range(len(present)), present, fontsize="small")
     ax.set_ylim(-0.6, len(present) - 0.4)
     ax.invert_yaxis()

@@ -10,9 +10,11 @@ from pathlib import Path
 from ..cli import command
 from ..defaults import (DEFAULT_MODEL, DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M,
                         DEFAULT_SEGMENT_LENGTH_M, DEFAULT_SMOOTHING, MODEL_KEYS, PLAN_BANDS)
+from ..errors import InputError
 from ..io.atomic import STDOUT, OutputSet
 from ..vehicle import load_vehicle
 from ._paths import vehicle_input
+from ._track import add_track_arguments, assumed_roughness, is_track, track_inputs, track_route
 
 
 class _DeprecatedAlias(argparse.Action):
@@ -32,7 +34,8 @@ def _float(text: str) -> float:
 
 
 def _arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("route", help="route CSV: columns s,z or x,y,z (m), optional speed_limit (m/s)")
+    parser.add_argument("route", help="route CSV: columns s,z or x,y,z (m), optional speed_limit (m/s); or a track "
+                                      "(GPX, GeoJSON, CSV of x,y with --terrain), sampled as 'profileopt route' does")
     parser.add_argument("--vehicle", default="atv", metavar="NAME_OR_TOML",
                         help="bundled vehicle name or .toml file (default: atv)")
     parser.add_argument("-o", "--output", metavar="CSV",
@@ -67,18 +70,29 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument("--plot", metavar="PNG",
                         help="draw speed, allowable speeds, RI, curvature, grade and the binding limit along the route")
+    parser.add_argument("--map", metavar="PNG",
+                        help="draw the route over its terrain, coloured by the planned speed, marking where each "
+                             "limit holds it (an x,y route or a track)")
+    add_track_arguments(parser)
 
 
 def _run(args: argparse.Namespace) -> int:
     # first, before any work: every output checked (none may be an input, nor both the same
     # file); then written together, all or none
-    outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot)],
-                        inputs=[args.route, vehicle_input(args.vehicle)])
+    outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot), ("--map", args.map)],
+                        inputs=[args.route, vehicle_input(args.vehicle), *track_inputs(args)])
     vehicle = load_vehicle(args.vehicle)
-    from ..io.routes import read_route  # the numerical packages: imported only when planning
-    from ..planning import plan
+    from ..planning import plan  # the numerical packages: imported only when planning
 
-    route = read_route(args.route)
+    made = None
+    if is_track(args.route, args):
+        made = track_route(args.route, args, "profileopt plan")
+        route = made.route
+    else:
+        route = _route_file(args)
+    if args.map is not None and route.x_m is None:
+        raise InputError(f"{args.route}: --map draws a route's x,y (or a track's); this route has only s,z: "
+                         "drop --map or give an x,y,z route")
     for note in route.notes:
         print(f"profileopt plan: note: {note}", file=sys.stderr)
     profile = plan(
@@ -95,6 +109,10 @@ def _run(args: argparse.Namespace) -> int:
 
             plot_profile(profile, args.plot, route=Path(args.route).name,
                          vehicle=Path(vehicle.name).stem if vehicle.name else None)
+        if args.map is not None:
+            from ..maps import plot_plan_map
+
+            plot_plan_map(profile, made if made is not None else _plain_map(route), args.map)
     for note in profile.notes:
         print(f"profileopt plan: note: {note}", file=sys.stderr)
     summary = profile.summary()
@@ -104,6 +122,33 @@ def _run(args: argparse.Namespace) -> int:
     else:
         print(_human(summary, args), file=out)
     return 0
+
+
+def _route_file(args: argparse.Namespace):  # noqa: ANN202  (Route)
+    """A route CSV, with the roughness the options assume, if any, in place of the file's."""
+    import dataclasses
+
+    from ..io.routes import read_route
+
+    route = read_route(args.route)
+    assumed = assumed_roughness(args)
+    if assumed is not None:
+        if route.assumed_roughness is not None:
+            print(f"profileopt plan: note: {args.route}: its assumed roughness ({route.assumed_roughness.label}) is "
+                  f"replaced by {assumed.label}", file=sys.stderr)
+        route = dataclasses.replace(route, assumed_roughness=assumed)
+    return route
+
+
+def _plain_map(route):  # noqa: ANN001, ANN202
+    """A map without terrain of a route file's x, y."""
+    import numpy as np
+
+    from ..ground_track import TrackRoute
+
+    return TrackRoute(route=route, crs_name="", track_x_m=route.x_m, track_y_m=route.y_m, terrain_kind="route file",
+                      roughness_measured=route.assumed_roughness is None, density_per_m2=None, resolution="",
+                      gaps_m=np.zeros((0, 2)), comments=(), notes=())
 
 
 def _ratio(m: dict) -> str:
