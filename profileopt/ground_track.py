@@ -15,7 +15,8 @@ returns the :class:`~profileopt.route.Route` the planner reads:
      median (a stray point, a twig or a multipath echo does not move it). An unclassified
      cloud gives the 10th percentile instead (vegetation lies above the ground), with a note;
    - DEM and OpenCRG: bilinear interpolation between the cells;
-   - no terrain: the track's own elevations, linear between its points.
+   - no terrain: the track's own elevations, smoothed over about 50 m
+     (:func:`smooth_track_elevations`).
 
 3. Resolution. Roughness at wheel scale needs the terrain resolved at the spacing: a cloud
    with :data:`~profileopt.defaults.MIN_POINTS_PER_BIN` ground points expected per bin
@@ -45,13 +46,19 @@ from .route import Route
 if TYPE_CHECKING:
     from .io.tracks import Track
 
-__all__ = ["TrackRoute", "route_from_track", "resample_polyline", "corridor_bins", "UNCLASSIFIED_QUANTILE"]
+__all__ = ["TrackRoute", "route_from_track", "resample_polyline", "corridor_bins", "smooth_track_elevations",
+           "UNCLASSIFIED_QUANTILE", "GPS_ELEVATION_SCALE_M"]
 
 #: Quantile of the points in a bin taken as the ground when the cloud is not classified:
 #: vegetation and other objects lie above the ground, so a low quantile, not the median.
 #: (Ground below the 10th percentile is not found: classify the cloud first, e.g. with
 #: PDAL's filters.smrf, for a trustworthy profile.)
 UNCLASSIFIED_QUANTILE = 0.1
+#: Length (m) over which a GPS track's own elevations are smoothed (:func:`smooth_track_elevations`):
+#: a consumer GPS's elevation errs by metres from fix to fix, about 10 m apart, so a few fixes
+#: (50 m) are averaged; a hill's grade over 50 m survives, a 5 m error no longer reads as a 50 %
+#: grade over the 10 m that the planner measures grades on.
+GPS_ELEVATION_SCALE_M = 50.0
 #: ASPRS class codes of ground (LAS 1.4 R15, Table 17).
 _GROUND = 2
 
@@ -170,6 +177,36 @@ def corridor_bins(points_xy_m: np.ndarray, stations_xy_m: np.ndarray, corridor_m
     across = offset[:, 0] * tangent[nearest, 1] - offset[:, 1] * tangent[nearest, 0]
     keep = (np.abs(across) <= corridor_m) & (np.abs(along) <= half * (1 + 1e-12))
     return inside[keep], nearest[keep]
+
+
+def smooth_track_elevations(s_m: np.ndarray, z_m: np.ndarray, *, scale_m: float = GPS_ELEVATION_SCALE_M) -> Any:
+    """A smooth elevation curve through a GPS track's own elevations (noisy by metres).
+
+    A smoothing spline of z over s (:func:`scipy.interpolate.make_smoothing_spline`) with
+    lam = (n / L) scale^4, which smooths over about ``scale_m``. A reading equal to the one
+    before it (to every digit the log keeps) is a frozen altimeter, not a measurement: it
+    gets a weight of 1e-6.
+
+    Parameters
+    ----------
+    s_m : numpy.ndarray, shape (K,)
+        Distance along the track of its points (m), strictly increasing, K >= 5.
+    z_m : numpy.ndarray, shape (K,)
+        Their elevations (m).
+    scale_m : float, default :data:`GPS_ELEVATION_SCALE_M`
+        The length (m) over which the elevations are smoothed.
+
+    Returns
+    -------
+    callable
+        z(s) (m) for s (m) along the track: ``curve(s)``.
+    """
+    from scipy.interpolate import make_smoothing_spline
+
+    s = np.asarray(s_m, dtype=float)
+    z = np.asarray(z_m, dtype=float)
+    frozen = np.concatenate([[False], np.diff(z) == 0])
+    return make_smoothing_spline(s, z, w=np.where(frozen, 1e-6, 1.0), lam=s.size / s[-1] * scale_m**4)
 
 
 def _bin_quantile(bins: np.ndarray, z: np.ndarray, count: int, quantile: float) -> tuple[np.ndarray, np.ndarray]:
@@ -315,11 +352,17 @@ def route_from_track(track: "Track", terrain: Any = None, *, spacing_m: float = 
             raise InputError(f"{track.source}: the track has no elevations (GPX <ele>, a z column); give a terrain "
                              "map (--terrain) for the ground's elevation")
         along = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(tx), np.diff(ty)))])
-        z = np.interp(s, along, track.z_m)
+        if tx.size >= 5:
+            z = smooth_track_elevations(along, track.z_m)(s)
+            how = (f"smoothed over about {GPS_ELEVATION_SCALE_M:g} m (a spline; GPS elevations are noisy by metres; "
+                   "repeated readings, a frozen altimeter, weigh 1e-6)")
+        else:
+            z = np.interp(s, along, track.z_m)
+            how = "linear between them (too few to smooth)"
         measured = False
         resolution = (f"the track's own elevations, one every {along[-1] / max(tx.size - 1, 1):.3g} m: "
                       "they measure the grade, not the ground's roughness")
-        comments.append(f"z: the track's own elevations, linear between its points (every {s[1] - s[0]:g} m)")
+        comments.append(f"z: the track's own elevations, {how}")
     elif hasattr(terrain, "classification"):
         kind = "point cloud"
         z, measured, density, resolution, more = _sample_cloud(terrain, terrain_source, s, x, y, spacing_m,
@@ -414,14 +457,19 @@ def _sample_cloud(cloud: Any, source: str, s: np.ndarray, x: np.ndarray, y: np.n
         return z, True, density, resolution, comments
     # too sparse for roughness, which is assumed: the ground's shape from its triangulation
     from scipy.interpolate import LinearNDInterpolator
+    from scipy.spatial import cKDTree
 
+    # the ground points within a few point spacings (at least 5 m) of the track: enough to
+    # surround every sample with triangles
+    px, py, pz = (cloud.x_m[ground], cloud.y_m[ground], cloud.z_m[ground])
     spread = 3.0 / math.sqrt(max(pz.size / max(np.ptp(px) * np.ptp(py), 1e-9), 1e-9))
-    wide = corridor_bins(np.column_stack([px, py]), stations, max(spread, 5.0))[0]
+    distance, _ = cKDTree(stations).query(np.column_stack([px, py]), distance_upper_bound=max(spread, 5.0))
+    wide = np.flatnonzero(np.isfinite(distance))
     if wide.size < 3:
         return np.full(s.size, np.nan), False, density, resolution, []
     surface = LinearNDInterpolator(np.column_stack([px[wide], py[wide]]), pz[wide])
     z = surface(x, y)
-    comments = [f"z: linear over the triangulation of the {which} (too sparse for roughness: {resolution})"]
+    comments = [f"z: linear over the triangulation of the {which} within {max(spread, 5.0):.3g} m of the track"]
     return z, False, density, resolution, comments
 
 

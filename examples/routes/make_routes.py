@@ -86,10 +86,10 @@ from pathlib import Path
 from typing import Sequence
 
 import numpy as np
-from scipy.interpolate import make_smoothing_spline
 
 from profileopt import InputError, load_vehicle, speed_bands
 from profileopt.geometry import path_grade_rad, smooth_path
+from profileopt.ground_track import smooth_track_elevations
 from profileopt.io import atomic_write, read_opencrg, read_xy_profile
 from profileopt.synthetic import iso8608_profile, iso8608_sections, step, washboard
 from profileopt.stations import segment_samples
@@ -351,9 +351,8 @@ def mojstrovka(real: Path) -> BundledRoute:
     # first of such a run is a measurement, the others get a weight of 1e-6 in the fit below.
     frozen = np.concatenate([[False], np.diff(ele) == 0])
     # GPS elevations are noisy by metres: a smoothing spline of z over s, lam = (n / L) 50^4,
-    # smooths over about 50 m (5 points)
-    z_spline = make_smoothing_spline(s, ele, w=np.where(frozen, 1e-6, 1.0),
-                                     lam=s.size / s[-1] * MOJSTROVKA_Z_SCALE_M**4)
+    # smooths over about 50 m (5 points), the frozen readings weighted 1e-6 (as profileopt route does)
+    z_spline = smooth_track_elevations(s, ele, scale_m=MOJSTROVKA_Z_SCALE_M)
     deviation = (z_spline(s) - ele)[~frozen]
     # each GPS segment cut into equal pieces of at most 0.5 m: the GPS points are kept, so the
     # chord lengths that read_route sums are the track's horizontal length and z(s) is kept

@@ -182,8 +182,9 @@ def _human(summary: dict, args: argparse.Namespace) -> str:
     ]
     if args.output is not None:
         lines.append("wrote the profile to standard output" if args.output == STDOUT else f"wrote {args.output}")
-    if args.plot is not None:
-        lines.append(f"wrote {args.plot}")
+    for picture in (args.plot, args.map):
+        if picture is not None:
+            lines.append(f"wrote {picture}")
     return "\n".join(lines)
 
 

@@ -1,0 +1,192 @@
+"""``profileopt route`` and ``profileopt plan TRACK --terrain`` on real files and on bad
+input (issue 12).
+
+Reference values: the KRC course's own profile (profileopt.io.read_opencrg, tested against
+the file's header in tests/test_synthetic.py), the data README's densities, and plans of the
+same route read back from its file.
+"""
+
+from __future__ import annotations
+
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from profileopt.cli import main
+from profileopt.io import read_opencrg, read_route
+
+from conftest import PROFILEOPT, REAL_DATA, ROOT
+from geo_data import cloud_points, track_utm_m, write_geotiff, write_gpx, write_laz
+
+pytest.importorskip("laspy")
+pytest.importorskip("rasterio")
+
+HEXBIN_LAZ = REAL_DATA / "pdal-lidar" / "hexbin-crop.laz"
+HEXBIN_LAS = REAL_DATA / "pdal-lidar" / "hexbin-crop.las"
+HEXBIN_TRACK = ROOT / "examples" / "geo" / "hexbin-track.gpx"
+GPX = REAL_DATA / "gpx-tracks"
+KRC_1IN = REAL_DATA / "krc-rms-courses" / "detrended_rms_course_1in.crg"
+
+
+def _run(args: list[str], capsys: pytest.CaptureFixture) -> tuple[int, str, str]:
+    status = main(args)
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def _one_line_error(status: int, err: str, *words: str) -> None:
+    assert status == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in err, err
+    for word in words:
+        assert word in lines[0], lines[0]
+
+
+# ------------------------------------------------------------------ real files
+
+
+def test_the_laz_is_the_las_compressed() -> None:
+    # data/real/pdal-lidar/hexbin-crop.laz: the same points as PDAL's LAS, compressed by laspy + lazrs
+    from profileopt.io import read_las
+
+    las, laz = read_las(HEXBIN_LAS), read_las(HEXBIN_LAZ)
+    for name in ("x_m", "y_m", "z_m", "classification"):
+        np.testing.assert_array_equal(getattr(las, name), getattr(laz, name))
+
+
+def test_airborne_lidar_is_refused_for_roughness_then_planned_with_a_class(tmp_path: Path,
+                                                                          capsys: pytest.CaptureFixture) -> None:
+    out = tmp_path / "route.csv"
+    status, _, err = _run(["route", str(HEXBIN_TRACK), "--terrain", str(HEXBIN_LAZ), "-o", str(out)], capsys)
+    # about one ground point per m^2 (data README: airborne LiDAR), 200 needed at 0.05 m
+    _one_line_error(status, err, "hexbin-crop.laz", "ground points (class 2) per m^2", "needs 200 per m^2",
+                    "--roughness-class")
+    assert not out.exists()
+    status, text, err = _run(["route", str(HEXBIN_TRACK), "--terrain", str(HEXBIN_LAZ), "-o", str(out),
+                              "--roughness-class", "c"], capsys)
+    assert status == 0, err
+    assert "EPSG:32642" in text and "assumed, ISO 8608 class C" in text
+    route = read_route(out)
+    assert route.assumed_roughness.road_class == "C"
+    # one step and two steps give the same plan: the file holds the route float for float
+    plans = []
+    for args in (["plan", str(out)],
+                 ["plan", str(HEXBIN_TRACK), "--terrain", str(HEXBIN_LAZ), "--roughness-class", "C"]):
+        profile = tmp_path / f"plan{len(plans)}.csv"
+        status, _, err = _run([*args, "--vehicle", "atv-low-range", "--path-tolerance", "2", "-o", str(profile)],
+                              capsys)
+        assert status == 0, err
+        plans.append(profile.read_text().splitlines()[1:])
+    assert plans[0] == plans[1]
+
+
+def test_a_real_gpx_track_alone_gives_a_route_with_an_assumed_class(tmp_path: Path,
+                                                                    capsys: pytest.CaptureFixture) -> None:
+    out = tmp_path / "mojstrovka.csv"
+    status, _, err = _run(["route", str(GPX / "Mojstrovka.gpx"), "-o", str(out)], capsys)
+    _one_line_error(status, err, "Mojstrovka.gpx", "track's own elevations", "--roughness-class")
+    status, text, err = _run(["route", str(GPX / "Mojstrovka.gpx"), "-o", str(out), "--roughness-class", "D"], capsys)
+    assert status == 0, err
+    route = read_route(out)
+    # the data README: 2.7 km, up from 1625 m to 2041 m (the bundled mojstrovka.csv agrees)
+    assert route.length_m == pytest.approx(2701, rel=0.01)
+    assert route.z_m.min() == pytest.approx(1625, abs=2) and route.z_m.max() == pytest.approx(2041, abs=2)
+    assert "UTM zone 33N" in text
+
+
+def test_a_gpx_file_of_two_drives_needs_track_index(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    out = tmp_path / "korita.csv"
+    status, _, err = _run(["route", str(GPX / "korita-zbevnica.gpx"), "-o", str(out), "--roughness-class", "C"],
+                          capsys)
+    _one_line_error(status, err, "korita-zbevnica.gpx", "--track-index")
+    assert not out.exists()
+    status, _, err = _run(["route", str(GPX / "korita-zbevnica.gpx"), "-o", str(out), "--roughness-class", "C",
+                           "--track-index", "1", "--spacing", "0.5"], capsys)
+    assert status == 0, err
+    assert read_route(out).length_m > 8000  # track 1: an 8.6 km loop (tests/test_geo_readers.py)
+
+
+def test_a_track_along_a_krc_course_reads_its_profile(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    course = read_opencrg(KRC_1IN)
+    track = tmp_path / "along.csv"
+    track.write_text("x_m,y_m\n0,0\n504.75,0\n")  # the course's reference line (its header)
+    out = tmp_path / "krc.csv"
+    status, _, err = _run(["route", str(track), "--terrain", str(KRC_1IN), "-o", str(out)], capsys)
+    assert status == 0, err
+    route = read_route(out)
+    # samples every 0.05 m on the reference line are the course's own rows (0.05 m apart):
+    # bilinear interpolation there returns the rows themselves
+    np.testing.assert_allclose(route.s_m, course.s_m, atol=1e-9)
+    np.testing.assert_allclose(route.z_m, course.z_m, atol=1e-6)
+    assert route.assumed_roughness is None
+
+
+# ------------------------------------------------------------------ bad input: one line, exit 2, nothing written
+
+
+@pytest.fixture(scope="module")
+def synthetic(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    folder = tmp_path_factory.mktemp("synthetic")
+    x, y, z, classes = cloud_points(seed=3)
+    return {"gpx": write_gpx(folder / "track.gpx", *track_utm_m(2.0)),
+            "laz": write_laz(folder / "ground.laz", x, y, z, classes),
+            "tif_no_crs": write_geotiff(folder / "nocrs.tif", cell_m=0.5, epsg=None)}
+
+
+def _bad(tmp_path: Path, synthetic: dict, case: str) -> tuple[list[str], tuple[str, ...]]:
+    gpx, laz = str(synthetic["gpx"]), str(synthetic["laz"])
+    if case == "outside":
+        tx, ty = track_utm_m(2.0)
+        far = write_gpx(tmp_path / "far.gpx", tx, ty + 3000.0)
+        return [str(far), "--terrain", laz], ("far.gpx", "outside the terrain")
+    if case == "unknown crs":
+        track = tmp_path / "t.csv"
+        track.write_text("x,y\n0,0\n10,0\n")
+        return [str(track), "--terrain", laz, "--track-crs", "EPSG:999999"], ("EPSG:999999", "--track-crs")
+    if case == "missing crs":
+        return [gpx, "--terrain", str(synthetic["tif_no_crs"])], ("nocrs.tif", "no CRS", "--terrain-crs")
+    if case == "empty gpx":
+        empty = tmp_path / "empty.gpx"
+        empty.write_text('<?xml version="1.0"?><gpx version="1.1" creator="t" '
+                         'xmlns="http://www.topografix.com/GPX/1/1"></gpx>')
+        return [str(empty), "--terrain", laz], ("empty.gpx",)
+    if case == "single point":
+        one = tmp_path / "one.gpx"
+        one.write_text('<?xml version="1.0"?><gpx version="1.1" creator="t" xmlns="http://www.topografix.com/GPX/1/1">'
+                       '<trk><trkseg><trkpt lat="46.0" lon="14.0"/></trkseg></trk></gpx>')
+        return [str(one), "--terrain", laz], ("one.gpx", "1 point")
+    if case == "truncated laz":
+        cut = tmp_path / "cut.laz"
+        cut.write_bytes(synthetic["laz"].read_bytes()[: synthetic["laz"].stat().st_size // 2])
+        return [gpx, "--terrain", str(cut)], ("cut.laz", "truncated")
+    if case == "duplicate points":
+        dup = tmp_path / "dup.gpx"
+        dup.write_text('<?xml version="1.0"?><gpx version="1.1" creator="t" xmlns="http://www.topografix.com/GPX/1/1">'
+                       '<trk><trkseg><trkpt lat="46.0" lon="14.0"/><trkpt lat="46.0" lon="14.0"/>'
+                       '<trkpt lat="46.001" lon="14.0"/></trkseg></trk></gpx>')
+        return [str(dup), "--terrain", laz], ("dup.gpx", "point 1", "repeats")
+    raise AssertionError(case)
+
+
+BAD_CASES = ["outside", "unknown crs", "missing crs", "empty gpx", "single point", "truncated laz", "duplicate points"]
+
+
+@pytest.mark.parametrize("case", BAD_CASES)
+def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path: Path, synthetic: dict, case: str,
+                                                          capsys: pytest.CaptureFixture) -> None:
+    args, words = _bad(tmp_path, synthetic, case)
+    out, plot = tmp_path / "route.csv", tmp_path / "route.png"
+    status, _, err = _run(["route", *args, "-o", str(out), "--plot", str(plot)], capsys)
+    _one_line_error(status, err, *words)
+    assert not out.exists() and not plot.exists()
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []  # no temporary file left
+
+
+def test_the_command_runs_as_a_program(tmp_path: Path, synthetic: dict) -> None:
+    out = tmp_path / "route.csv"
+    done = subprocess.run([*PROFILEOPT, "route", str(synthetic["gpx"]), "--terrain", str(synthetic["laz"]),
+                           "-o", str(out)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "roughness  measured" in done.stdout and out.exists()
