@@ -96,6 +96,34 @@ class AssumedRoughness:
             return float(self.ri)
         return iso8608_ri(self.road_class, window_m=window_m, clearance_m=clearance_m)
 
+    def realisation_band_cpm(self, s_m: ArrayLike) -> tuple[float, float]:
+        """The band of :meth:`realisation_m` at these samples (cycles/m): ISO8608_N_MIN_CPM to
+        the smaller of ISO8608_N_MAX_CPM and REALISATION_NYQUIST_SHARE / (2 d), d the median
+        sample spacing.
+
+        Parameters
+        ----------
+        s_m : array_like, shape (M,)
+            The route's distances (m), strictly increasing, M >= 2.
+
+        Returns
+        -------
+        n_min_cpm, n_max_cpm : float
+            The band (cycles/m).
+
+        Raises
+        ------
+        InputError
+            Samples so sparse (spacing above 0.9 / (2 ISO8608_N_MIN_CPM), 41 m) that no band
+            is left.
+        """
+        spacing = float(np.median(np.diff(np.asarray(s_m, dtype=float))))
+        n_max = min(ISO8608_N_MAX_CPM, REALISATION_NYQUIST_SHARE * 0.5 / spacing)
+        if not n_max > ISO8608_N_MIN_CPM:
+            raise InputError(f"the route's samples are {spacing:g} m apart: too sparse to carry any roughness "
+                             f"wave shorter than {1 / ISO8608_N_MIN_CPM:.0f} m; resample the route more densely")
+        return ISO8608_N_MIN_CPM, n_max
+
     def realisation_m(self, s_m: ArrayLike, *, clearance_m: float, window_m: float, seed: int) -> np.ndarray:
         """A seeded random ISO 8608 profile at ``s_m`` whose RMS window roughness is the
         assumed one: the elevation verify adds to the route's.
@@ -128,15 +156,11 @@ class AssumedRoughness:
         Raises
         ------
         InputError
-            A bad seed, or samples so sparse (spacing above 0.9 / (2 ISO8608_N_MIN_CPM), 41 m)
-            that no band is left.
+            A bad seed, or samples too sparse for any band (:meth:`realisation_band_cpm`).
         """
         s = np.asarray(s_m, dtype=float)
         spacing = float(np.median(np.diff(s)))
-        n_max = min(ISO8608_N_MAX_CPM, REALISATION_NYQUIST_SHARE * 0.5 / spacing)
-        if not n_max > ISO8608_N_MIN_CPM:
-            raise InputError(f"the route's samples are {spacing:g} m apart: too sparse to carry any roughness "
-                             f"wave shorter than {1 / ISO8608_N_MIN_CPM:.0f} m; resample the route more densely")
+        _, n_max = self.realisation_band_cpm(s)
         shape = self.road_class or _SHAPE_CLASS
         length = float(s[-1] - s[0])
         base_s, base_z = iso8608_profile(shape, length + 2.0 * spacing, spacing, seed, n_max_cpm=n_max)

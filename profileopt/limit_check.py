@@ -27,9 +27,9 @@ from .planning.options import SolverOptions
 from .defaults import DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M
 from .planning.nlp import family_rows
 from .planning.path import segment_path
-from .planning.segments import segments_at
+from .planning.segments import route_roughness_windows, segments_at
 from .stations import segment_samples
-from .terrain import RoughnessWindows, roughness_windows
+from .terrain import RoughnessWindows
 
 if TYPE_CHECKING:
     from .planning.result import Profile
@@ -259,8 +259,7 @@ def check_limits(
     _check_coverage(route, s)
     starts, stops = segment_samples(route.s_m, s)
     window_m = _roughness_window_m(profile)
-    windows = roughness_windows(route.s_m, route.z_m, vehicle.ground_clearance_m, window_m=window_m,
-                                source=route.source)
+    windows = route_roughness_windows(route, vehicle, window_m=window_m)
     segments = segments_at(s, windows, vehicle, starts=starts, stops=stops)
     ri_here = segments.ri
     mismatch = np.flatnonzero(~np.isclose(np.asarray(profile.ri, dtype=float)[:-1], ri_here, rtol=1e-6, atol=1e-9))

@@ -40,7 +40,7 @@ if TYPE_CHECKING:
     from .route import Route
     from .vehicle import Vehicle
 
-__all__ = ["Verification", "verify", "VERIFICATION_COLUMNS", "STANDARD_GRAVITY_MPS2"]
+__all__ = ["Verification", "verify", "with_assumed_roughness", "VERIFICATION_COLUMNS", "STANDARD_GRAVITY_MPS2"]
 
 #: Standard gravity (m/s^2), for the static wheel load m g.
 STANDARD_GRAVITY_MPS2 = 9.80665
@@ -302,6 +302,7 @@ def verify(
     model: str | None = None,
     detrend: bool = True,
     check: LimitCheck | None = None,
+    roughness_seed: int = 0,
 ) -> Verification:
     """Simulate the vehicle driving ``profile`` over ``route`` and compare with the limits.
 
@@ -325,6 +326,12 @@ def verify(
         least-squares line of the base input (True, as the RI) or mean (False).
     check : LimitCheck, optional
         The result of :func:`check_limits` for the same arguments, if already computed.
+    roughness_seed : int, default 0
+        For a route with an assumed roughness (:attr:`Route.assumed_roughness`), whose own
+        elevation (a DEM or GPS profile) cannot show it: the seed (>= 0) of the random
+        ISO 8608 profile added to the route's elevation for the simulation
+        (:meth:`~profileopt.assumed_roughness.AssumedRoughness.realisation_m`), whose RMS
+        window roughness is the assumed one. A note says so. Unused for other routes.
 
     Returns
     -------
@@ -343,6 +350,10 @@ def verify(
         check = check_limits(route, profile, vehicle, model=model)
     force_model = get_model(check.model)
     s = np.asarray(profile.s_m, dtype=float)
+    notes = check.notes
+    if route.assumed_roughness is not None:  # drive ground like the one planned for, not the smooth model
+        route, note = with_assumed_roughness(route, vehicle, window_m=check.windows.window_m, seed=roughness_seed)
+        notes += (note,)
     run = simulate_quarter_car(route.s_m, route.z_m, s, profile.speed_mps, vehicle, detrend=detrend)
     t_sim = time.perf_counter()
 
@@ -382,6 +393,41 @@ def verify(
             "windows": t_end - t_sim,
             "total": t_end - t_start,
         },
-        notes=check.notes,
+        notes=notes,
         breaches=check.breaches,
     )
+
+
+def with_assumed_roughness(route: "Route", vehicle: "Vehicle", *, window_m: float, seed: int) -> tuple["Route", str]:
+    """The route verify drives when its roughness was assumed: its elevation plus a seeded
+    random ISO 8608 profile whose RMS window roughness is the assumed one, and a note
+    saying so.
+
+    Parameters
+    ----------
+    route : Route
+        A route with ``assumed_roughness``.
+    vehicle : Vehicle
+        Supplies the ground clearance h (m).
+    window_m : float
+        The roughness window length W the profile was planned with (m).
+    seed : int
+        Seed (>= 0) of the random phases.
+
+    Returns
+    -------
+    route : Route
+        The same samples, elevation ``z_m + realisation``, the same assumed roughness.
+    note : str
+        One line for the user: the class (or RI), the seed, the band and the RMS.
+    """
+    assumed = route.assumed_roughness
+    h = vehicle.ground_clearance_m
+    added = assumed.realisation_m(route.s_m, clearance_m=h, window_m=window_m, seed=seed)
+    n_min, n_max = assumed.realisation_band_cpm(route.s_m)
+    ri = assumed.ri_for(clearance_m=h, window_m=window_m)
+    shape = f"ISO 8608 class {assumed.road_class}" if assumed.road_class else "ISO 8608 (class C's shape)"
+    note = (f"roughness assumed ({assumed.label}): simulated on the route's elevation plus a random {shape} "
+            f"profile, seed {seed}, {n_min:g} to {n_max:.3g} cycles/m, RMS {1e3 * ri * h:.3g} mm over {window_m:g} m "
+            f"windows (RI {ri:.4g}); another seed drives other ground of that roughness")
+    return dataclasses.replace(route, z_m=route.z_m + added), note

@@ -11,6 +11,7 @@ sampled sinusoids, E[sigma^2] against seeded realisations of
 from __future__ import annotations
 
 import math
+import subprocess
 
 import numpy as np
 import pytest
@@ -23,6 +24,13 @@ from profileopt.roughness_classes import (detrending_gain, iso8608_expected_rms_
                                           iso8608_ri)
 from profileopt.synthetic import ISO8608_GD0_M3, iso8608_profile, iso8608_variance_m2
 from profileopt.terrain import roughness_windows
+from profileopt.io import read_profile
+from profileopt.planning import plan, segment_route
+from profileopt.route import Route
+from profileopt.simulate import simulate_quarter_car
+from profileopt.verification import verify
+
+from conftest import PROFILEOPT
 
 
 def polyfit_gain(n_cpm: float, window_m: float, samples: int) -> float:
@@ -168,3 +176,127 @@ def test_bad_roughness_lines_are_one_line_naming_file_and_line(tmp_path, comment
         read_route(path)
     message = str(info.value)
     assert message.startswith(f"{path}: line {line}: ") and says in message and "\n" not in message
+
+
+# --- planning with it ------------------------------------------------------------------------
+
+
+
+
+#: a smooth DEM-like route: a constant 2 % grade, sampled at 0.05 m (its windows' RI is ~0)
+SMOOTH_S_M = np.arange(0.0, 150.0001, 0.05)
+SMOOTH_Z_M = 0.02 * SMOOTH_S_M
+
+
+def smooth_route(assumed: AssumedRoughness | None) -> Route:
+    return Route(SMOOTH_S_M, SMOOTH_Z_M, source="smooth.csv", assumed_roughness=assumed)
+
+
+def test_every_window_gets_the_assumed_ri_in_the_measured_windows_places(atv) -> None:
+    measured = segment_route(smooth_route(None), atv, roughness_window_m=4.0)
+    assumed = segment_route(smooth_route(AssumedRoughness(road_class="D")), atv, roughness_window_m=4.0)
+    ri = iso8608_ri("D", window_m=4.0, clearance_m=atv.ground_clearance_m)  # the window actually used
+    assert np.all(assumed.windows.ri == ri) and np.all(assumed.ri == ri) and np.all(assumed.ri_min == ri)
+    assert np.all(measured.windows.ri < 1e-6)  # the route itself measures nothing (rounding only)
+    for field in ("start_m", "first_sample", "stop_sample"):
+        assert np.array_equal(getattr(assumed.windows, field), getattr(measured.windows, field))
+
+
+def test_a_route_shorter_than_the_window_uses_its_length(atv) -> None:
+    route = Route(SMOOTH_S_M[:61], SMOOTH_Z_M[:61], assumed_roughness=AssumedRoughness(road_class="C"))  # 3 m
+    seg = segment_route(route, atv, segment_length_m=1.0, roughness_window_m=5.0)
+    assert seg.windows.window_m == pytest.approx(3.0)
+    assert seg.ri[0] == pytest.approx(iso8608_ri("C", window_m=3.0, clearance_m=atv.ground_clearance_m), rel=1e-12)
+
+
+def test_plan_says_the_roughness_was_assumed(atv) -> None:
+    profile = plan(smooth_route(AssumedRoughness(road_class="F")), atv)
+    ri = iso8608_ri("F", window_m=5.0, clearance_m=atv.ground_clearance_m)
+    assert np.allclose(profile.ri, ri, rtol=0, atol=0)
+    assert f"roughness assumed, not measured: ISO 8608 class F, RI {ri:.4g} over 5 m windows for this vehicle" \
+        in profile.notes
+    assert profile.summary()["roughness"] == {"source": "assumed", "label": "ISO 8608 class F", "ri": ri,
+                                              "window_m": 5.0}
+    # class F (RI 0.32) must slow the atv below what the bare smooth route allows
+    assert profile.travel_time_s > 1.2 * plan(smooth_route(None), atv).travel_time_s
+
+
+def test_a_measured_route_says_so_and_a_read_profile_keeps_the_label(atv, tmp_path) -> None:
+    assert plan(smooth_route(None), atv).summary()["roughness"] == {"source": "measured"}
+    path = tmp_path / "profile.csv"
+    plan(smooth_route(AssumedRoughness(ri=0.05)), atv).to_csv(path)
+    assert read_profile(path).summary()["roughness"] == {"source": "assumed", "label": "RI 0.05 given"}
+
+
+# --- verify on such a route ------------------------------------------------------------------
+
+
+def window_rms_m(s_m: np.ndarray, z_m: np.ndarray, window_m: float) -> float:
+    return float(np.sqrt(np.mean(roughness_windows(s_m, z_m, 1.0, window_m=window_m).ri ** 2)))
+
+
+@pytest.mark.parametrize("assumed, spacing_m", [(AssumedRoughness(road_class="C"), 0.05),
+                                                (AssumedRoughness(ri=0.05), 0.05),
+                                                (AssumedRoughness(road_class="C"), 0.25)])
+def test_the_realisation_has_the_assumed_window_rms(assumed, spacing_m: float) -> None:
+    # one 4 km realisation: the mean of sigma^2 over its windows scatters by about 0.3 % (see the
+    # 24-seed test above: 0.07 % for 24 x 2 km), so 2 % holds it with room; the reference is
+    # the assumed RMS^2 times the sampled-window factor E(W + d) / E(W) over the band used
+    # (docs/paper-notes.md): 1 % at 0.05 m, 5 % at 0.25 m (where the band stops at 1.8 cycles/m
+    # and the realisation is scaled up to the assumed RMS)
+    s = np.arange(0.0, 4000.0001, spacing_m)
+    z = assumed.realisation_m(s, clearance_m=0.1, window_m=5.0, seed=7)
+    n_min, n_max = assumed.realisation_band_cpm(s)
+    assert n_max == pytest.approx(min(4.0, 0.9 / (2 * spacing_m)))
+    shape = assumed.road_class or "C"
+    factor = (iso8608_expected_variance_m2(shape, window_m=5.0 + spacing_m, n_max_cpm=n_max)
+              / iso8608_expected_variance_m2(shape, window_m=5.0, n_max_cpm=n_max))
+    wanted = assumed.ri_for(clearance_m=0.1, window_m=5.0) * 0.1
+    assert window_rms_m(s, z, 5.0) ** 2 == pytest.approx(wanted**2 * factor, rel=0.02)
+
+
+def test_verify_drives_the_assumed_roughness_deterministically(atv) -> None:
+    route = smooth_route(AssumedRoughness(road_class="E"))
+    profile = plan(route, atv)
+    first = verify(route, profile, atv, roughness_seed=5)
+    again = verify(route, profile, atv, roughness_seed=5)
+    other = verify(route, profile, atv, roughness_seed=6)
+    note = [n for n in first.notes if n.startswith("roughness assumed (ISO 8608 class E)")]
+    assert len(note) == 1 and "seed 5" in note[0]
+    assert np.array_equal(first.transmitted_peak_n, again.transmitted_peak_n)
+    assert not np.array_equal(first.transmitted_peak_n, other.transmitted_peak_n)
+    # the bare route (a constant grade) excites almost nothing: the same drive over it stays
+    # below 20 N (the speed changes on the grade), so a peak of hundreds of newtons is the
+    # synthetic class E roughness
+    bare = simulate_quarter_car(route.s_m, route.z_m, profile.s_m, profile.speed_mps, atv)
+    assert np.max(bare.transmitted_peak_n) < 20.0
+    assert np.max(first.transmitted_peak_n) > 10 * np.max(bare.transmitted_peak_n) + 100.0
+    assert first.windows.count == segment_route(route, atv).windows.count
+
+
+def test_verify_of_a_measured_route_is_unchanged_by_the_seed(atv) -> None:
+    route = Route(SMOOTH_S_M, SMOOTH_Z_M + 0.01 * np.sin(2 * np.pi * SMOOTH_S_M / 3.0), source="bumpy.csv")
+    profile = plan(route, atv)
+    a, b = verify(route, profile, atv, roughness_seed=1), verify(route, profile, atv, roughness_seed=2)
+    assert np.array_equal(a.transmitted_peak_n, b.transmitted_peak_n)
+    assert not any("roughness assumed" in n for n in a.notes)
+
+
+def test_verify_command_reports_the_synthetic_roughness(tmp_path) -> None:
+    route = write_route(tmp_path, "# from a DEM\n" + route_metadata_lines(AssumedRoughness(road_class="D"))[0] + "\n")
+    profile = tmp_path / "profile.csv"
+    done = subprocess.run([*PROFILEOPT, "plan", str(route), "--vehicle", "atv", "-o", str(profile)],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    outputs = []
+    for seed in ("4", "4", "5"):
+        done = subprocess.run([*PROFILEOPT, "verify", str(route), str(profile), "--seed", seed],
+                              capture_output=True, text=True, timeout=300)
+        assert done.returncode in (0, 4), done.stderr
+        outputs.append(done.stdout)
+    assert "note: roughness assumed (ISO 8608 class D): simulated on the route's elevation plus a random " \
+           "ISO 8608 class D profile, seed 4," in outputs[0]
+    assert outputs[0] == outputs[1] and outputs[0] != outputs[2]
+    done = subprocess.run([*PROFILEOPT, "verify", str(route), str(profile), "--seed", "-3"],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2 and "--seed" in done.stderr

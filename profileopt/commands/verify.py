@@ -100,7 +100,7 @@ def _verify(args: argparse.Namespace) -> int:
     header = (f"verified {args.profile} on {args.route} with vehicle {args.vehicle}, "
               f"model {model.label} ({model.quantity} force, limit {check.limit_n:g} N)")
     try:
-        result = verify(route, profile, vehicle, model=args.model, check=check)
+        result = verify(route, profile, vehicle, model=args.model, check=check, roughness_seed=args.seed)
     except InputError as exc:
         if not check.breaches:
             raise
@@ -185,6 +185,21 @@ def _verify_arguments(parser: argparse.ArgumentParser) -> None:
                              "it ('-': standard output, the summary then goes to stderr)")
     parser.add_argument("--plot", metavar="PNG", help="write forces along s and simulated vs predicted per window")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    parser.add_argument("--seed", type=_seed, default=0, metavar="N",
+                        help="for a route with an assumed roughness (a '# roughness_class' or '# roughness_ri' "
+                             "line): the seed of the random ISO 8608 profile added to its elevation for the "
+                             "simulation (default: 0); unused for other routes")
+
+
+def _seed(text: str) -> int:
+    """An integer >= 0 for --seed, or argparse's one-line error."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not an integer; give a seed >= 0, e.g. --seed 1") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{value} is negative; give a seed >= 0")
+    return value
 
 
 _verify.arguments = _verify_arguments  # type: ignore[attr-defined]

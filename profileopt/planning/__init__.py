@@ -16,11 +16,11 @@ from .limits import AccelLimit, ForceLimit, JerkLimit, Limit, PlanContext, Speed
 from .options import SolverOptions
 from .planner import DEFAULT_SMOOTHING, PLAN_BANDS, plan
 from .result import PROFILE_COLUMNS, Profile
-from .segments import DEFAULT_SEGMENT_LENGTH_M, MIN_SAMPLES_PER_SEGMENT, Segments, segment_route
+from .segments import DEFAULT_SEGMENT_LENGTH_M, MIN_SAMPLES_PER_SEGMENT, Segments, route_roughness_windows, segment_route
 
 __all__ = [
     "plan", "Profile", "PROFILE_COLUMNS", "SolverOptions", "DEFAULT_SMOOTHING", "PLAN_BANDS",
-    "Segments", "segment_route", "MIN_SAMPLES_PER_SEGMENT", "DEFAULT_SEGMENT_LENGTH_M",
+    "Segments", "segment_route", "route_roughness_windows", "MIN_SAMPLES_PER_SEGMENT", "DEFAULT_SEGMENT_LENGTH_M",
     "BandChoice", "choose_bands", "greatest_profile",
     "Limit", "PlanContext", "ForceLimit", "SpeedLimit", "AccelLimit", "JerkLimit", "default_limits",
     "summarize",

@@ -38,7 +38,7 @@ from .path import SegmentPath, segment_path
 from .options import SolverOptions
 from .pieces import choose_cuts, cut_scores, solve_pieces
 from .result import Profile
-from .segments import DEFAULT_ROUGHNESS_WINDOW_M, DEFAULT_SEGMENT_LENGTH_M, Segments, segment_route
+from .segments import DEFAULT_ROUGHNESS_WINDOW_M, DEFAULT_SEGMENT_LENGTH_M, Segments, roughness_source, segment_route
 
 if TYPE_CHECKING:
     from ..route import Route
@@ -256,6 +256,9 @@ def plan(
         # "bands" is the profile file's key for the band option (kept so files stay readable)
         "v0_mps": float(v0_mps), "vend_mps": float(vend_mps), "method": method, "bands": band,
     }
+    roughness = roughness_source(route, seg.windows)
+    if roughness["source"] == "assumed":  # only then: a measured route's file keeps its bytes
+        settings["roughness"] = roughness["label"]
     profile = _assemble(seg, b, vehicle, model, speed_sets, all_bands, usable, chosen, cap)
     row_values = {family: family_rows(family, b, seg.length_m, data) for family, data in rows.items()}
     cap_label = _cap_labels(limits, context, cap, cap_source)
@@ -274,7 +277,7 @@ def plan(
         profile, status=status, success=success, objective=objective_s(b, seg.length_m, smoothing),
         iterations=iterations, pieces=pieces, notes=tuple(notes), settings=settings,
         limits=limits, cap_source=cap_source, band_source=band_source, path=path,
-        curvature_1pm=path.curvature_1pm, grade_rad=path.grade_rad, binding=binding,
+        curvature_1pm=path.curvature_1pm, grade_rad=path.grade_rad, binding=binding, roughness=roughness,
     )
     for limit in limits:  # the bands promise every limit; never hand back a breach
         breach = limit.check(profile)

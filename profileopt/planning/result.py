@@ -97,6 +97,10 @@ class Profile:
         The limit that holds the speed at each row (:data:`~profileopt.planning.binding.BINDING_NAMES`).
     path : SegmentPath or None
         Each segment's turns and slopes, as the limits saw them (None when read from a file).
+    roughness : dict or None
+        Where the RI came from (:func:`profileopt.planning.segments.roughness_source`):
+        ``{"source": "measured"}`` or ``{"source": "assumed", "label", "ri", "window_m"}``;
+        None when read from a file (the settings' ``roughness`` key then tells).
     """
 
     s_m: np.ndarray
@@ -128,6 +132,7 @@ class Profile:
     grade_rad: np.ndarray | None = None
     binding: np.ndarray | None = None
     path: "SegmentPath | None" = None
+    roughness: dict | None = None
 
     @property
     def travel_time_s(self) -> float:
@@ -186,6 +191,15 @@ class Profile:
             off.append("grade in the acceleration bounds (any of the keys above)")
         return off
 
+    def _roughness(self) -> dict:
+        """Where the RI came from: the planner's account, or what a read file's settings say."""
+        if self.roughness is not None:
+            return dict(self.roughness)
+        label = self.settings.get("roughness")
+        if label is None:
+            return {"source": "measured"}
+        return {"source": "assumed", "label": str(label).replace("_", " ")}
+
     def summary(self) -> dict:
         """A short account of a planned profile, for people and for ``--json``.
 
@@ -200,7 +214,9 @@ class Profile:
             quantity to its limit, and where: force, lateral, friction, accel, decel, power,
             jerk); ``binding`` (the share of the distance each limit holds the speed, 0 to
             1, from the ``binding`` column); ``limits_off`` (the limits of turns and hills
-            the vehicle file leaves off); ``solver``
+            the vehicle file leaves off); ``roughness`` (``source``: ``"measured"`` or
+            ``"assumed"``, then its ``label``, the ``ri`` every window got and ``window_m``;
+            for a profile read from a file, the label its settings record); ``solver``
             (status, success, iterations, pieces, time_s); ``notes``. Plain Python numbers
             only.
         """
@@ -243,6 +259,7 @@ class Profile:
             "margins": margins,
             "binding": binding_shares(self.binding, self.s_m) if self.binding is not None else {},
             "limits_off": self._limits_off(),
+            "roughness": self._roughness(),
             "solver": {
                 "status": self.status, "success": self.success, "iterations": self.iterations,
                 "pieces": self.pieces, "time_s": float(self.timings_s.get("total", math.nan)),

@@ -6,7 +6,9 @@ only: the roughness is measured over sliding *roughness windows* of a fixed leng
 (:func:`profileopt.terrain.roughness_windows`), wherever the segments fall, and a
 segment's admissible speeds are those admissible for every window that shares a point
 with it. So each segment carries the least and the largest RI (Eq. 1, detrended) of those
-windows, and the worst-case elevation e_max of Eq. (8) of the largest.
+windows, and the worst-case elevation e_max of Eq. (8) of the largest. A route with an
+assumed roughness (:attr:`profileopt.route.Route.assumed_roughness`) keeps its windows'
+places but every window gets the assumed RI (:func:`route_roughness_windows`).
 """
 
 from __future__ import annotations
@@ -26,8 +28,8 @@ if TYPE_CHECKING:
     from ..route import Route
     from ..vehicle import Vehicle
 
-__all__ = ["Segments", "segment_route", "segments_at", "MIN_SAMPLES_PER_SEGMENT", "DEFAULT_SEGMENT_LENGTH_M",
-           "DEFAULT_ROUGHNESS_WINDOW_M"]
+__all__ = ["Segments", "segment_route", "segments_at", "route_roughness_windows", "roughness_source",
+           "MIN_SAMPLES_PER_SEGMENT", "DEFAULT_SEGMENT_LENGTH_M", "DEFAULT_ROUGHNESS_WINDOW_M"]
 
 #: Samples a segment must hold: the roughness comes from the windows, but the simulator
 #: (verify) measures each segment's own samples.
@@ -122,12 +124,19 @@ def segment_route(route: "Route", vehicle: "Vehicle", segment_length_m: float = 
             f"segment_length_m = {length:g} m is longer than the route {route.source} ({total:g} m); "
             "choose a shorter segment length"
         )
-    s, z = route.s_m, route.z_m
+    s = route.s_m
     notes: tuple[str, ...] = ()
-    windows = roughness_windows(s, z, vehicle.ground_clearance_m, window_m=roughness_window_m, source=route.source)
+    windows = route_roughness_windows(route, vehicle, window_m=roughness_window_m)
     if windows.window_m < float(roughness_window_m):
         notes = (f"the route ({total:g} m) is shorter than the {float(roughness_window_m):g} m roughness window: its "
                  "RI is that of the whole route",)
+    source = roughness_source(route, windows)
+    if route.assumed_roughness is not None and route.assumed_roughness.road_class is None:
+        notes += (f"roughness assumed, not measured: RI {source['ri']:.4g} given for every {windows.window_m:g} m "
+                  "window",)
+    elif route.assumed_roughness is not None:
+        notes += (f"roughness assumed, not measured: {source['label']}, RI {source['ri']:.4g} over "
+                  f"{windows.window_m:g} m windows for this vehicle",)
     if total / length > s.size:  # more segments than samples: refuse before allocating them
         raise InputError(
             f"segment_length_m = {length:g} m cuts {route.source} ({total:g} m, {s.size} samples) into more "
@@ -158,6 +167,55 @@ def segment_route(route: "Route", vehicle: "Vehicle", segment_length_m: float = 
             "route's sample spacing"
         )
     return segments_at(bounds, windows, vehicle, starts=starts, stops=stops, notes=notes)
+
+
+def route_roughness_windows(route: "Route", vehicle: "Vehicle", *, window_m: float) -> RoughnessWindows:
+    """The route's roughness windows (:func:`profileopt.terrain.roughness_windows`) with the
+    RI the planner uses: the measured one, or for a route with an assumed roughness, the
+    assumed RI in every window (the windows' places stay those of the route's samples).
+
+    Parameters
+    ----------
+    route : Route
+        The terrain samples, and ``assumed_roughness`` if any.
+    vehicle : Vehicle
+        Supplies the ground clearance h (m).
+    window_m : float
+        Roughness window length W (m), > 0; a route shorter than W is one window.
+
+    Returns
+    -------
+    RoughnessWindows
+    """
+    windows = roughness_windows(route.s_m, route.z_m, vehicle.ground_clearance_m, window_m=window_m,
+                                source=route.source)
+    if route.assumed_roughness is None:
+        return windows
+    ri = route.assumed_roughness.ri_for(clearance_m=vehicle.ground_clearance_m, window_m=windows.window_m)
+    return dataclasses.replace(windows, ri=np.full(windows.count, ri))
+
+
+def roughness_source(route: "Route", windows: RoughnessWindows) -> dict:
+    """Where a plan's roughness comes from, for :meth:`profileopt.planning.Profile.summary`.
+
+    Parameters
+    ----------
+    route : Route
+        The route planned.
+    windows : RoughnessWindows
+        Its windows as planned (:func:`route_roughness_windows`).
+
+    Returns
+    -------
+    dict
+        ``{"source": "measured"}``, or ``{"source": "assumed", "label": ..., "ri": ...,
+        "window_m": ...}`` with the assumed roughness's label, the RI every window got
+        (dimensionless) and the window length W (m).
+    """
+    if route.assumed_roughness is None:
+        return {"source": "measured"}
+    return {"source": "assumed", "label": route.assumed_roughness.label, "ri": float(windows.ri[0]),
+            "window_m": float(windows.window_m)}
 
 
 def segments_at(boundaries_m: np.ndarray, windows: RoughnessWindows, vehicle: "Vehicle", *, starts: np.ndarray,
