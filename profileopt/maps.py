@@ -67,8 +67,7 @@ def _map_axes(ax: Any, result: "TrackRoute") -> None:
     x0, x1, y0, y1 = _view(result)
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
-    label = result.crs_name or "local frame"
-    ax.set_xlabel(f"x (m), {label}", fontsize="small")
+    ax.set_xlabel(f"x (m), {result.crs_name}" if result.crs_name else "x (m)", fontsize="small")
     ax.set_ylabel("y (m)")
     ax.ticklabel_format(useOffset=False, style="plain")
     ax.tick_params(labelsize="small")
@@ -175,7 +174,7 @@ def plan_map_figure(profile: "Profile", result: "TrackRoute", *, title: str | No
                 ax.scatter(x[where], y[where], marker=markers[name], s=40, color=BINDING_COLOURS[name],
                            edgecolors="white", linewidths=0.7, zorder=3,
                            label="the start or end speed" if name == "boundary" else f"{name} holds the speed from here")
-    ax.plot(x[0], y[0], "^", color="black", ms=9, zorder=4)
+    ax.plot(x[0], y[0], "^", color="black", ms=9, zorder=4, label="start")
     _map_axes(ax, result)
     ax.legend(loc="best", fontsize="small")
     fig.suptitle(title or f"planned speed along the route: {profile.distance_m:.0f} m in {profile.travel_time_s:.0f} s")
