@@ -174,11 +174,11 @@ def test_function_docs_hold_no_absolute_path(atv, tmp_path: Path) -> None:
 
 
 def _readme_outputs() -> set[str]:
-    """Output paths named in the README's commands (-o, --plot, --out), placeholders aside."""
+    """Output paths named in the README's commands (-o, --plot, --map, --out), placeholders aside."""
     names = set()
     for line in README.splitlines():
         folder = re.search(r"\bcd (\S+) &&", line)  # a command run inside a folder writes there
-        for match in re.finditer(r"(?:-o|--plot|--out)\s+([\w./-]+)", line):
+        for match in re.finditer(r"(?:-o|--plot|--map|--out)\s+([\w./-]+)", line):
             name = match.group(1)
             if name.isupper() or name.split(".")[0].isupper() or name.startswith("/") or name == "-":
                 continue

@@ -190,3 +190,36 @@ def test_the_command_runs_as_a_program(tmp_path: Path, synthetic: dict) -> None:
                            "-o", str(out)], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert "roughness  measured" in done.stdout and out.exists()
+
+
+# ------------------------------------------------------------------ the README's walk-through
+
+
+def _walkthrough_commands() -> list[str]:
+    """The walk-through's commands as the README gives them (continuation lines joined)."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    start = text.index("**Walk-through: a GPX track and a LAZ cloud to a verified plan.**")
+    section = text[start:text.index("\n## ", start)].replace("\\\n", " ")
+    return [" ".join(line.split()).removeprefix("$ ") for line in section.splitlines()
+            if line.strip().removeprefix("$ ").startswith("profileopt ")
+            and not line.split()[1 + line.strip().startswith("$")].endswith(":")]  # not its output
+
+
+def test_the_readme_walkthrough_runs_as_written(tmp_path: Path) -> None:
+    import shlex
+
+    commands = _walkthrough_commands()
+    assert [c.split()[1] for c in commands] == ["route", "route", "plan", "verify"]
+    outputs = []
+    for command in commands:
+        args = [str(ROOT / a) if a.startswith(("examples/", "data/")) else a for a in shlex.split(command)[1:]]
+        done = subprocess.run([*PROFILEOPT, *args], capture_output=True, text=True, cwd=tmp_path, timeout=600)
+        outputs.append(done)
+    refused, made, planned, verified = outputs
+    # the README quotes the refusal, the plan and the verdict
+    assert refused.returncode == 2 and "0.979 ground points (class 2) per m^2" in refused.stderr
+    assert made.returncode == 0 and (tmp_path / "hexbin.csv").exists() and (tmp_path / "hexbin-route.png").exists()
+    assert planned.returncode == 0 and "279.3 m" in planned.stdout and "travel time  39.43 s" in planned.stdout
+    assert (tmp_path / "hexbin-map.png").exists()
+    assert verified.returncode == 0, verified.stdout + verified.stderr
+    assert "0 of 10972" in verified.stdout and "0.454 of the limit" in verified.stdout
