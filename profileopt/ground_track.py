@@ -388,10 +388,20 @@ def route_from_track(track: "Track", terrain: Any = None, *, spacing_m: float = 
         notes.append(f"{terrain_source}: {text}")
     if assumed_roughness is not None:
         comments.append(f"roughness: assumed ({assumed_roughness.label}), not measured; {resolution}")
+    limit = None
+    if track.speed_limit_mps is not None:
+        # a track point's limit holds to the next point; a sample on a piece of the track gets that
+        # piece's limit, and a sample at a point the lower of the two pieces meeting there
+        along = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(tx), np.diff(ty)))])
+        piece = np.clip(np.searchsorted(along, s, side="right") - 1, 0, tx.size - 2)
+        before = np.clip(np.searchsorted(along, s, side="left") - 1, 0, tx.size - 2)
+        limit = np.minimum(track.speed_limit_mps[piece], track.speed_limit_mps[before])
+        comments.append("speed_limit_mps: the track's speed_limit, each from its point to the next")
     # s as every x,y route has it (profileopt.io.read_route): the horizontal distance between the samples,
     # so that the route written and read back is this one, float for float
     s_route = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
-    route = Route(s_m=s_route, z_m=z, x_m=x, y_m=y, source=track.source, assumed_roughness=assumed_roughness)
+    route = Route(s_m=s_route, z_m=z, x_m=x, y_m=y, speed_limit_mps=limit, source=track.source,
+                  assumed_roughness=assumed_roughness)
     return TrackRoute(route=route, crs_name=_crs_label(crs), track_x_m=np.asarray(tx), track_y_m=np.asarray(ty),
                       terrain_kind=kind, roughness_measured=measured, density_per_m2=density, resolution=resolution,
                       gaps_m=gaps.reshape(-1, 2), comments=tuple(comments), notes=tuple(notes),

@@ -186,3 +186,24 @@ def test_a_track_alone_gives_geometry_and_grade_with_an_assumed_class() -> None:
     result = route_from_track(track, None, spacing_m=0.5, assumed_roughness=AssumedRoughness(road_class="D"))
     # linear between the track's points: z(5 m) = 0.5, z(15 m) = 1.25 (hand interpolation)
     np.testing.assert_allclose(np.interp([5.0, 15.0], result.route.s_m, result.route.z_m), [0.5, 1.25])
+
+
+def test_a_csv_tracks_speed_limit_holds_from_its_point_to_the_next(tmp_path: Path) -> None:
+    from profileopt.io import read_route, read_track
+    from profileopt.io.routes import write_route
+    from profileopt.assumed_roughness import AssumedRoughness
+
+    path = tmp_path / "track.csv"
+    path.write_text("x_m,y_m,z_m,speed_limit_mps\n0,0,0,5\n10,0,0,3\n20,0,0,4\n")
+    track = read_track(path)
+    result = route_from_track(track, None, spacing_m=2.5, assumed_roughness=AssumedRoughness(road_class="A"))
+    s, limit = result.route.s_m, result.route.speed_limit_mps
+    # hand table: the first piece 5 m/s, the point at 10 m the lower of 5 and 3, the second piece 3 m/s
+    np.testing.assert_allclose(s, [0, 2.5, 5, 7.5, 10, 12.5, 15, 17.5, 20])
+    np.testing.assert_allclose(limit, [5, 5, 5, 5, 3, 3, 3, 3, 3])
+    out = tmp_path / "route.csv"
+    write_route(result.route, out)
+    np.testing.assert_array_equal(read_route(out).speed_limit_mps, limit)
+    path.write_text("x,y,speed_limit\n0,0,5\n10,0,0\n")
+    with pytest.raises(InputError, match=r"line 3: speed_limit = 0 m/s must be a number > 0"):
+        read_track(path)

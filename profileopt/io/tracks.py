@@ -47,7 +47,8 @@ JOIN_GAP_M = 50.0
 #: File name endings :func:`read_track` accepts, and the reader of each.
 TRACK_SUFFIXES = {".gpx": "GPX", ".geojson": "GeoJSON", ".json": "GeoJSON", ".csv": "CSV"}
 
-_CSV_COLUMNS = {"x": "x", "x_m": "x", "y": "y", "y_m": "y", "z": "z", "z_m": "z"}
+_CSV_COLUMNS = {"x": "x", "x_m": "x", "y": "y", "y_m": "y", "z": "z", "z_m": "z",
+                "speed_limit": "speed_limit", "speed_limit_mps": "speed_limit"}
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -71,6 +72,9 @@ class Track:
         The file read, for messages.
     notes : tuple of str
         What was done on the way (joints, dropped repeats, ignored items), one line each.
+    speed_limit_mps : numpy.ndarray, shape (N,), or None
+        A speed cap (m/s, > 0) at each point, from a CSV ``speed_limit`` column: it holds
+        from that point to the next. None if the file gives none.
     """
 
     x: np.ndarray
@@ -79,6 +83,7 @@ class Track:
     crs: Any
     source: str
     notes: tuple[str, ...] = ()
+    speed_limit_mps: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.x.size)
@@ -93,6 +98,7 @@ class _Points:
     z: list[float | None]
     t: list[float]
     label: Callable[[int], str]
+    limit: list[float] | None = None
 
 
 def read_track(path: str | os.PathLike, *, track_crs: str | None = None,
@@ -107,7 +113,8 @@ def read_track(path: str | os.PathLike, *, track_crs: str | None = None,
       FeatureCollection with exactly one LineString. CRS: WGS 84 (RFC 7946), or the legacy
       ``"crs"`` member if the file has one.
     * CSV (``.csv``): a header with ``x,y`` or ``x_m,y_m`` and optionally ``z`` or ``z_m``
-      (m), ``#`` comment lines. CRS: ``track_crs``, else None (not stated). The x, y values
+      (m) and ``speed_limit`` or ``speed_limit_mps`` (m/s, from that point to the next),
+      ``#`` comment lines. CRS: ``track_crs``, else None (not stated). The x, y values
       are in the unit of that CRS's axes (a GIS writes them so) and are converted to metres
       here; ``x_m, y_m`` columns with a CRS not in metres are refused as contradictory.
 
@@ -198,6 +205,13 @@ def _finish(path: Path, points: _Points, crs: Any, notes: list[str], metres_name
         missing = sum(v is None for v in z_values)
         notes.append(f"{path.name}: {missing} of {len(z_values)} points have no elevation; the track's own "
                      "elevations are not used")
+    limit = None if points.limit is None else np.asarray(points.limit, dtype=float)
+    if limit is not None:
+        bad = np.flatnonzero(~(np.isfinite(limit) & (limit > 0)))
+        if bad.size:
+            i = int(bad[0])
+            raise InputError(f"{path}: {points.label(i)}: speed_limit = {limit[i]:g} m/s must be a number > 0; "
+                             "give the limit in m/s")
     keep = np.ones(x.size, dtype=bool)
     repeat = np.flatnonzero((np.diff(x) == 0) & (np.diff(y) == 0)) + 1
     for i in repeat:
@@ -212,9 +226,10 @@ def _finish(path: Path, points: _Points, crs: Any, notes: list[str], metres_name
                      f"(first: {points.label(int(dropped[0]))})")
         x, y = x[keep], y[keep]
         z = None if z is None else z[keep]
+        limit = None if limit is None else limit[keep]
     if x.size < 2:
         raise InputError(f"{path}: the track has {x.size} point; a track needs at least 2 distinct points")
-    return Track(x=x, y=y, z_m=z, crs=crs, source=str(path), notes=tuple(notes))
+    return Track(x=x, y=y, z_m=z, crs=crs, source=str(path), notes=tuple(notes), speed_limit_mps=limit)
 
 
 def _is_geographic(crs: Any) -> bool:
@@ -405,7 +420,8 @@ def _read_csv(path: Path, notes: list[str]) -> tuple[_Points, bool]:
     lines = table.line_numbers
     out = _Points(list(values[:, columns["x"]]), list(values[:, columns["y"]]),
                   list(values[:, columns["z"]]) if "z" in columns else [None] * len(values),
-                  [math.nan] * len(values), lambda k: f"line {lines[k]}")
+                  [math.nan] * len(values), lambda k: f"line {lines[k]}",
+                  list(values[:, columns["speed_limit"]]) if "speed_limit" in columns else None)
     return out, names["x"].endswith("_m") or names["y"].endswith("_m")
 
 
