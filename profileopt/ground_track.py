@@ -368,6 +368,10 @@ def route_from_track(track: "Track", terrain: Any = None, *, spacing_m: float = 
         z, measured, density, resolution, more = _sample_cloud(terrain, terrain_source, s, x, y, spacing_m,
                                                                corridor_m, assumed_roughness is not None)
         comments += more
+        if not terrain.is_classified:
+            notes.append(f"{terrain_source}: the cloud is not classified (no ground class): each sample takes the "
+                         f"{100 * UNCLASSIFIED_QUANTILE:g}th percentile of its points, as vegetation lies above the "
+                         "ground; classify it (e.g. PDAL filters.smrf) for a trustworthy profile")
     else:
         kind = "OpenCRG" if hasattr(terrain, "u_m") else "DEM"
         z, measured, resolution, more = _sample_grid(terrain, terrain_source, kind, x, y, spacing_m)

@@ -113,6 +113,7 @@ def test_vegetation_and_noise_do_not_become_bumps(ground: dict) -> None:
 def test_an_unclassified_cloud_takes_a_low_quantile_and_says_so(ground: dict) -> None:
     result = _route(ground["gpx"], ground["unclassified"])
     assert any("not classified" in line for line in result.comments)
+    assert any("not classified" in line and "10th percentile" in line for line in result.notes)
     error = result.route.z_m - surface_m(result.route.x_m, result.route.y_m)
     # 13 % of the points are vegetation above the ground: the 10th percentile stays on it
     assert np.median(np.abs(error)) < 0.01
