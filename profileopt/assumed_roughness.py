@@ -72,7 +72,36 @@ class AssumedRoughness:
         """What was assumed, for people: ``"ISO 8608 class C"`` or ``"RI 0.05 given"``."""
         if self.road_class is not None:
             return f"ISO 8608 class {self.road_class}"
-        return f"RI {self.ri:g} given"
+        return f"RI {self.ri!r} given"  # repr: read back exactly by from_label
+
+    @classmethod
+    def from_label(cls, label: str) -> "AssumedRoughness":
+        """The assumed roughness a :attr:`label` names, as a profile file records it (blanks
+        may be written as underscores: ``ISO_8608_class_C``, ``RI_0.05_given``).
+
+        Parameters
+        ----------
+        label : str
+            ``"ISO 8608 class C"`` or ``"RI 0.05 given"``, with blanks or underscores.
+
+        Returns
+        -------
+        AssumedRoughness
+
+        Raises
+        ------
+        InputError
+            Neither form.
+        """
+        words = str(label).replace("_", " ").split()
+        if len(words) == 4 and words[:3] == ["ISO", "8608", "class"]:
+            return cls(road_class=words[3])
+        if len(words) == 3 and words[0] == "RI" and words[2] == "given":
+            try:
+                return cls(ri=float(words[1]))
+            except ValueError:
+                pass
+        raise InputError(f"assumed roughness {label!r} is neither 'ISO 8608 class X' nor 'RI <value> given'")
 
     def ri_for(self, *, clearance_m: float, window_m: float) -> float:
         """The RI of every roughness window of the route, for a vehicle and window length.

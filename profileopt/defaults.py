@@ -8,7 +8,8 @@ from __future__ import annotations
 
 __all__ = ["MODEL_KEYS", "DEFAULT_MODEL", "DEFAULT_SMOOTHING", "DEFAULT_SEGMENT_LENGTH_M", "DEFAULT_ROUGHNESS_WINDOW_M",
            "DEFAULT_PATH_TOLERANCE_M", "PLAN_BANDS", "MAX_C_BYTES", "DEFAULT_TRACK_SPACING_M",
-           "DEFAULT_CORRIDOR_M", "DEFAULT_MAX_GAP_M", "MIN_POINTS_PER_BIN"]
+           "DEFAULT_CORRIDOR_M", "DEFAULT_MAX_GAP_M", "MIN_POINTS_PER_BIN", "MAX_ROUGHNESS_SPACING_M",
+           "MAX_ROUGHNESS_CORRIDOR_M"]
 
 #: The four force models, in the paper's order (keys of :data:`profileopt.forces.MODELS`).
 MODEL_KEYS = ("prev_bem", "iecm", "sbem_ef", "sbem_tf")
@@ -50,6 +51,13 @@ DEFAULT_MAX_GAP_M = 0.2
 #: for the cloud to measure roughness: with Poisson-scattered points, 3 expected leave 5 %
 #: of the bins empty (e^-3), which the gap filling bridges.
 MIN_POINTS_PER_BIN = 3.0
+#: Coarsest spacing (m) of a route sampled along a track that measures roughness: one sample
+#: per wheel radius of the bundled vehicles (0.1 m). A coarser route misses bumps the wheel
+#: feels, whatever the terrain's resolution, so its roughness must be assumed.
+MAX_ROUGHNESS_SPACING_M = 0.1
+#: Widest corridor half-width (m) that measures roughness: twice the default, a strip of about
+#: two tyres' width. A wider strip's median is the ground beside the tyre as much as under it.
+MAX_ROUGHNESS_CORRIDOR_M = 0.3
 #: The values of :func:`profileopt.plan`'s ``band``: every band of each segment (chosen over
 #: the whole route), only the band from rest, or only the highest band.
 PLAN_BANDS = ("all", "first", "largest")

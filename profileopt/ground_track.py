@@ -39,7 +39,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .defaults import DEFAULT_CORRIDOR_M, DEFAULT_MAX_GAP_M, DEFAULT_TRACK_SPACING_M, MIN_POINTS_PER_BIN
+from .defaults import (DEFAULT_CORRIDOR_M, DEFAULT_MAX_GAP_M, DEFAULT_TRACK_SPACING_M, MAX_ROUGHNESS_CORRIDOR_M,
+                       MAX_ROUGHNESS_SPACING_M, MIN_POINTS_PER_BIN)
 from .errors import InputError
 from .route import Route
 
@@ -47,7 +48,7 @@ if TYPE_CHECKING:
     from .io.tracks import Track
 
 __all__ = ["TrackRoute", "route_from_track", "resample_polyline", "corridor_bins", "smooth_track_elevations",
-           "UNCLASSIFIED_QUANTILE", "GPS_ELEVATION_SCALE_M"]
+           "UNCLASSIFIED_QUANTILE", "GPS_ELEVATION_SCALE_M", "MAX_TRACK_SAMPLES"]
 
 #: Quantile of the points in a bin taken as the ground when the cloud is not classified:
 #: vegetation and other objects lie above the ground, so a low quantile, not the median.
@@ -59,6 +60,8 @@ UNCLASSIFIED_QUANTILE = 0.1
 #: (50 m) are averaged; a hill's grade over 50 m survives, a 5 m error no longer reads as a 50 %
 #: grade over the 10 m that the planner measures grades on.
 GPS_ELEVATION_SCALE_M = 50.0
+#: Most samples a track is cut into (1e7: 500 km at 0.05 m, about 1 GB of route in memory).
+MAX_TRACK_SAMPLES = 10_000_000
 #: ASPRS class codes of ground (LAS 1.4 R15, Table 17).
 _GROUND = 2
 
@@ -118,21 +121,34 @@ def resample_polyline(x_m: np.ndarray, y_m: np.ndarray, spacing_m: float) -> tup
         The polyline's points (m), K >= 2, consecutive points distinct.
     spacing_m : float
         Distance between samples along the polyline (m), > 0. The last sample is the
-        polyline's end; it is closer than ``spacing_m`` to the one before when the length is
-        not a multiple of the spacing (and dropped if within 1e-9 m of it).
+        polyline's end: when the length is not a multiple of the spacing, the last step is
+        the remainder if that is at least half a spacing, else the last regular sample moves
+        to the end (a last step between 1 and 1.5 spacings).
 
     Returns
     -------
     s_m, xs_m, ys_m : numpy.ndarray, shape (M,)
         Horizontal distance along the polyline (m, from 0) and the samples' coordinates (m).
+
+    Raises
+    ------
+    InputError
+        More than :data:`MAX_TRACK_SAMPLES` samples.
     """
     x = np.asarray(x_m, dtype=float)
     y = np.asarray(y_m, dtype=float)
     along = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
     length = float(along[-1])
-    s = spacing_m * np.arange(int(math.floor(length / spacing_m + 1e-9)) + 1)
+    count = int(math.floor(length / spacing_m + 1e-9)) + 1
+    if count > MAX_TRACK_SAMPLES:
+        raise InputError(f"spacing_m = {spacing_m:g} m cuts the {length:.6g} m track into {count:.3g} samples, more "
+                         f"than {MAX_TRACK_SAMPLES:.0e}; give a larger spacing or a shorter track")
+    s = spacing_m * np.arange(count)
     if length - s[-1] > 1e-9:
-        s = np.append(s, length)
+        if s.size > 1 and length - s[-1] < 0.5 * spacing_m:
+            s[-1] = length  # a sliver of an end: the last sample moves to the end (a step below 1.5 spacings)
+        else:
+            s = np.append(s, length)
     return s, np.interp(s, along, x), np.interp(s, along, y)
 
 
@@ -228,33 +244,31 @@ def _bin_quantile(bins: np.ndarray, z: np.ndarray, count: int, quantile: float) 
 
 def _fill_gaps(s: np.ndarray, z: np.ndarray, max_gap_m: float, source: str, what: str,
                xy: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-    """Bridge runs of NaN no longer than ``max_gap_m`` by straight lines; refuse a longer
-    one (or one at an end of the route, which has no neighbour to bridge from)."""
+    """Bridge each stretch without data no longer than ``max_gap_m``: between two samples
+    with data by a straight line, at an end of the route by the nearest sample's elevation.
+    A stretch is measured between the samples with data on either side (at an end, from the
+    end's sample to the first with data). Returns z and the stretches bridged, shape (G, 2)."""
     missing = ~np.isfinite(z)
     if not missing.any():
         return z, np.zeros((0, 2))
     if missing.all():
-        raise InputError(f"{source}: {what} anywhere along the track")
+        raise InputError(f"{source}: {what} anywhere along the track; check that the terrain covers the track "
+                         "(and the CRS of both)")
     edges = np.flatnonzero(np.diff(np.concatenate([[0], missing.astype(np.int8), [0]])))
-    runs = edges.reshape(-1, 2)  # [first missing, first present after] per run
-    spacing = float(np.median(np.diff(s)))
     gaps = []
-    for first, stop in runs:
-        # the stretch without data: between the samples either side (an end: the run itself)
-        start_m = s[first - 1] if first > 0 else s[first]
-        end_m = s[stop] if stop < s.size else s[stop - 1]
-        length = (stop - first) * spacing
-        if first == 0 or stop == s.size or length > max_gap_m * (1 + 1e-9):
-            where = "at the start" if first == 0 else "at the end" if stop == s.size else "in a gap"
+    for first, stop in edges.reshape(-1, 2):  # [first missing, first present after] per run
+        start_m = s[first - 1] if first > 0 else s[0]
+        end_m = s[stop] if stop < s.size else s[-1]
+        if end_m - start_m > max_gap_m * (1 + 1e-9):
+            where = "at the start" if first == 0 else "at the end" if stop == s.size else "between samples with data"
             raise InputError(
                 f"{source}: {what} from s = {s[first]:.2f} to {s[stop - 1]:.2f} m along the track "
-                f"(x = {xy[0][first]:.2f}, y = {xy[1][first]:.2f}), {length:.2f} m {where}, longer than max_gap_m = "
-                f"{max_gap_m:g} m allows; cut the track there, give terrain that covers it, or raise max_gap_m "
-                "(a straight line is then assumed across it)"
-            )
+                f"(x = {xy[0][first]:.2f}, y = {xy[1][first]:.2f}), a stretch of {end_m - start_m:.2f} m {where}, "
+                f"longer than max_gap_m = {max_gap_m:g} m; cut the track there, give terrain that covers it, or raise "
+                "max_gap_m (a straight line is then assumed across it)")
         gaps.append((start_m, end_m))
     filled = z.copy()
-    filled[missing] = np.interp(s[missing], s[~missing], z[~missing])
+    filled[missing] = np.interp(s[missing], s[~missing], z[~missing])  # flat beyond the ends
     return filled, np.array(gaps)
 
 
@@ -283,6 +297,10 @@ def _project(track: "Track", terrain: Any, terrain_source: str) -> tuple[np.ndar
             return track.x, track.y, None, notes
         target = local_projected_crs(track) if track.crs.is_geographic else track.crs
         moved = project_track(track, target)
+        notes += moved.notes[len(track.notes):]
+        if track.crs.is_geographic:
+            notes.append(f"{track.source}: projected into {_crs_label(target)}, the UTM zone of its mean position "
+                         f"(longitude {np.mean(track.x):.4f}, latitude {np.mean(track.y):.4f})")
         return moved.x, moved.y, target, notes
     crs = getattr(terrain, "crs", None)
     if crs is None:
@@ -291,10 +309,15 @@ def _project(track: "Track", terrain: Any, terrain_source: str) -> tuple[np.ndar
                              "cannot be placed on it; pass terrain_crs (e.g. EPSG:32633)")
         return track.x, track.y, None, notes
     if track.crs is None:
+        from .io.geo import length_units_m
+
+        unit_m = length_units_m(crs, terrain_source)[0]
         notes.append(f"{track.source}: the track states no CRS; its x, y are taken in the terrain's "
-                     f"({_crs_label(crs)}); give track_crs if they are not")
-        return track.x, track.y, crs, notes
+                     f"({_crs_label(crs)}" + (f", in its unit of {unit_m:g} m" if unit_m != 1.0 else "")
+                     + "); give track_crs if they are not")
+        return track.x * unit_m, track.y * unit_m, crs, notes
     moved = project_track(track, crs)
+    notes += moved.notes[len(track.notes):]
     return moved.x, moved.y, crs, notes
 
 
@@ -345,7 +368,8 @@ def route_from_track(track: "Track", terrain: Any = None, *, spacing_m: float = 
     comments = [f"track: {track.source} ({tx.size} points, {s[-1]:.1f} m)", f"x, y: {frame}, in metres; z in metres"]
     density = None
     if terrain is not None:
-        _check_extent(terrain, terrain_source, track.source, s, x, y, crs)
+        _check_extent(terrain, terrain_source, track.source, s, x, y, crs,
+                      track.crs is not None and track.crs.to_epsg() == 4326, max_gap_m)
     if terrain is None:
         kind = "track"
         if track.z_m is None:
@@ -378,7 +402,12 @@ def route_from_track(track: "Track", terrain: Any = None, *, spacing_m: float = 
         comments += more
     if not measured and assumed_roughness is None:
         raise InputError(f"{terrain_source if terrain is not None else track.source}: {resolution}; give an assumed "
-                         "roughness, roughness_class (A-H, ISO 8608) or ri = <RI>, or a terrain that resolves it")
+                         "roughness, roughness_class A-H (ISO 8608) or ri VALUE (an RI), or a terrain that resolves it")
+    if measured and assumed_roughness is not None:
+        notes.append(f"{terrain_source}: the terrain measures the roughness at wheel scale, so the assumed "
+                     f"{assumed_roughness.label} is not used (to plan with it anyway, give it to plan with the route "
+                     "file)")
+        assumed_roughness = None
     if terrain is not None and track.z_m is not None:
         notes.append(f"{track.source}: the track's own elevations are ignored; the terrain gives z")
     what = "no ground points within the corridor" if kind == "point cloud" else "no terrain data"
@@ -421,10 +450,12 @@ def _extent(terrain: Any) -> tuple[float, float, float, float]:
 
 
 def _check_extent(terrain: Any, source: str, track_source: str, s: np.ndarray, x: np.ndarray, y: np.ndarray,
-                  crs: Any) -> None:
-    """Refuse a track that leaves the terrain's bounding box, naming where."""
+                  crs: Any, track_is_wgs84: bool, max_gap_m: float) -> None:
+    """Refuse a track that leaves the terrain's bounding box by more than ``max_gap_m`` + 1 m,
+    naming where (a shorter excursion is a gap without data, bridged or refused as such)."""
     x0, x1, y0, y1 = _extent(terrain)
-    outside = (x < x0) | (x > x1) | (y < y0) | (y > y1)
+    pad = max_gap_m + 1.0
+    outside = (x < x0 - pad) | (x > x1 + pad) | (y < y0 - pad) | (y > y1 + pad)
     if not outside.any():
         return
     box = f"x {x0:.1f} to {x1:.1f} m, y {y0:.1f} to {y1:.1f} m"
@@ -432,12 +463,25 @@ def _check_extent(terrain: Any, source: str, track_source: str, s: np.ndarray, x
         raise InputError(
             f"{track_source}: the track (x {x.min():.1f} to {x.max():.1f} m, y {y.min():.1f} to {y.max():.1f} m"
             f"{', ' + _crs_label(crs) if crs is not None else ''}) lies outside the terrain {source} ({box}); "
-            "is the track's CRS right (track_crs)?")
+            + ("is the terrain's CRS right (terrain_crs)?" if track_is_wgs84 else
+               "are the CRS of the track and of the terrain right (track_crs, terrain_crs)?"))
     i = int(np.flatnonzero(outside)[0])
     stop = i + int(np.argmin(outside[i:])) if not outside[i:].all() else s.size
     raise InputError(
         f"{track_source}: the track leaves the terrain {source} ({box}) from s = {s[i]:.1f} to {s[stop - 1]:.1f} m "
         f"(x = {x[i]:.1f}, y = {y[i]:.1f}); cut the track to the terrain or give a terrain that covers it")
+
+
+def _coarser_than_wheel_scale(spacing_m: float, corridor_m: float | None) -> str | None:
+    """Why a route sampled so does not measure wheel-scale roughness, whatever the terrain (None if it does)."""
+    reasons = []
+    if spacing_m > MAX_ROUGHNESS_SPACING_M * (1 + 1e-9):
+        reasons.append(f"samples every {spacing_m:g} m miss the bumps a wheel feels (roughness is measured at a "
+                       f"spacing of at most {MAX_ROUGHNESS_SPACING_M:g} m)")
+    if corridor_m is not None and corridor_m > MAX_ROUGHNESS_CORRIDOR_M * (1 + 1e-9):
+        reasons.append(f"a corridor of {corridor_m:g} m each side averages ground the tyre does not touch (roughness "
+                       f"is measured within at most {MAX_ROUGHNESS_CORRIDOR_M:g} m of the wheel path)")
+    return "; ".join(reasons) or None
 
 
 def _sample_cloud(cloud: Any, source: str, s: np.ndarray, x: np.ndarray, y: np.ndarray, spacing_m: float,
@@ -456,19 +500,26 @@ def _sample_cloud(cloud: Any, source: str, s: np.ndarray, x: np.ndarray, y: np.n
     kept, bins = corridor_bins(np.column_stack([px, py]), stations, corridor_m)
     density = kept.size / (2.0 * corridor_m * s[-1])
     needed = MIN_POINTS_PER_BIN / (2.0 * corridor_m * spacing_m)
-    measured = density >= needed
+    dense = density >= needed
+    coarse = _coarser_than_wheel_scale(spacing_m, corridor_m)
+    measured = dense and coarse is None
     statistic = "median" if classified else f"{100 * UNCLASSIFIED_QUANTILE:g}th percentile"
     which = "ground points (class 2)" if classified else "points (the cloud is not classified)"
-    resolution = (f"{density:.3g} {which} per m^2 within {corridor_m:g} m of the track; roughness at {spacing_m:g} m "
-                  f"needs {needed:.3g} per m^2 ({MIN_POINTS_PER_BIN:g} per {2 * corridor_m:g} m x {spacing_m:g} m bin)")
-    if measured or not assumed:
-        if not measured:  # refused by the caller with this resolution
-            return np.full(s.size, np.nan), False, density, resolution, []
+    found = (f"{density:.3g} {which} per m^2 within {corridor_m:g} m of the track; roughness at {spacing_m:g} m "
+             f"needs {needed:.3g} per m^2 ({MIN_POINTS_PER_BIN:g} per {2 * corridor_m:g} m x {spacing_m:g} m bin)")
+    resolution = "; ".join(([] if dense else [found]) + ([coarse] if coarse else [])) or found
+    if not measured and not assumed:  # refused by the caller with this resolution
+        return np.full(s.size, np.nan), False, density, resolution, []
+    if dense:
         quantile = 0.5 if classified else UNCLASSIFIED_QUANTILE
         z, _ = _bin_quantile(bins, pz[kept], s.size, quantile)
         comments = [f"z: {statistic} of the {which} within {corridor_m:g} m of the wheel path, in bins of "
-                    f"{spacing_m:g} m along it; {resolution}"]
-        return z, True, density, resolution, comments
+                    f"{spacing_m:g} m along it; {found}"]
+        return z, measured, density, resolution, comments
+    if not classified:
+        raise InputError(f"{source}: the cloud is not classified and too sparse for roughness ({found}): a surface "
+                         "through all its points would run over vegetation; classify its ground first (e.g. PDAL "
+                         "filters.smrf)")
     # too sparse for roughness, which is assumed: the ground's shape from its triangulation
     from scipy.interpolate import LinearNDInterpolator
     from scipy.spatial import cKDTree
@@ -498,10 +549,13 @@ def _sample_grid(grid: Any, source: str, kind: str, x: np.ndarray, y: np.ndarray
     else:
         cell = float(max(grid.cell_size_m))
         cell_text = f"{grid.cell_size_m[0]:g} m x {grid.cell_size_m[1]:g} m"
-    measured = cell <= spacing_m * (1 + 1e-9)
-    resolution = (f"the {kind}'s cells are {cell_text}: it has no data on ground features smaller than that, and "
-                  f"roughness at {spacing_m:g} m needs cells of at most {spacing_m:g} m")
+    coarse = _coarser_than_wheel_scale(spacing_m, None)
+    fine = cell <= spacing_m * (1 + 1e-9)
+    measured = fine and coarse is None
+    found = (f"the {kind}'s cells are {cell_text}: it has no data on ground features smaller than that, and "
+             f"roughness at {spacing_m:g} m needs cells of at most {spacing_m:g} m")
+    resolution = "; ".join(([] if fine else [found]) + ([coarse] if coarse else [])) or found
     comments = [f"z: bilinear between the {kind}'s cells ({cell_text})"]
-    if not measured:
+    if not fine:
         comments[0] += f"; samples every {spacing_m:g} m interpolate between cells, no detail below the cell size"
     return z, measured, resolution, comments

@@ -208,3 +208,68 @@ def test_a_csv_tracks_speed_limit_holds_from_its_point_to_the_next(tmp_path: Pat
     path.write_text("x,y,speed_limit\n0,0,5\n10,0,0\n")
     with pytest.raises(InputError, match=r"line 3: speed_limit = 0 m/s must be a number > 0"):
         read_track(path)
+
+
+# ------------------------------------------------------------------ the review's cases
+
+
+def test_a_sliver_at_the_end_moves_the_last_sample_and_huge_counts_are_refused() -> None:
+    # 2.04 m at 1 m: a 0.04 m remainder is below half a spacing, so the last sample moves to the end
+    s, _, _ = resample_polyline(np.array([0.0, 2.04]), np.zeros(2), 1.0)
+    np.testing.assert_allclose(s, [0, 1, 2.04])
+    with pytest.raises(InputError, match=r"spacing_m = 1e-06 m cuts the 60 m track into 6e\+07 samples"):
+        resample_polyline(np.array([0.0, 60.0]), np.zeros(2), 1e-6)
+
+
+def test_roughness_is_measured_only_at_wheel_scale(ground: dict) -> None:
+    from profileopt.assumed_roughness import AssumedRoughness
+
+    # the dense cloud measures roughness at 0.05 m in a 0.15 m corridor (above); not so at 0.5 m
+    # spacing or in a 1 m corridor, whatever its density (defaults.MAX_ROUGHNESS_*)
+    with pytest.raises(InputError, match=r"samples every 0.5 m miss the bumps a wheel feels"):
+        _route(ground["gpx"], ground["laz"], spacing_m=0.5)
+    with pytest.raises(InputError, match=r"a corridor of 1 m each side averages ground the tyre does not touch"):
+        _route(ground["gpx"], ground["laz"], corridor_m=1.0)
+    coarse = _route(ground["gpx"], ground["laz"], spacing_m=0.5, assumed_roughness=AssumedRoughness(road_class="B"))
+    assert not coarse.roughness_measured and coarse.route.assumed_roughness.road_class == "B"
+    # where the terrain measures the roughness, an assumed class is not used, and a note says so
+    fine = _route(ground["gpx"], ground["laz"], assumed_roughness=AssumedRoughness(road_class="A"))
+    assert fine.roughness_measured and fine.route.assumed_roughness is None
+    assert any("is not used" in note and "ISO 8608 class A" in note for note in fine.notes)
+
+
+def test_a_sparse_unclassified_cloud_is_refused_even_with_a_class(tmp_path: Path) -> None:
+    from profileopt.assumed_roughness import AssumedRoughness
+    from profileopt.io import read_terrain, read_track
+
+    x, y, z, classes = cloud_points(seed=4, density_per_m2=20.0)
+    plain = write_laz(tmp_path / "plain.laz", x, y, z, np.ones_like(classes))
+    gpx = write_gpx(tmp_path / "t.gpx", *track_utm_m(2.0))
+    with pytest.raises(InputError, match=r"not classified and too sparse for roughness.*classify its ground"):
+        route_from_track(read_track(gpx), read_terrain(plain), assumed_roughness=AssumedRoughness(road_class="C"))
+
+
+def test_a_gap_at_an_end_is_held_flat_up_to_max_gap(tmp_path: Path) -> None:
+    from profileopt.io import read_terrain, read_track
+
+    x, y, z, classes = cloud_points(seed=5)
+    tx, ty = track_utm_m(0.05)
+    arc = np.arctan2(x - tx[0], (ty[0] + ARC_RADIUS_M) - y) * ARC_RADIUS_M
+    cut = arc > 0.13  # no ground before 0.13 m along the track: the samples at 0, 0.05 and 0.1 m are empty
+    cloud = read_terrain(write_laz(tmp_path / "cut.laz", x[cut], y[cut], z[cut], classes[cut]))
+    track = read_track(write_gpx(tmp_path / "t.gpx", *track_utm_m(2.0)))
+    result = route_from_track(track, cloud, max_gap_m=0.2)
+    # the stretch from the start to the first sample with data (0.15 m) is bridged, flat
+    np.testing.assert_allclose(result.gaps_m, [[0.0, 0.15]], atol=1e-6)
+    assert result.route.z_m[0] == result.route.z_m[1] == result.route.z_m[2] == result.route.z_m[3]
+    with pytest.raises(InputError, match=r"a stretch of 0.15 m at the start, longer than max_gap_m = 0.1 m"):
+        route_from_track(track, cloud, max_gap_m=0.1)
+
+
+def test_a_label_reads_back_as_the_assumed_roughness() -> None:
+    from profileopt.assumed_roughness import AssumedRoughness
+
+    for assumed in (AssumedRoughness(road_class="E"), AssumedRoughness(ri=0.012345678901234)):
+        assert AssumedRoughness.from_label(assumed.label.replace(" ", "_")) == assumed
+    with pytest.raises(InputError, match="neither"):
+        AssumedRoughness.from_label("class C")

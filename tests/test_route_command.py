@@ -223,3 +223,39 @@ def test_the_readme_walkthrough_runs_as_written(tmp_path: Path) -> None:
     assert (tmp_path / "hexbin-map.png").exists()
     assert verified.returncode == 0, verified.stdout + verified.stderr
     assert "0 of 10972" in verified.stdout and "0.454 of the limit" in verified.stdout
+
+
+def test_the_review_cases_through_the_command(tmp_path: Path, synthetic: dict, capsys: pytest.CaptureFixture) -> None:
+    # a track CSV with a header only: one line, not an internal error
+    header_only = tmp_path / "h.csv"
+    header_only.write_text("x,y\n")
+    status, _, err = _run(["route", str(header_only), "-o", str(tmp_path / "o.csv")], capsys)
+    _one_line_error(status, err, "h.csv", "no data rows")
+    # a LAS without a CRS: the fix is --terrain-crs, not the API's units_m
+    x, y, z, classes = cloud_points(seed=6, density_per_m2=300.0)
+    bare = write_laz(tmp_path / "bare.laz", x, y, z, classes, epsg=None)
+    status, _, err = _run(["route", str(synthetic["gpx"]), "--terrain", str(bare), "-o", str(tmp_path / "o.csv")],
+                          capsys)
+    _one_line_error(status, err, "bare.laz", "--terrain-crs")
+    assert "units_m" not in err
+    # the options of a track are refused with a route file, which is already sampled
+    status, _, err = _run(["plan", str(ROOT / "examples" / "routes" / "curb.csv"), "--spacing", "7"], capsys)
+    _one_line_error(status, err, "curb.csv", "--spacing apply to a track")
+
+
+def test_verify_uses_the_roughness_the_profile_was_planned_with(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    # a route file without a roughness line, planned with --roughness-class: verify judges by that class
+    route = tmp_path / "route.csv"
+    status, _, err = _run(["route", str(HEXBIN_TRACK), "--terrain", str(HEXBIN_LAZ), "--roughness-class", "C",
+                           "-o", str(route)], capsys)
+    assert status == 0, err
+    bare = tmp_path / "bare.csv"
+    bare.write_text("".join(line for line in route.read_text().splitlines(keepends=True)
+                            if not line.startswith("# roughness_class")))
+    profile = tmp_path / "plan.csv"
+    status, _, err = _run(["plan", str(bare), "--roughness-class", "C", "--vehicle", "atv-low-range",
+                           "--path-tolerance", "2", "-o", str(profile)], capsys)
+    assert status == 0, err
+    status, out, err = _run(["verify", str(bare), str(profile)], capsys)
+    assert status == 0, out + err
+    assert "planned with the assumed roughness ISO 8608 class C" in err

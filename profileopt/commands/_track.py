@@ -105,6 +105,28 @@ def track_route(track_path: str, args: argparse.Namespace, prog: str) -> "TrackR
     track = read_track(track_path, track_crs=args.track_crs, track_index=args.track_index)
     result = route_from_track(track, terrain, spacing_m=args.spacing, corridor_m=args.corridor,
                               max_gap_m=args.max_gap, assumed_roughness=assumed_roughness(args))
-    for note in (*track.notes, *result.notes):
-        print(f"{prog}: note: {note}", file=sys.stderr)
+    from ..cli import flags_for_parameters
+
+    for note in (*track.notes, *getattr(terrain, "notes", ()), *result.notes):
+        print(f"{prog}: note: {flags_for_parameters(note)}", file=sys.stderr)
     return result
+
+
+def refuse_track_options(route_path: str, args: argparse.Namespace) -> None:
+    """Refuse the options of a track over a terrain given with a route file, which has its samples.
+
+    Raises
+    ------
+    InputError
+        One of ``--spacing``, ``--corridor``, ``--max-gap``, ``--track-crs``, ``--terrain-crs``,
+        ``--track-index`` differs from its default.
+    """
+    from ..errors import InputError
+
+    defaults = {"spacing": DEFAULT_TRACK_SPACING_M, "corridor": DEFAULT_CORRIDOR_M, "max_gap": DEFAULT_MAX_GAP_M,
+                "track_crs": None, "terrain_crs": None, "track_index": None}
+    given = [name for name, default in defaults.items() if getattr(args, name) != default]
+    if given:
+        flags = ", ".join("--" + name.replace("_", "-") for name in given)
+        raise InputError(f"{route_path}: {flags} apply to a track sampled over a terrain (--terrain TERRAIN); this is a route "
+                         "file, already sampled: drop them, or give the track and --terrain")

@@ -14,7 +14,7 @@ from ..errors import InputError
 from ..io.atomic import STDOUT, OutputSet
 from ..vehicle import load_vehicle
 from ._paths import vehicle_input
-from ._track import add_track_arguments, assumed_roughness, is_track, track_inputs, track_route
+from ._track import add_track_arguments, assumed_roughness, is_track, refuse_track_options, track_inputs, track_route
 
 
 class _DeprecatedAlias(argparse.Action):
@@ -89,6 +89,7 @@ def _run(args: argparse.Namespace) -> int:
         made = track_route(args.route, args, "profileopt plan")
         route = made.route
     else:
+        refuse_track_options(args.route, args)
         route = _route_file(args)
     if args.map is not None and route.x_m is None:
         raise InputError(f"{args.route}: --map draws a route's x,y (or a track's); this route has only s,z: "

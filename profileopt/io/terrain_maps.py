@@ -272,6 +272,10 @@ def read_geotiff(path: str | os.PathLike, *, terrain_crs: str | None = None) -> 
         notes.append(f"{path.name}: elevations converted from units of {vertical_m:g} m to metres")
     if horizontal_m != 1.0:
         notes.append(f"{path.name}: x, y converted from the CRS's unit ({horizontal_m:g} m) to metres")
+        if vertical_m == 1.0 and not unit.strip() and vertical is None:
+            notes.append(f"{path.name}: elevations taken in metres, as the file states no vertical unit, though its "
+                         f"CRS is in units of {horizontal_m:g} m; if they are in that unit, convert the DEM "
+                         "(e.g. gdal_calc) or set its band unit")
     dx, dy = transform.a * horizontal_m, transform.e * horizontal_m
     x0 = (transform.c + 0.5 * transform.a) * horizontal_m  # the centre of cell (0, 0)
     y0 = (transform.f + 0.5 * transform.e) * horizontal_m
@@ -392,7 +396,12 @@ def read_terrain(path: str | os.PathLike, *, terrain_crs: str | None = None) -> 
     if kind == "OpenCRG":
         return read_crg_surface(path, terrain_crs=terrain_crs)
     if terrain_crs is None:
-        return read_las(path)
+        try:
+            return read_las(path)
+        except InputError as exc:  # read_las's fix names its API argument; here the CRS is the fix
+            message = re.sub(r"pass units_m \(metres per file unit[^)]*\)",
+                             "give its CRS with terrain_crs (e.g. EPSG:32633)", str(exc))
+            raise InputError(message) from None
     crs = parse_crs(terrain_crs, str(path), "--terrain-crs")
     units = length_units_m(crs, str(path))
     cloud = read_las(path, units_m=units)
