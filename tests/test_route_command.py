@@ -218,6 +218,10 @@ def test_the_readme_walkthrough_runs_as_written(tmp_path: Path) -> None:
     refused, made, planned, verified = outputs
     # the README quotes the refusal, the plan and the verdict
     assert refused.returncode == 2 and "0.979 ground points (class 2) per m^2" in refused.stderr
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    quoted = text[text.index("    profileopt route: error:"):]
+    quoted = " ".join(quoted[:quoted.index("\n\n")].split())  # the README's quote, its lines joined
+    assert quoted == " ".join(refused.stderr.replace(f"{ROOT}/", "").split())
     assert made.returncode == 0 and (tmp_path / "hexbin.csv").exists() and (tmp_path / "hexbin-route.png").exists()
     assert planned.returncode == 0 and "279.3 m" in planned.stdout and "travel time  39.43 s" in planned.stdout
     assert (tmp_path / "hexbin-map.png").exists()
