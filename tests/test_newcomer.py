@@ -56,6 +56,7 @@ EXAMPLES = {
     "examples/mpc_dompc.py": ["atv", "trail.csv", "washboard.csv", "950"],
     "examples/mpc_rockit.py": ["atv", "trail.csv", "washboard.csv", "40"],
     "examples/routes/make_routes.py": ["beside this script"],
+    "examples/geo_route.py": ["hexbin-track.gpx", "atv-low-range", "geo_route.png"],
 }
 
 

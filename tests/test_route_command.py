@@ -8,7 +8,9 @@ same route read back from its file.
 
 from __future__ import annotations
 
+import os
 import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -263,3 +265,13 @@ def test_verify_uses_the_roughness_the_profile_was_planned_with(tmp_path: Path, 
     status, out, err = _run(["verify", str(bare), str(profile)], capsys)
     assert status == 0, out + err
     assert "planned with the assumed roughness ISO 8608 class C" in err
+
+
+def test_the_geo_example_runs(tmp_path: Path) -> None:
+    done = subprocess.run([sys.executable, str(ROOT / "examples" / "geo_route.py"), "--out", str(tmp_path / "m.png")],
+                          capture_output=True, text=True, cwd=tmp_path, timeout=600,
+                          env={**os.environ, "MPLBACKEND": "Agg"})
+    assert done.returncode == 0, done.stderr
+    # the same plan and check as the README's commands (test_the_readme_walkthrough_runs_as_written)
+    assert "plan: 39.43 s; simulated: 0 of 10972 roughness windows over the force limit" in done.stdout
+    assert (tmp_path / "m.png").stat().st_size > 10_000
