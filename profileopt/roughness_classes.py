@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .errors import InputError
+from ._checks import finite_positive
 from .synthetic import ISO8608_GD0_M3, ISO8608_N0_CPM, ISO8608_N_MAX_CPM, ISO8608_N_MIN_CPM
 
 __all__ = ["detrending_gain", "iso8608_expected_variance_m2", "iso8608_expected_rms_m", "iso8608_ri",
@@ -82,7 +83,7 @@ def detrending_gain(n_cpm: ArrayLike, *, window_m: float) -> np.ndarray:
     numpy.ndarray, shape of ``n_cpm``
         K (dimensionless), in [0, 1).
     """
-    width = _positive("window_m", window_m)
+    width = finite_positive("window_m", window_m)
     a = np.pi * np.abs(np.asarray(n_cpm, dtype=float)) * width
     small = a < _SERIES_BELOW
     a2 = np.where(small, a * a, 1.0)
@@ -123,8 +124,8 @@ def iso8608_expected_variance_m2(road_class: str, *, window_m: float, n_min_cpm:
     from scipy import integrate  # only when a class's RI is derived: reading a route needs no SciPy
 
     gd0 = ISO8608_GD0_M3[iso8608_class_key(road_class)]
-    width = _positive("window_m", window_m)
-    n_min, n_max = _positive("n_min_cpm", n_min_cpm), _positive("n_max_cpm", n_max_cpm)
+    width = finite_positive("window_m", window_m)
+    n_min, n_max = finite_positive("n_min_cpm", n_min_cpm), finite_positive("n_max_cpm", n_max_cpm)
     if not n_max > n_min:
         raise InputError(f"n_max_cpm = {n_max_cpm!r} must be greater than n_min_cpm = {n_min_cpm!r}")
     lo, hi = math.pi * n_min * width, math.pi * n_max * width
@@ -182,14 +183,4 @@ def iso8608_ri(road_class: str, *, window_m: float, clearance_m: float) -> float
     float
         RI (dimensionless).
     """
-    return iso8608_expected_rms_m(road_class, window_m=window_m) / _positive("clearance_m", clearance_m)
-
-
-def _positive(name: str, value: float) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} = {value!r}: must be a number") from None
-    if not (math.isfinite(x) and x > 0):
-        raise InputError(f"{name} = {value!r}: must be a finite number > 0")
-    return x
+    return iso8608_expected_rms_m(road_class, window_m=window_m) / finite_positive("clearance_m", clearance_m)

@@ -26,6 +26,7 @@ from typing import NamedTuple, Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ._checks import finite_positive
 from .errors import InputError
 
 __all__ = [
@@ -74,15 +75,6 @@ class ElevationProfile(NamedTuple):
     z_m: np.ndarray
 
 
-def _finite_positive(name: str, value: float) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} = {value!r}: must be a number") from None
-    if not (math.isfinite(x) and x > 0):
-        raise InputError(f"{name} = {value!r}: must be a finite number > 0")
-    return x
-
 
 def _gd0_m3(road_class: str) -> float:
     key = road_class.upper() if isinstance(road_class, str) else road_class
@@ -94,8 +86,8 @@ def _gd0_m3(road_class: str) -> float:
 
 
 def _check_band(spacing_m: float, n_min_cpm: float, n_max_cpm: float) -> tuple[float, float]:
-    n_min = _finite_positive("n_min_cpm", n_min_cpm)
-    n_max = _finite_positive("n_max_cpm", n_max_cpm)
+    n_min = finite_positive("n_min_cpm", n_min_cpm)
+    n_max = finite_positive("n_max_cpm", n_max_cpm)
     if n_max <= n_min:
         raise InputError(f"n_max_cpm = {n_max_cpm!r} must be greater than n_min_cpm = {n_min_cpm!r}")
     nyquist = 0.5 / spacing_m
@@ -219,8 +211,8 @@ def iso8608_profile(
         an integer >= 0.
     """
     gd0 = _gd0_m3(road_class)
-    length = _finite_positive("length_m", length_m)
-    spacing = _finite_positive("spacing_m", spacing_m)
+    length = finite_positive("length_m", length_m)
+    spacing = finite_positive("spacing_m", spacing_m)
     n_samples = _sample_count(length, spacing)
     n_min, n_max = _check_band(spacing, n_min_cpm, n_max_cpm)
     z = math.sqrt(gd0) * _unit_iso8608(n_samples, spacing, _check_seed(seed), n_min, n_max)
@@ -271,8 +263,8 @@ def iso8608_sections(
     if len(sections) == 0:
         raise InputError("sections is empty; give at least one (class, length_m) pair")
     gd0 = np.array([_gd0_m3(c) for c, _ in sections])
-    lengths = np.array([_finite_positive(f"length of section {i} ({c!r})", n) for i, (c, n) in enumerate(sections)])
-    spacing = _finite_positive("spacing_m", spacing_m)
+    lengths = np.array([finite_positive(f"length of section {i} ({c!r})", n) for i, (c, n) in enumerate(sections)])
+    spacing = finite_positive("spacing_m", spacing_m)
     width = float(transition_m)
     if not (math.isfinite(width) and width >= 0):
         raise InputError(f"transition_m = {transition_m!r}: must be a finite number >= 0")
@@ -333,7 +325,7 @@ def washboard(
     amplitude = float(amplitude_m)
     if not (math.isfinite(amplitude) and amplitude >= 0):
         raise InputError(f"amplitude_m = {amplitude_m!r}: must be a finite number >= 0")
-    wavelength = _finite_positive("wavelength_m", wavelength_m)
+    wavelength = finite_positive("wavelength_m", wavelength_m)
     start = 0.0 if start_m is None else float(start_m)
     inside = np.ones(s.shape, dtype=bool) if start_m is None else s >= start
     if end_m is not None:

@@ -19,7 +19,8 @@ TRACK_SUFFIXES = (".gpx", ".geojson", ".json")
 ROAD_CLASSES = tuple("ABCDEFGH")
 
 
-def _float(text: str) -> float:
+def number_argument(text: str) -> float:
+    """An option's number, or argparse's one-line error."""
     try:
         return float(text)
     except ValueError:
@@ -39,13 +40,13 @@ def add_track_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--terrain", metavar="FILE",
                        help="the ground under the track: a point cloud (.las, .laz), a DEM (.tif) or an OpenCRG "
                             "surface (.crg); without it, a track's own elevations (GPX <ele>)")
-    group.add_argument("--spacing", type=_float, default=DEFAULT_TRACK_SPACING_M, metavar="M",
+    group.add_argument("--spacing", type=number_argument, default=DEFAULT_TRACK_SPACING_M, metavar="M",
                        help=f"distance between route samples along the track in m (default: {DEFAULT_TRACK_SPACING_M:g}, "
                             "half the bundled vehicles' wheel radius)")
-    group.add_argument("--corridor", type=_float, default=DEFAULT_CORRIDOR_M, metavar="M",
+    group.add_argument("--corridor", type=number_argument, default=DEFAULT_CORRIDOR_M, metavar="M",
                        help="half-width in m of the strip around the wheel path whose ground points give the "
                             f"elevation (default: {DEFAULT_CORRIDOR_M:g}, about one tyre's width in all)")
-    group.add_argument("--max-gap", type=_float, default=DEFAULT_MAX_GAP_M, metavar="M",
+    group.add_argument("--max-gap", type=number_argument, default=DEFAULT_MAX_GAP_M, metavar="M",
                        help="longest stretch without ground data bridged by a straight line, in m; a longer one "
                             f"is refused (default: {DEFAULT_MAX_GAP_M:g})")
     group.add_argument("--track-crs", metavar="CRS",
@@ -58,7 +59,7 @@ def add_track_arguments(parser: argparse.ArgumentParser) -> None:
     rough.add_argument("--roughness-class", choices=ROAD_CLASSES, type=str.upper, metavar="A-H",
                        help="assume this ISO 8608 road class's roughness where the terrain cannot measure it "
                             "(the terrain then gives the geometry and grade)")
-    rough.add_argument("--ri", type=_float, metavar="VALUE",
+    rough.add_argument("--ri", type=number_argument, metavar="VALUE",
                        help="assume this Roughness Index (RI = STD(e)/h over a roughness window) instead")
 
 

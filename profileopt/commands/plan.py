@@ -14,7 +14,8 @@ from ..errors import InputError
 from ..io.atomic import STDOUT, OutputSet
 from ..vehicle import load_vehicle
 from ._paths import vehicle_input
-from ._track import add_track_arguments, assumed_roughness, is_track, refuse_track_options, track_inputs, track_route
+from ._track import (add_track_arguments, assumed_roughness, is_track, number_argument, refuse_track_options,
+                     track_inputs, track_route)
 
 
 class _DeprecatedAlias(argparse.Action):
@@ -26,13 +27,6 @@ class _DeprecatedAlias(argparse.Action):
         setattr(namespace, self.dest, values)
 
 
-def _float(text: str) -> float:
-    try:
-        return float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
-
-
 def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("route", help="route CSV: columns s,z or x,y,z (m), optional speed_limit (m/s); or a track "
                                       "(GPX, GeoJSON, CSV of x,y with --terrain), sampled as 'profileopt route' does")
@@ -40,24 +34,24 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
                         help="bundled vehicle name or .toml file (default: atv)")
     parser.add_argument("-o", "--output", metavar="CSV",
                         help="write the profile CSV here ('-': standard output, the summary then goes to stderr)")
-    parser.add_argument("--segment-length", type=_float, default=DEFAULT_SEGMENT_LENGTH_M, metavar="M",
+    parser.add_argument("--segment-length", type=number_argument, default=DEFAULT_SEGMENT_LENGTH_M, metavar="M",
                         help=f"segment length in m, the planning resolution (default: {DEFAULT_SEGMENT_LENGTH_M:g})")
-    parser.add_argument("--roughness-window", type=_float, default=DEFAULT_ROUGHNESS_WINDOW_M, metavar="M",
+    parser.add_argument("--roughness-window", type=number_argument, default=DEFAULT_ROUGHNESS_WINDOW_M, metavar="M",
                         help="roughness window in m: every stretch this long, wherever it starts, is driven at "
                              f"speeds admissible for its own RI (default: {DEFAULT_ROUGHNESS_WINDOW_M:g})")
-    parser.add_argument("--path-tolerance", type=_float, default=DEFAULT_PATH_TOLERANCE_M, metavar="M",
+    parser.add_argument("--path-tolerance", type=number_argument, default=DEFAULT_PATH_TOLERANCE_M, metavar="M",
                         help="how far in m the smoothed path, whose curvature limits the speed in turns, may stray "
                              "from an x,y,z route's points; give the track's noise, a few m for a consumer GPS "
                              f"(default: {DEFAULT_PATH_TOLERANCE_M:g})")
     parser.add_argument("--model", default=DEFAULT_MODEL, choices=list(MODEL_KEYS),
                         help="force model (default: sbem_tf)")
-    parser.add_argument("--smoothing", type=_float, default=DEFAULT_SMOOTHING, metavar="W",
+    parser.add_argument("--smoothing", type=number_argument, default=DEFAULT_SMOOTHING, metavar="W",
                         help="weight of the comfort term: objective = time + W * integral (jerk/(1 m/s^3))^2 dt "
                              f"(default: {DEFAULT_SMOOTHING}; 0 = pure minimum time)")
-    parser.add_argument("--max-jerk", type=_float, default=None, metavar="MPS3",
+    parser.add_argument("--max-jerk", type=number_argument, default=None, metavar="MPS3",
                         help="jerk bound in m/s^3 (default: the vehicle file's; 'inf' turns it off)")
-    parser.add_argument("--v0", type=_float, default=0.0, metavar="MPS", help="speed at the start, m/s (default: 0)")
-    parser.add_argument("--vend", type=_float, default=0.0, metavar="MPS", help="speed at the end, m/s (default: 0)")
+    parser.add_argument("--v0", type=number_argument, default=0.0, metavar="MPS", help="speed at the start, m/s (default: 0)")
+    parser.add_argument("--vend", type=number_argument, default=0.0, metavar="MPS", help="speed at the end, m/s (default: 0)")
     parser.add_argument("--method", default="auto", choices=["auto", "ipopt"],
                         help="'auto': exact forward-backward profile when it is optimal, else IPOPT; "
                              "'ipopt': always IPOPT")
