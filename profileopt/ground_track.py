@@ -405,8 +405,9 @@ def route_from_track(track: "Track", terrain: Any = None, *, spacing_m: float = 
                          "roughness, roughness_class A-H (ISO 8608) or ri VALUE (an RI), or a terrain that resolves it")
     if measured and assumed_roughness is not None:
         notes.append(f"{terrain_source}: the terrain measures the roughness at wheel scale, so the assumed "
-                     f"{assumed_roughness.label} is not used (to plan with it anyway, give it to plan with the route "
-                     "file)")
+                     f"{assumed_roughness.label} is not used (to plan with it anyway, plan the route file with "
+                     + (f"roughness_class {assumed_roughness.road_class})" if assumed_roughness.road_class
+                        else "ri VALUE)"))
         assumed_roughness = None
     if terrain is not None and track.z_m is not None:
         notes.append(f"{track.source}: the track's own elevations are ignored; the terrain gives z")
