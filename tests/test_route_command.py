@@ -275,3 +275,12 @@ def test_the_geo_example_runs(tmp_path: Path) -> None:
     # the same plan and check as the README's commands (test_the_readme_walkthrough_runs_as_written)
     assert "plan: 39.43 s; simulated: 0 of 10972 roughness windows over the force limit" in done.stdout
     assert (tmp_path / "m.png").stat().st_size > 10_000
+
+
+def test_a_track_where_a_route_file_is_expected_says_what_to_do(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    track = tmp_path / "track.csv"
+    track.write_text("x,y\n0,0\n10,0\n")
+    status, _, err = _run(["plan", str(track)], capsys)
+    _one_line_error(status, err, "track.csv", "--terrain TERRAIN")
+    status, _, err = _run(["verify", str(HEXBIN_TRACK), str(track)], capsys)
+    _one_line_error(status, err, "hexbin-track.gpx", "profileopt route")

@@ -125,7 +125,12 @@ def _route_file(args: argparse.Namespace):  # noqa: ANN202  (Route)
 
     from ..io.routes import read_route
 
-    route = read_route(args.route)
+    try:
+        route = read_route(args.route)
+    except InputError as exc:
+        if "lacks the columns" not in str(exc):
+            raise
+        raise InputError(f"{exc}; a track of x,y points is planned with --terrain TERRAIN") from None
     assumed = assumed_roughness(args)
     if assumed is not None:
         if route.assumed_roughness is not None:

@@ -113,6 +113,11 @@ def _verify(args: argparse.Namespace) -> int:
     # file); then written together, all or none
     outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot)],
                         inputs=[args.route, args.profile, vehicle_input(args.vehicle)])
+    from ._track import TRACK_SUFFIXES
+
+    if Path(args.route).suffix.lower() in TRACK_SUFFIXES:
+        raise InputError(f"{args.route}: verify drives a route file, not a track: make one with 'profileopt route "
+                         f"{args.route} --terrain TERRAIN -o route.csv', plan and verify that")
     route = read_route(args.route)
     profile = read_profile(args.profile)
     route = _with_profiles_roughness(route, profile, args.profile)
