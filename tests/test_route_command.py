@@ -227,6 +227,7 @@ def test_the_readme_walkthrough_runs_as_written(tmp_path: Path) -> None:
     assert made.returncode == 0 and (tmp_path / "hexbin.csv").exists() and (tmp_path / "hexbin-route.png").exists()
     assert planned.returncode == 0 and "279.3 m" in planned.stdout and "travel time  39.43 s" in planned.stdout
     assert (tmp_path / "hexbin-map.png").exists()
+    assert "roughness    assumed, not measured: ISO 8608 class C (RI 0.04025 over 5 m windows)" in planned.stdout
     assert verified.returncode == 0, verified.stdout + verified.stderr
     assert "0 of 10972" in verified.stdout and "0.454 of the limit" in verified.stdout
 

@@ -166,6 +166,9 @@ def _human(summary: dict, args: argparse.Namespace) -> str:
         f"  slowest      {slow['s_start_m']:g}-{slow['s_end_m']:g} m at {slow['top_speed_mps']:.3g} m/s: "
         f"{slow['reason']}",
         f"  force        {_ratio(margins['force'])}",
+        *([f"  roughness    assumed, not measured: {summary['roughness']['label']} (RI {summary['roughness']['ri']:.4g} "
+           f"over {summary['roughness']['window_m']:g} m windows)"]
+          if summary.get("roughness", {}).get("source") == "assumed" else []),
         *(f"  {name:<12} {_ratio(margins[key])}" for key, name in (("lateral", "lateral"), ("friction", "friction"))
           if key in margins),
         f"  acceleration {_ratio(margins['accel'])}",
