@@ -297,8 +297,9 @@ def _project(track: "Track", terrain: Any, terrain_source: str) -> tuple[np.ndar
             return track.x, track.y, None, notes
         target = local_projected_crs(track) if track.crs.is_geographic else track.crs
         moved = project_track(track, target)
-        notes += moved.notes[len(track.notes):]
-        if track.crs.is_geographic:
+        if not track.crs.is_geographic:
+            notes += moved.notes[len(track.notes):]
+        else:
             notes.append(f"{track.source}: projected into {_crs_label(target)}, the UTM zone of its mean position "
                          f"(longitude {np.mean(track.x):.4f}, latitude {np.mean(track.y):.4f})")
         return moved.x, moved.y, target, notes
