@@ -238,7 +238,9 @@ def check_plan(profile, route: Route, vehicle: Vehicle, options: dict) -> None:
     np.testing.assert_allclose(np.diff(profile.time_s), dt, rtol=1e-9)
 
 
-NAMES_THE_CAUSE = re.compile(r"v0_mps|vend_mps|segment \d+|s = [-0-9.e+]+ m")
+#: An infeasibility message names its cause: the end speeds, a segment, or a place (s = 12 m, or
+#: a stretch: s = 0 to 48 m, as the power-limited climb's message gives it).
+NAMES_THE_CAUSE = re.compile(r"v0_mps|vend_mps|segment \d+|s = [-0-9.e+]+( to [-0-9.e+]+)? m")
 
 
 @FAST
