@@ -308,7 +308,7 @@ class RowLimit(Limit):
 
     The family's expressions are evaluated once for every use: on IPOPT's solution
     (:meth:`violation`), and on a finished profile at its exact speeds (:meth:`row_values`,
-    for a subclass's :meth:`check` and :meth:`margins`). A subclass names its ``family`` and
+    for :meth:`check` and a subclass's :meth:`margins`). A subclass names its ``family`` and
     gives its per-segment data (:meth:`row_data`).
     """
 
@@ -363,6 +363,21 @@ class RowLimit(Limit):
         path = profile.path if profile.path is not None else flat_path(n)
         return family_rows(self.family, profile.speed_mps**2, np.diff(profile.s_m), self.row_data(path),
                            smooth=False).max(axis=0)
+
+    def check(self, profile: "Profile") -> float:
+        """How far the family's largest row in any segment exceeds 1 (its rows are the
+        limited quantity over its limit: the friction usage, the drive power over P).
+
+        Parameters
+        ----------
+        profile : Profile
+            The profile about to be returned.
+
+        Returns
+        -------
+        float
+        """
+        return max(float(np.max(self.row_values(profile), initial=0.0)) - 1.0, 0.0)
 
 
 def worst_ratio(values: np.ndarray, limit: float, where: np.ndarray) -> dict:

@@ -164,20 +164,6 @@ class FrictionLimit(RowLimit):
         accel = np.where(need, np.minimum(accel_mps2, -tyre_accel_mps2(-share, path.grade_hi_rad)), accel_mps2)
         return cap, decel, accel
 
-    def check(self, profile: "Profile") -> float:
-        """How far the friction usage of any segment exceeds 1.
-
-        Parameters
-        ----------
-        profile : Profile
-            The profile about to be returned.
-
-        Returns
-        -------
-        float
-        """
-        return max(float(np.max(self.row_values(profile), initial=0.0)) - 1.0, 0.0)
-
     def margins(self, profile: "Profile") -> dict[str, dict]:
         """The largest share of the friction circle used (the tyre force over mu times the
         normal force, the square root of the usage), and where.

@@ -98,20 +98,6 @@ class PowerLimit(RowLimit):
             return None
         return "power", self.row_data(context.turns_and_slopes)
 
-    def check(self, profile: "Profile") -> float:
-        """How far the drive power in any segment exceeds P (relative).
-
-        Parameters
-        ----------
-        profile : Profile
-            The profile about to be returned.
-
-        Returns
-        -------
-        float
-        """
-        return max(float(np.max(self.row_values(profile), initial=0.0)) - 1.0, 0.0)
-
     def margins(self, profile: "Profile") -> dict[str, dict]:
         """The largest drive power over P, and where.
 
