@@ -36,7 +36,7 @@ if TYPE_CHECKING:
     from .route import Route
     from .vehicle import Vehicle
 
-__all__ = ["check_limits", "LimitCheck", "LimitBreach", "LIMIT_RTOL", "STALE_FORCE_RTOL"]
+__all__ = ["check_limits", "route_as_planned", "LimitCheck", "LimitBreach", "LIMIT_RTOL", "STALE_FORCE_RTOL"]
 
 #: A profile keeps a limit when it exceeds it by at most this share of it: the planner's own
 #: check (:attr:`profileopt.planning.SolverOptions.check_rtol`), so a planned profile passes.
@@ -208,6 +208,48 @@ def _setting_m(profile: "Profile", key: str, default: float) -> float:
     return value if math.isfinite(value) and value > 0 else default
 
 
+def route_as_planned(route: "Route", profile: "Profile") -> tuple["Route", str | None]:
+    """The route with the assumed roughness its profile was planned with.
+
+    ``plan route.csv --roughness-class C`` (``plan(dataclasses.replace(route,
+    assumed_roughness=...))``) records the assumption in the profile's settings, not in the
+    route file: a profile is judged on the roughness it was planned for.
+
+    Parameters
+    ----------
+    route : Route
+        The route as read.
+    profile : Profile
+        A profile of it; ``profile.settings["roughness"]`` names an assumed roughness, if any.
+
+    Returns
+    -------
+    (Route, str or None)
+        The route (itself when the profile records no assumption) and a note when the
+        profile's assumption differs from the route's own.
+
+    Raises
+    ------
+    InputError
+        The profile records a roughness that names no class and no RI.
+    """
+    from .assumed_roughness import AssumedRoughness
+
+    label = profile.settings.get("roughness")
+    if label is None:
+        return route, None
+    try:
+        assumed = AssumedRoughness.from_label(label)
+    except InputError as exc:
+        raise InputError(f"profile: its settings line records roughness={label}: {exc}; plan it again") from None
+    if assumed == route.assumed_roughness:
+        return route, None
+    was = route.assumed_roughness.label if route.assumed_roughness else "none, measured"
+    note = (f"the profile was planned with the assumed roughness {assumed.label} (the route's: {was}); it is "
+            "judged with the profile's")
+    return dataclasses.replace(route, assumed_roughness=assumed), note
+
+
 def check_limits(
     route: "Route",
     profile: "Profile",
@@ -254,6 +296,7 @@ def check_limits(
     """
     key = profile.model if model is None else model
     force_model = get_model(key)
+    route, planned_with = route_as_planned(route, profile)
     s = np.asarray(profile.s_m, dtype=float)
     v = np.asarray(profile.speed_mps, dtype=float)
     _check_coverage(route, s)
@@ -271,7 +314,7 @@ def check_limits(
             "meets); verify a profile on the route and vehicle (ground clearance) it was planned for, or plan "
             "it again"
         )
-    notes: list[str] = []
+    notes = [planned_with] if planned_with else []
     limit = force_model.limit_n(vehicle)
     profile_limit = np.asarray(profile.force_limit_n, dtype=float)[:-1]
     if np.any(np.abs(profile_limit - limit) > 1e-9 * limit):

@@ -30,7 +30,7 @@ import numpy as np
 
 from .io.atomic import atomic_write
 from .forces import get_model
-from .limit_check import LimitBreach, LimitCheck, check_limits
+from .limit_check import LimitBreach, LimitCheck, check_limits, route_as_planned
 from .simulate import QuarterCarRun, simulate_quarter_car
 from .stations import segment_index
 from .window_check import UNDERPREDICTION_TOLERANCE, WindowCheck, check_windows
@@ -348,6 +348,7 @@ def verify(
     t_start = time.perf_counter()
     if check is None:
         check = check_limits(route, profile, vehicle, model=model)
+    route, _ = route_as_planned(route, profile)  # the roughness it was planned with (check_limits notes it)
     force_model = get_model(check.model)
     s = np.asarray(profile.s_m, dtype=float)
     notes = check.notes

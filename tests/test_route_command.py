@@ -265,7 +265,7 @@ def test_verify_uses_the_roughness_the_profile_was_planned_with(tmp_path: Path, 
     assert status == 0, err
     status, out, err = _run(["verify", str(bare), str(profile)], capsys)
     assert status == 0, out + err
-    assert "planned with the assumed roughness ISO 8608 class C" in err
+    assert "planned with the assumed roughness ISO 8608 class C" in out + err
 
 
 def test_the_geo_example_runs(tmp_path: Path) -> None:

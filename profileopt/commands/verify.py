@@ -80,27 +80,6 @@ def _verdict(check, result=None) -> tuple[int, str]:
                          f"simulation; exit {EXIT_PASSES}")
 
 
-def _with_profiles_roughness(route, profile, profile_path: str):  # noqa: ANN001, ANN202 (Route)
-    """The route with the roughness the profile was planned with, if that was an assumed one:
-    ``plan route.csv --roughness-class C`` records it in the profile, not in the route file."""
-    import dataclasses
-
-    from ..assumed_roughness import AssumedRoughness
-
-    label = profile.settings.get("roughness")
-    if label is None:
-        return route
-    try:
-        assumed = AssumedRoughness.from_label(label)
-    except InputError as exc:
-        raise InputError(f"{profile_path}: its settings line records roughness={label}: {exc}; plan it again") from None
-    if assumed != route.assumed_roughness:
-        was = route.assumed_roughness.label if route.assumed_roughness else "none, measured"
-        print(f"profileopt verify: note: {profile_path} was planned with the assumed roughness {assumed.label} "
-              f"(the route file's: {was}); verified with the profile's", file=sys.stderr)
-    return dataclasses.replace(route, assumed_roughness=assumed)
-
-
 def _verify(args: argparse.Namespace) -> int:
     """Run ``profileopt verify``; returns the verdict's status (:data:`VERIFY_EXIT_STATUSES`)."""
     from ..forces import get_model
@@ -120,7 +99,6 @@ def _verify(args: argparse.Namespace) -> int:
                          f"{args.route} --terrain TERRAIN -o route.csv', plan and verify that")
     route = read_route(args.route)
     profile = read_profile(args.profile)
-    route = _with_profiles_roughness(route, profile, args.profile)
     vehicle = load_vehicle(_vehicle_of(args, profile))
     check = check_limits(route, profile, vehicle, model=args.model)
     model = get_model(check.model)
