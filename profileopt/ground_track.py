@@ -42,7 +42,7 @@ import numpy as np
 from .defaults import (DEFAULT_CORRIDOR_M, DEFAULT_MAX_GAP_M, DEFAULT_TRACK_SPACING_M, MAX_ROUGHNESS_CORRIDOR_M,
                        MAX_ROUGHNESS_SPACING_M, MIN_POINTS_PER_BIN)
 from .errors import InputError
-from .route import Route
+from .route import Route, path_distance_m
 
 if TYPE_CHECKING:
     from .io.tracks import Track
@@ -137,7 +137,7 @@ def resample_polyline(x_m: np.ndarray, y_m: np.ndarray, spacing_m: float) -> tup
     """
     x = np.asarray(x_m, dtype=float)
     y = np.asarray(y_m, dtype=float)
-    along = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
+    along = path_distance_m(x, y)
     length = float(along[-1])
     count = int(math.floor(length / spacing_m + 1e-9)) + 1
     if count > MAX_TRACK_SAMPLES:
@@ -376,7 +376,7 @@ def route_from_track(track: "Track", terrain: Any = None, *, spacing_m: float = 
         if track.z_m is None:
             raise InputError(f"{track.source}: the track has no elevations (GPX <ele>, a z column); give a terrain "
                              "map (--terrain) for the ground's elevation")
-        along = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(tx), np.diff(ty)))])
+        along = path_distance_m(tx, ty)
         if tx.size >= 5:
             z = smooth_track_elevations(along, track.z_m)(s)
             how = (f"smoothed over about {GPS_ELEVATION_SCALE_M:g} m (a spline; GPS elevations are noisy by metres; "
@@ -427,14 +427,14 @@ def route_from_track(track: "Track", terrain: Any = None, *, spacing_m: float = 
     if track.speed_limit_mps is not None:
         # a track point's limit holds to the next point; a sample on a piece of the track gets that
         # piece's limit, and a sample at a point the lower of the two pieces meeting there
-        along = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(tx), np.diff(ty)))])
+        along = path_distance_m(tx, ty)
         piece = np.clip(np.searchsorted(along, s, side="right") - 1, 0, tx.size - 2)
         before = np.clip(np.searchsorted(along, s, side="left") - 1, 0, tx.size - 2)
         limit = np.minimum(track.speed_limit_mps[piece], track.speed_limit_mps[before])
         comments.append("speed_limit_mps: the track's speed_limit, each from its point to the next")
     # s as every x,y route has it (profileopt.io.read_route): the horizontal distance between the samples,
     # so that the route written and read back is this one, float for float
-    s_route = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
+    s_route = path_distance_m(x, y)
     route = Route(s_m=s_route, z_m=z, x_m=x, y_m=y, speed_limit_mps=limit, source=track.source,
                   assumed_roughness=assumed_roughness)
     return TrackRoute(route=route, crs_name=_crs_label(crs), track_x_m=np.asarray(tx), track_y_m=np.asarray(ty),
@@ -494,10 +494,10 @@ def _sample_cloud(cloud: Any, source: str, s: np.ndarray, x: np.ndarray, y: np.n
     if classified and not ground.any():
         raise InputError(f"{source}: the cloud is classified but has no ground points (class 2); classify its ground "
                          "(e.g. PDAL filters.smrf)")
-    px, py, pz = cloud.x_m[ground], cloud.y_m[ground], cloud.z_m[ground]
+    gx, gy, gz = cloud.x_m[ground], cloud.y_m[ground], cloud.z_m[ground]
     reach = corridor_m + spacing_m
-    near = ((px >= x.min() - reach) & (px <= x.max() + reach) & (py >= y.min() - reach) & (py <= y.max() + reach))
-    px, py, pz = px[near], py[near], pz[near]
+    near = ((gx >= x.min() - reach) & (gx <= x.max() + reach) & (gy >= y.min() - reach) & (gy <= y.max() + reach))
+    px, py, pz = gx[near], gy[near], gz[near]
     stations = np.column_stack([x, y])
     kept, bins = corridor_bins(np.column_stack([px, py]), stations, corridor_m)
     density = kept.size / (2.0 * corridor_m * s[-1])
@@ -528,13 +528,12 @@ def _sample_cloud(cloud: Any, source: str, s: np.ndarray, x: np.ndarray, y: np.n
 
     # the ground points within a few point spacings (at least 5 m) of the track: enough to
     # surround every sample with triangles
-    px, py, pz = (cloud.x_m[ground], cloud.y_m[ground], cloud.z_m[ground])
-    spread = 3.0 / math.sqrt(max(pz.size / max(np.ptp(px) * np.ptp(py), 1e-9), 1e-9))
-    distance, _ = cKDTree(stations).query(np.column_stack([px, py]), distance_upper_bound=max(spread, 5.0))
+    spread = 3.0 / math.sqrt(max(gz.size / max(np.ptp(gx) * np.ptp(gy), 1e-9), 1e-9))
+    distance, _ = cKDTree(stations).query(np.column_stack([gx, gy]), distance_upper_bound=max(spread, 5.0))
     wide = np.flatnonzero(np.isfinite(distance))
     if wide.size < 3:
         return np.full(s.size, np.nan), False, density, resolution, []
-    surface = LinearNDInterpolator(np.column_stack([px[wide], py[wide]]), pz[wide])
+    surface = LinearNDInterpolator(np.column_stack([gx[wide], gy[wide]]), gz[wide])
     z = surface(x, y)
     comments = [f"z: linear over the triangulation of the {which} within {max(spread, 5.0):.3g} m of the track"]
     return z, False, density, resolution, comments

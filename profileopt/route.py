@@ -14,7 +14,7 @@ import numpy as np
 from .assumed_roughness import AssumedRoughness
 from .errors import InputError
 
-__all__ = ["Route", "validate_route_arrays", "MAX_ABS_ELEVATION_M", "MAX_ELEVATION_STEP_M", "MIN_SPEED_LIMIT_MPS"]
+__all__ = ["Route", "validate_route_arrays", "path_distance_m", "MAX_ABS_ELEVATION_M", "MAX_ELEVATION_STEP_M", "MIN_SPEED_LIMIT_MPS"]
 
 #: Elevations beyond this (m) are not on the Earth's surface: almost surely a unit mistake.
 MAX_ABS_ELEVATION_M = 10_000.0
@@ -94,6 +94,25 @@ class Route:
     def length_m(self) -> float:
         """Length of the route s[-1] - s[0] (m)."""
         return float(self.s_m[-1] - self.s_m[0])
+
+
+def path_distance_m(x_m: np.ndarray, y_m: np.ndarray) -> np.ndarray:
+    """Distance along a polyline in the plane from its first point: the cumulative length of
+    its straight pieces, the ``s`` of a route given as ``x,y,z``.
+
+    Parameters
+    ----------
+    x_m, y_m : numpy.ndarray, shape (M,)
+        The polyline's points (m).
+
+    Returns
+    -------
+    numpy.ndarray, shape (M,)
+        s (m), from 0.
+    """
+    x = np.asarray(x_m, dtype=float)
+    y = np.asarray(y_m, dtype=float)
+    return np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
 
 
 def validate_route_arrays(source: str, s: np.ndarray, z: np.ndarray, limit: np.ndarray | None,

@@ -38,7 +38,7 @@ import numpy as np
 
 from ..assumed_roughness import MAX_ASSUMED_RI, AssumedRoughness
 from ..errors import InputError
-from ..route import Route, validate_route_arrays
+from ..route import Route, path_distance_m, validate_route_arrays
 from .atomic import atomic_write
 from .table import Table, read_table
 
@@ -111,12 +111,11 @@ def read_route(path: str | os.PathLike) -> Route:
         s = values[:, columns["s"]]
     else:
         x, y = values[:, columns["x"]], values[:, columns["y"]]
-        step = np.hypot(np.diff(x), np.diff(y))
-        bad = np.flatnonzero(step == 0)
+        s = path_distance_m(x, y)
+        bad = np.flatnonzero(np.diff(s) == 0)
         if bad.size:
             raise InputError(f"{name}: line {where[bad[0] + 1]}: the point repeats the previous x,y; "
                              "remove duplicate points")
-        s = np.concatenate([[0.0], np.cumsum(step)])
     validate_route_arrays(name, s, z, limit, where, "line")
     return Route(s_m=s, z_m=z, speed_limit_mps=limit, source=name, notes=notes, x_m=x, y_m=y,
                  assumed_roughness=_assumed_roughness(table))
