@@ -109,16 +109,14 @@ def test_hessian_is_banded_so_the_build_does_not_grow_with_n() -> None:
     assert jac.nnz() == 2 * n + 3 * (n - 1)
 
 
-@pytest.mark.parametrize("n, with_jerk", [(1, True), (3, False), (37, True), (64, True), (150, True)])
-def test_solution_equals_the_reference_nlpsol(n: int, with_jerk: bool) -> None:
-    """Same IPOPT options on the reference NLP (symbolic derivatives of the whole
-    expression): the same iterates, so the same b to rounding."""
-    rng = np.random.default_rng(7 + n)
+def random_problem(n: int, with_jerk: bool, seed: int) -> dict:
+    """nlpsol arguments of a random feasible problem: random caps and lengths, stops at both
+    ends, the greatest profile below the caps within the acceleration bounds as start."""
+    rng = np.random.default_rng(seed)
     ds = rng.uniform(0.5, 1.5, n)
     l_ref, b_ref, a_ref, decel = 5.0, 100.0, 1.5, 2.0
     upper = rng.uniform(0.2, 1.0, n + 1)
     upper[0] = upper[-1] = 0.0
-    # a feasible start: the greatest profile below the caps within the acceleration bounds
     b = upper * b_ref
     for i in range(n):
         b[i + 1] = min(b[i + 1], b[i] + 2 * a_ref * ds[i] * l_ref)
@@ -127,7 +125,14 @@ def test_solution_equals_the_reference_nlpsol(n: int, with_jerk: bool) -> None:
     p = np.concatenate([ds, [b_ref, l_ref, a_ref, 30.0, 0.05, 1 / 1.5]])
     ng = n + (n - 1 if with_jerk and n >= 2 else 0)
     lbg = np.concatenate([np.full(n, -decel / a_ref), np.full(ng - n, -1.0)])
-    args = dict(x0=b / b_ref, lbx=np.zeros(n + 1), ubx=upper, lbg=lbg, ubg=np.ones(ng), p=p)
+    return dict(x0=b / b_ref, lbx=np.zeros(n + 1), ubx=upper, lbg=lbg, ubg=np.ones(ng), p=p)
+
+
+@pytest.mark.parametrize("n, with_jerk", [(1, True), (3, False), (37, True), (64, True), (150, True)])
+def test_solution_equals_the_reference_nlpsol(n: int, with_jerk: bool) -> None:
+    """Same IPOPT options on the reference NLP (symbolic derivatives of the whole
+    expression): the same iterates, so the same b to rounding."""
+    args = random_problem(n, with_jerk, 7 + n)
     reference = ca.nlpsol("reference", "ipopt", reference_nlp(n, with_jerk), dict(DEFAULT_IPOPT_OPTIONS))
     fast = _nlp.build_nlp(n, with_jerk)
     x_ref = dense(reference(**args)["x"]).ravel()

@@ -71,20 +71,28 @@ def test_pieces_give_the_optimum_of_the_whole_route(check_profile, monkeypatch, 
     check_profile(split, route, vehicle, jerk=options.get("max_jerk_mps3"))
 
 
+def spy_on_the_whole_solve(monkeypatch, run) -> list:
+    """Run ``run()`` and return, for each NLP solve plan() made, IPOPT's solver of that NLP
+    and the solve's arguments (x0, lbx, ubx, lengths, lbg, ubg, p_tail, data), so that a
+    test can solve it again with IPOPT and read IPOPT's bound multipliers lam_x."""
+    calls = []
+    original = planner.solve_nlp
+
+    def spy(n, with_jerk, families, options, *args, **kwargs):
+        calls.append((nlp.cached_nlp(n, with_jerk, options.ipopt_key(), families), args + (None,) * (8 - len(args))))
+        return original(n, with_jerk, families, options, *args, **kwargs)
+
+    monkeypatch.setattr(planner, "solve_nlp", spy)
+    run()
+    monkeypatch.setattr(planner, "solve_nlp", original)
+    return calls
+
+
 def whole_solve_with_multipliers(monkeypatch, route, vehicle, **options):
     """The whole route's NLP solved as plan() does, with IPOPT's x, lam_x, lam_g (scaled)
     and the parameters after the segment lengths."""
-    calls = []
-    original = planner.solve_ipopt
-
-    def spy(solver, *args):
-        calls.append((solver, args))
-        return original(solver, *args)
-
-    monkeypatch.setattr(planner, "solve_ipopt", spy)
-    solve(monkeypatch, route, vehicle, 10**9, **options)
-    monkeypatch.setattr(planner, "solve_ipopt", original)
-    (solver, (x0, lbx, ubx, length, lbg, ubg, p_tail)), = calls
+    calls = spy_on_the_whole_solve(monkeypatch, lambda: solve(monkeypatch, route, vehicle, 10**9, **options))
+    (solver, (x0, lbx, ubx, length, lbg, ubg, p_tail, _)), = calls
     result = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=np.concatenate([length, p_tail]))
     y, lam_x, lam_g = (np.asarray(result[k]).ravel() for k in ("x", "lam_x", "lam_g"))
     return y, lam_x, lam_g, ubx, length, p_tail
@@ -296,16 +304,8 @@ def test_cut_check_reproduces_ipopts_multipliers_with_friction_and_power_rows(mo
     IPOPT's own bound multipliers at every boundary pair, active rows or not."""
     route = winding_hilly_route()
     vehicle = load_vehicle("atv").replace(friction_coefficient=0.5, max_power_w=6000.0)
-    calls = []
-    original = planner.solve_ipopt
-
-    def spy(solver, *args):
-        calls.append((solver, args))
-        return original(solver, *args)
-
-    monkeypatch.setattr(planner, "solve_ipopt", spy)
-    solve(monkeypatch, route, vehicle, 10**9, smoothing=0.0, max_jerk_mps3=float("inf"))
-    monkeypatch.setattr(planner, "solve_ipopt", original)
+    calls = spy_on_the_whole_solve(monkeypatch, lambda: solve(monkeypatch, route, vehicle, 10**9, smoothing=0.0,
+                                                              max_jerk_mps3=float("inf")))
     (solver, (x0, lbx, ubx, length, lbg, ubg, p_tail, data)), = calls
     result = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=np.concatenate([length, data.T.ravel(), p_tail]))
     y, lam_x, lam_g = (np.asarray(result[k]).ravel() for k in ("x", "lam_x", "lam_g"))

@@ -253,15 +253,21 @@ def test_a_bad_path_tolerance_is_one_line(tmp_path, atv):
 @pytest.mark.parametrize("route_name, vehicle_name", [("trail", "atv"), ("washboard", "atv-resonant")])
 def test_a_vehicle_file_without_the_keys_plans_exactly_as_before(route_name, vehicle_name):
     # tests/expected/before-turns/ holds the profiles the planner wrote before turns and hills
-    # (commit 87d3afb): the same vehicle without the optional keys must give them bit for bit
+    # (commit 87d3afb, IPOPT): the same vehicle without the optional keys must give them bit for
+    # bit with IPOPT, and the banded solver (issue 14, later) the same optimum within its tolerance
     from profileopt.io import read_route
+    from profileopt.planning import SolverOptions
 
     bare = load_vehicle(vehicle_name).replace(max_lateral_accel_mps2=None, track_width_m=None, cg_height_m=None,
                                               friction_coefficient=None, mass_kg=None, max_power_w=None)
     before = np.loadtxt(ROOT / "tests" / "expected" / "before-turns" / f"{route_name}-{vehicle_name}.csv", delimiter=",", skiprows=2)
-    profile = plan(read_route(ROUTES / f"{route_name}.csv"), bare)
+    route = read_route(ROUTES / f"{route_name}.csv")
+    profile = plan(route, bare, solver_options=SolverOptions(nlp_solver="ipopt"))
     now = np.column_stack([profile.columns()[name] for name in PROFILE_COLUMNS[:8]])
     assert np.array_equal(now, before)
+    banded = plan(route, bare)
+    assert banded.objective == pytest.approx(profile.objective, rel=1e-7)
+    np.testing.assert_allclose(banded.speed_mps, profile.speed_mps, rtol=0, atol=1e-4)
 
 
 def test_a_climb_steeper_than_the_drive_is_named_where_the_vehicle_stalls():

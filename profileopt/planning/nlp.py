@@ -39,8 +39,9 @@ from ..kinematics import boundary_jerk_mps3, jerk_squared_time, segment_accel_mp
 from ..symbolic import mx_replay
 from .options import DEFAULT_IPOPT_OPTIONS, SolverOptions
 
-__all__ = ["SPEED_EPS_MPS", "PARAMETERS", "ROW_FAMILIES", "NEUTRAL_DATA", "build_nlp", "cached_nlp", "Scaling", "IpoptResult",
-           "solve_ipopt", "row_bounds", "objective_s", "family_rows"]
+__all__ = ["SPEED_EPS_MPS", "PARAMETERS", "ROW_FAMILIES", "NEUTRAL_DATA", "build_nlp", "cached_nlp", "Scaling",
+           "NlpResult", "row_bounds", "objective_s", "family_rows", "nlp_parts",
+           "NlpParts"]
 
 #: Speed (m/s) that keeps sqrt(b) differentiable at rest in the NLP's time and jerk terms.
 SPEED_EPS_MPS = 1e-3
@@ -224,43 +225,45 @@ def _diagonal(v: ca.MX, rows: int, cols: int, offset: int) -> ca.MX:
     return ca.vertcat(ca.horzcat(ca.MX(k, offset), block, ca.MX(k, cols - offset - k)), ca.MX(rows - k, cols))
 
 
-def build_nlp(n: int, with_jerk: bool, ipopt_options: Mapping[str, Any] = DEFAULT_IPOPT_OPTIONS,
-              families: tuple[str, ...] = ()) -> ca.Function:
-    """The IPOPT solver of the planner's NLP for N = n segments, in y = b / b_ref (b = v^2).
+@dataclasses.dataclass(frozen=True)
+class NlpParts:
+    """The NLP's symbols and placed stage outputs (see :func:`nlp_parts`). ``jac_blocks``:
+    one tuple of columns per row block (accelerations, jerks, each family row), column r of
+    a block holding d row_k / d y_{k + r} for the block's rows k; ``hess_diagonals``: the
+    upper triangle's diagonals at offsets 0, 1, 2 (lengths N+1, N, N-1)."""
+
+    name: str
+    x: ca.MX
+    p: ca.MX
+    lam_f: ca.MX
+    lam_g: ca.MX
+    f: ca.MX
+    g: ca.MX
+    f_d: ca.MX
+    grad: ca.MX
+    g_d: ca.MX
+    jac_blocks: tuple[tuple[ca.MX, ...], ...]
+    hess_diagonals: tuple[ca.MX, ca.MX, ca.MX]
+
+
+def nlp_parts(n: int, with_jerk: bool, families: tuple[str, ...]) -> "NlpParts":
+    """The symbolic pieces of the planner's NLP, placed but not yet assembled into matrices.
+
+    :func:`build_nlp` assembles them into IPOPT's sparse Jacobian and Hessian;
+    :func:`profileopt.planning.banded_ipm.build_banded_oracle` returns them as dense bands.
 
     Parameters
     ----------
     n : int
-        Number of segments N >= 1; there are N + 1 variables y (squared speeds at the
-        boundaries over b_ref).
+        Number of segments N >= 1.
     with_jerk : bool
-        Whether g holds the jerk constraints (only when N >= 2).
-    ipopt_options : Mapping[str, Any], default :data:`~profileopt.planning.options.DEFAULT_IPOPT_OPTIONS`
-        Options of ``casadi.nlpsol`` for IPOPT.
-    families : tuple of str, default ()
-        Row families (:data:`ROW_FAMILIES`) to add, in this order.
+        Whether g holds the jerk rows (only when N >= 2).
+    families : tuple of str
+        Row families (:data:`ROW_FAMILIES`), in this order.
 
     Returns
     -------
-    casadi.Function
-        ``casadi.nlpsol`` (IPOPT with ``ipopt_options``, exact Hessian) with x = y, shape
-        (N+1,), and parameters p, shape (N + N D + 6,): segment lengths / L_ref (N), the
-        families' data (N per data column, family after family, D columns in all), then b_ref
-        (m^2/s^2), L_ref (m), a_ref (m/s^2), T_ref (s), the smoothing weight (-) and 1/J
-        (s^3/m). Constraints g: the accelerations a_i / a_ref (N), then, with jerk and
-        N >= 2, jerk_j / J at the N-1 interior boundaries, jerk_j = v_j (a_j - a_{j-1}) /
-        dsm_j (jerk = v da/ds, dsm_j = (ds_{j-1} + ds_j) / 2). Objective: (travel time +
-        weight * integral (jerk / (1 m/s^3))^2 dt) / T_ref, with travel time = sum 2 ds_i /
-        (v_i + v_{i+1}), integral jerk^2 dt = sum v_j (a_j - a_{j-1})^2 / dsm_j, and
-        v = sqrt(b + eps^2), eps = :data:`SPEED_EPS_MPS`. After the jerk rows, each family's
-        rows (N per row of the family, row after row), bounded above by 1.
-
-    Notes
-    -----
-    The objective and g run the stage Functions of :func:`_stages` on all stages at once
-    (graph size independent of N); ``grad_f``, ``jac_g`` and ``hess_lag`` are the exact stage
-    derivatives placed on the diagonals of the banded structure (Hessian bandwidth 2), so
-    IPOPT receives exactly the derivatives of the whole problem.
+    NlpParts
     """
     n = int(n)
     if n < 1:
@@ -325,16 +328,15 @@ def build_nlp(n: int, with_jerk: bool, ipopt_options: Mapping[str, Any] = DEFAUL
     # holds columns j-1, j, j+1: shifted diagonals of the stage gradients.
     (g_seg,), dg_seg = stages("seg", "gdg")
     g_d = [g_seg]
-    blocks = [sum(_diagonal(dg_seg[r], n, nx, r) for r in range(2))]
+    jac_blocks = [dg_seg]
     if jerk:
         (g_bnd,), dg_bnd = stages("bnd", "gdg")
         g_d.append(g_bnd)
-        blocks.append(sum(_diagonal(dg_bnd[r], m, nx, r) for r in range(3)))
+        jac_blocks.append(dg_bnd)
     for family, k, inputs in fam_rows:
         (g_fam,), dg_fam = stages(f"{family}{k}", "gdg", inputs=inputs)
         g_d.append(g_fam)
-        blocks.append(sum(_diagonal(dg_fam[r], n, nx, r) for r in range(2)))
-    jac = ca.vertcat(*blocks)
+        jac_blocks.append(dg_fam)
 
     # Hessian of the Lagrangian, upper triangle: entry (r, c) of stage k's local Hessian
     # lands on (k + r, k + c); the stage Hessians are summed where they overlap.
@@ -353,15 +355,62 @@ def build_nlp(n: int, with_jerk: bool, ipopt_options: Mapping[str, Any] = DEFAUL
     by_offset: dict[int, list[ca.MX]] = {}
     for v, r, c, count in parts:  # diagonal c - r, starting at row r
         by_offset.setdefault(c - r, []).append(_shifted(v, r, nx - (c - r) - r - count))
-    hess = sum(_diagonal(sum(vs), nx, nx, offset) for offset, vs in sorted(by_offset.items()))
-
+    hess_diagonals = tuple(sum(by_offset[offset]) if offset in by_offset else ca.MX.zeros(nx - offset, 1)
+                           for offset in range(3))
     name = f"profileopt_n{n}_{'jerk' if with_jerk else 'nojerk'}" + "".join(f"_{f}" for f in families)
+    return NlpParts(name, x, p, lam_f, lam_g, f, g, f_d, grad, ca.vertcat(*g_d), tuple(jac_blocks), hess_diagonals)
+
+
+def build_nlp(n: int, with_jerk: bool, ipopt_options: Mapping[str, Any] = DEFAULT_IPOPT_OPTIONS,
+              families: tuple[str, ...] = ()) -> ca.Function:
+    """The IPOPT solver of the planner's NLP for N = n segments, in y = b / b_ref (b = v^2).
+
+    Parameters
+    ----------
+    n : int
+        Number of segments N >= 1; there are N + 1 variables y (squared speeds at the
+        boundaries over b_ref).
+    with_jerk : bool
+        Whether g holds the jerk constraints (only when N >= 2).
+    ipopt_options : Mapping[str, Any], default :data:`~profileopt.planning.options.DEFAULT_IPOPT_OPTIONS`
+        Options of ``casadi.nlpsol`` for IPOPT.
+    families : tuple of str, default ()
+        Row families (:data:`ROW_FAMILIES`) to add, in this order.
+
+    Returns
+    -------
+    casadi.Function
+        ``casadi.nlpsol`` (IPOPT with ``ipopt_options``, exact Hessian) with x = y, shape
+        (N+1,), and parameters p, shape (N + N D + 6,): segment lengths / L_ref (N), the
+        families' data (N per data column, family after family, D columns in all), then b_ref
+        (m^2/s^2), L_ref (m), a_ref (m/s^2), T_ref (s), the smoothing weight (-) and 1/J
+        (s^3/m). Constraints g: the accelerations a_i / a_ref (N), then, with jerk and
+        N >= 2, jerk_j / J at the N-1 interior boundaries, jerk_j = v_j (a_j - a_{j-1}) /
+        dsm_j (jerk = v da/ds, dsm_j = (ds_{j-1} + ds_j) / 2). Objective: (travel time +
+        weight * integral (jerk / (1 m/s^3))^2 dt) / T_ref, with travel time = sum 2 ds_i /
+        (v_i + v_{i+1}), integral jerk^2 dt = sum v_j (a_j - a_{j-1})^2 / dsm_j, and
+        v = sqrt(b + eps^2), eps = :data:`SPEED_EPS_MPS`. After the jerk rows, each family's
+        rows (N per row of the family, row after row), bounded above by 1.
+
+    Notes
+    -----
+    The objective and g run the stage Functions of :func:`_stages` on all stages at once
+    (graph size independent of N); ``grad_f``, ``jac_g`` and ``hess_lag`` are the exact stage
+    derivatives placed on the diagonals of the banded structure (Hessian bandwidth 2), so
+    IPOPT receives exactly the derivatives of the whole problem.
+    """
+    parts = nlp_parts(n, with_jerk, families)
+    x, p, nx = parts.x, parts.p, parts.x.size1()
+    jac = ca.vertcat(*(sum(_diagonal(block[r], block[r].size1(), nx, r) for r in range(len(block)))
+                       for block in parts.jac_blocks))
+    hess = sum(_diagonal(diagonal, nx, nx, offset) for offset, diagonal in enumerate(parts.hess_diagonals))
+    name = parts.name
     options = dict(ipopt_options)
-    options["grad_f"] = ca.Function(f"{name}_grad_f", [x, p], [f_d, grad], ["x", "p"], ["f", "grad_f_x"])
-    options["jac_g"] = ca.Function(f"{name}_jac_g", [x, p], [ca.vertcat(*g_d), jac], ["x", "p"], ["g", "jac_g_x"])
-    options["hess_lag"] = ca.Function(f"{name}_hess_lag", [x, p, lam_f, lam_g], [hess],
+    options["grad_f"] = ca.Function(f"{name}_grad_f", [x, p], [parts.f_d, parts.grad], ["x", "p"], ["f", "grad_f_x"])
+    options["jac_g"] = ca.Function(f"{name}_jac_g", [x, p], [parts.g_d, jac], ["x", "p"], ["g", "jac_g_x"])
+    options["hess_lag"] = ca.Function(f"{name}_hess_lag", [x, p, parts.lam_f, parts.lam_g], [hess],
                                       ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
-    return ca.nlpsol(name, "ipopt", {"x": x, "p": p, "f": f, "g": g}, options)
+    return ca.nlpsol(name, "ipopt", {"x": x, "p": p, "f": parts.f, "g": parts.g}, options)
 
 
 def _column(v: ca.MX | None, count: int) -> ca.MX:
@@ -448,21 +497,23 @@ class Scaling:
 
 
 @dataclasses.dataclass(frozen=True)
-class IpoptResult:
-    """One IPOPT solve, in scaled units.
+class NlpResult:
+    """One solve of the planner's NLP, in scaled units.
 
     Attributes
     ----------
     y : numpy.ndarray, shape (N+1,)
         b / b_ref at the boundaries.
     lam_g : numpy.ndarray
-        Multipliers of the rows (CasADi's sign convention).
+        Multipliers of the rows (CasADi's sign convention: > 0 where an upper bound holds).
     success : bool
-        Whether IPOPT converged.
+        Whether the solver converged.
     status : str
-        ``"optimal"`` or IPOPT's return status.
+        ``"optimal"`` or the solver's reason for stopping.
     iterations : int
-        IPOPT iterations.
+        Iterations.
+    solver : str, default "ipopt"
+        ``"banded"`` (:mod:`.banded_ipm`) or ``"ipopt"``.
     """
 
     y: np.ndarray
@@ -470,38 +521,7 @@ class IpoptResult:
     success: bool
     status: str
     iterations: int
-
-
-def solve_ipopt(solver: ca.Function, x0: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, length_scaled: np.ndarray,
-                lbg: np.ndarray, ubg: np.ndarray, p_tail: np.ndarray, data: np.ndarray | None = None) -> IpoptResult:
-    """One IPOPT solve of a cached NLP, all in scaled units.
-
-    Parameters
-    ----------
-    solver : casadi.Function
-        From :func:`cached_nlp`.
-    x0, lbx, ubx : numpy.ndarray, shape (N+1,)
-        Start point and bounds of y = b / b_ref.
-    length_scaled : numpy.ndarray, shape (N,)
-        Segment lengths / L_ref.
-    lbg, ubg : numpy.ndarray
-        Bounds of the rows (:func:`row_bounds`).
-    p_tail : numpy.ndarray, shape (6,)
-        :meth:`Scaling.tail`.
-    data : numpy.ndarray, shape (N, D), optional
-        The row families' data, columns in the order the NLP was built with.
-
-    Returns
-    -------
-    IpoptResult
-    """
-    middle = [] if data is None else [np.asarray(data, dtype=float).T.ravel()]
-    result = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=np.concatenate([length_scaled, *middle, p_tail]))
-    stats = solver.stats()
-    success = bool(stats.get("success", False))
-    status = "optimal" if success else str(stats.get("return_status", "failed"))
-    return IpoptResult(np.asarray(result["x"]).ravel(), np.asarray(result["lam_g"]).ravel(), success, status,
-                       int(stats.get("iter_count", 0)))
+    solver: str = "ipopt"
 
 
 def row_bounds(with_jerk: bool, decel_mps2: np.ndarray, accel_mps2: np.ndarray, a_ref: float,

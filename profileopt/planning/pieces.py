@@ -39,7 +39,8 @@ import casadi as ca
 import numpy as np
 
 from ..kinematics import boundary_jerk_mps3, segment_accel_mps2
-from .nlp import NEUTRAL_DATA, ROW_FAMILIES, cached_nlp, family_rows, objective_s, solve_ipopt
+from .nlp import NEUTRAL_DATA, ROW_FAMILIES, cached_nlp, family_rows, objective_s
+from .solve import solve_nlp
 
 if TYPE_CHECKING:
     from .bands import BandChoice
@@ -369,12 +370,12 @@ def solve_pieces(length_m: np.ndarray, chosen: "BandChoice", decel_mps2: np.ndar
     neutral = np.concatenate([NEUTRAL_DATA[f] for f in families]) if rows else None
     n_family = sum(ROW_FAMILIES[f][1] for f in families)  # family rows per segment
     t = time.perf_counter()
-    solver = cached_nlp(w, with_jerk, options.ipopt_key(), families)
     nlp_with_jerk = with_jerk and w >= 2
     check = cached_nlp(5, with_jerk, options.ipopt_key(), families)
     grad_f, jac_g = check.get_function("nlp_grad_f"), check.get_function("nlp_jac_g")
     timings["build"] += time.perf_counter() - t
     t = time.perf_counter()
+    piece_timings = {"build": 0.0, "solve": 0.0}  # the pieces' solver builds, moved to "build" below
     b_ref, l_ref = scaling.b_ref, scaling.l_ref
     lower, upper, start_b = chosen.lower_b / b_ref, chosen.upper_b / b_ref, chosen.greatest_b / b_ref
     length = length_m / l_ref
@@ -414,7 +415,8 @@ def solve_pieces(length_m: np.ndarray, chosen: "BandChoice", decel_mps2: np.ndar
             for real_rows in family_rows_real:
                 ubg[real_rows] = 1.0
         t_ref = max(objective_s(chosen.greatest_b[first:last + 1], length_m[first:last], 0.0), 1e-6)
-        result = solve_ipopt(solver, x0, lbx, ubx, p_length, lbg, ubg, scaling.tail(t_ref), *extra)
+        result = solve_nlp(w, with_jerk, families, options, x0, lbx, ubx, p_length, lbg, ubg, scaling.tail(t_ref),
+                           *extra, timings=piece_timings)
         iterations += result.iterations
         if result.success:
             rescale = t_ref / t_whole  # multipliers of f / t_ref, expressed for f / t_whole
@@ -461,4 +463,5 @@ def solve_pieces(length_m: np.ndarray, chosen: "BandChoice", decel_mps2: np.ndar
                 break
         return None, iterations, 0
     finally:
-        timings["solve"] += time.perf_counter() - t
+        timings["solve"] += time.perf_counter() - t - piece_timings["build"]
+        timings["build"] += piece_timings["build"]

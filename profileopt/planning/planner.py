@@ -33,7 +33,8 @@ from .binding import binding_labels
 from .fallback import fallback_choice
 from .limits import Limit, PlanContext, default_limits
 from .limits.force import max_force_over_segments
-from .nlp import Scaling, cached_nlp, family_rows, objective_s, row_bounds, solve_ipopt
+from .nlp import Scaling, family_rows, objective_s, row_bounds
+from .solve import solve_nlp
 from .path import SegmentPath, segment_path
 from .options import SolverOptions
 from .pieces import choose_cuts, cut_scores, solve_pieces
@@ -226,6 +227,8 @@ def plan(
         result = _solve_nlp(seg, chosen, decel, accel, smoothing, jerk_bound, options, rows)
         b, status, iterations, pieces = result.b, result.status, result.iterations, result.pieces
         timings.update(result.timings)
+        if "stopped" in result.solver:  # IPOPT took over: worth knowing, never a different optimum
+            notes.append(f"IPOPT solved the NLP{result.solver.removeprefix('ipopt')}")
         success = status == "optimal"
         if success:
             worst = {"speed": chosen.violation(b)}
@@ -460,9 +463,10 @@ def _boundary_labels(seg_label: np.ndarray, upper_b: np.ndarray, band_top_mps: n
 class _NlpResult:
     b: np.ndarray  # (N+1,) squared speeds, m^2/s^2
     status: str
-    iterations: int  # IPOPT iterations, all solves together
-    pieces: int  # IPOPT solves whose solutions make up b
+    iterations: int  # NLP solver iterations, all solves together
+    pieces: int  # NLP solves whose solutions make up b
     timings: dict[str, float]
+    solver: str = "banded"  # NlpResult.solver of a whole-route solve
 
 
 def _accel_scale(accel: np.ndarray, decel: np.ndarray) -> float:
@@ -483,7 +487,7 @@ def _solve_nlp(seg: Segments, chosen: BandChoice, decel: np.ndarray, accel: np.n
                       t_whole=max(objective_s(chosen.greatest_b, seg.length_m, 0.0), 1e-6))
     timings = {"build": 0.0, "solve": 0.0}
     iterations = 0
-    if n > max(options.split_above_segments, options.piece_segments):
+    if n > max(options.split_threshold(), options.piece_segments):
         score = cut_scores(chosen.upper_b, chosen.greatest_b, seg.length_m)
         cuts = choose_cuts(score, options.piece_segments)
         if cuts.size:
@@ -492,18 +496,14 @@ def _solve_nlp(seg: Segments, chosen: BandChoice, decel: np.ndarray, accel: np.n
             if b is not None:
                 return _NlpResult(b, "optimal", iterations, pieces, timings)
 
-    t = time.perf_counter()
     families = tuple(rows)
-    solver = cached_nlp(n, with_jerk, options.ipopt_key(), families)
-    timings["build"] += time.perf_counter() - t
-    t = time.perf_counter()
     b_ref = scaling.b_ref
     lbg, ubg = row_bounds(with_jerk and n >= 2, decel, accel, scaling.a_ref, families)
-    data = (np.column_stack(list(rows.values())),) if rows else ()  # the row families' data
-    result = solve_ipopt(solver, chosen.greatest_b / b_ref, chosen.lower_b / b_ref, chosen.upper_b / b_ref,
-                         seg.length_m / scaling.l_ref, lbg, ubg, scaling.tail(scaling.t_whole), *data)
-    timings["solve"] += time.perf_counter() - t
-    return _NlpResult(result.y * b_ref, result.status, iterations + result.iterations, 1, timings)
+    data = np.column_stack(list(rows.values())) if rows else None  # the row families' data
+    result = solve_nlp(n, with_jerk, families, options, chosen.greatest_b / b_ref, chosen.lower_b / b_ref,
+                       chosen.upper_b / b_ref, seg.length_m / scaling.l_ref, lbg, ubg, scaling.tail(scaling.t_whole),
+                       data, timings=timings)
+    return _NlpResult(result.y * b_ref, result.status, iterations + result.iterations, 1, timings, result.solver)
 
 
 def _assemble(seg: Segments, b: np.ndarray, vehicle: "Vehicle", model: str, bands: SpeedBands,

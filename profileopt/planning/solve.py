@@ -1,0 +1,119 @@
+"""One solve of the planner's NLP: the banded interior-point method, IPOPT where it stops.
+
+:func:`solve_nlp` is the one place that chooses the solver (:attr:`SolverOptions.nlp_solver`),
+so the whole-route solve (:mod:`.planner`) and the pieces of a long route (:mod:`.pieces`)
+are solved alike. The banded solver (:mod:`.banded_ipm`) and IPOPT solve the same NLP
+(:mod:`.nlp`) from the same start point to the same tolerance; when the banded solver does
+not converge, IPOPT solves the problem from the start and its iterations are added.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+import numpy as np
+
+from .banded_ipm import cached_banded_oracle, solve_banded
+import casadi as ca
+
+from .nlp import NlpResult, cached_nlp
+from .options import DEFAULT_IPOPT_OPTIONS, SolverOptions
+
+__all__ = ["solve_nlp", "solve_ipopt"]
+
+
+def solve_nlp(n: int, with_jerk: bool, families: tuple[str, ...], options: SolverOptions, x0: np.ndarray,
+              lbx: np.ndarray, ubx: np.ndarray, length_scaled: np.ndarray, lbg: np.ndarray, ubg: np.ndarray,
+              p_tail: np.ndarray, data: np.ndarray | None = None, *, timings: dict[str, float] | None = None
+              ) -> NlpResult:
+    """Solve the planner's NLP for N = n segments, all in scaled units.
+
+    Parameters
+    ----------
+    n : int
+        Number of segments N.
+    with_jerk : bool
+        Whether the NLP has jerk rows.
+    families : tuple of str
+        Row families (:data:`~.nlp.ROW_FAMILIES`), in the order of ``data``'s columns.
+    options : SolverOptions
+        ``nlp_solver``, IPOPT's options, and the tolerance and iteration limit both use.
+    x0, lbx, ubx : numpy.ndarray, shape (N+1,)
+        Start point and bounds of y = b / b_ref.
+    length_scaled : numpy.ndarray, shape (N,)
+        Segment lengths / L_ref.
+    lbg, ubg : numpy.ndarray
+        Bounds of the rows (:func:`~.nlp.row_bounds`).
+    p_tail : numpy.ndarray, shape (6,)
+        :meth:`~.nlp.Scaling.tail`.
+    data : numpy.ndarray, shape (N, D), optional
+        The row families' data.
+    timings : dict, optional
+        ``build`` and ``solve`` seconds are added here.
+
+    Returns
+    -------
+    NlpResult
+        ``solver`` says which solver's answer it is (``"banded"``, ``"ipopt"``, or
+        ``"ipopt (the banded solver stopped: <why>)"``); ``iterations`` counts both when
+        IPOPT took over.
+    """
+    timings = {} if timings is None else timings
+    for key in ("build", "solve"):
+        timings.setdefault(key, 0.0)
+    tol = float(options.ipopt.get("ipopt.tol", DEFAULT_IPOPT_OPTIONS["ipopt.tol"]))
+    max_iter = int(options.ipopt.get("ipopt.max_iter", DEFAULT_IPOPT_OPTIONS["ipopt.max_iter"]))
+    spent, stopped = 0, ""
+    if options.nlp_solver == "banded":
+        t = time.perf_counter()
+        oracle = cached_banded_oracle(n, with_jerk, families)
+        timings["build"] += time.perf_counter() - t
+        t = time.perf_counter()
+        middle = [] if data is None else [np.asarray(data, dtype=float).T.ravel()]
+        result = solve_banded(oracle, x0, lbx, ubx, lbg, ubg, np.concatenate([length_scaled, *middle, p_tail]),
+                              tol=tol, max_iter=max_iter)
+        timings["solve"] += time.perf_counter() - t
+        if result.success:
+            return result
+        spent, stopped = result.iterations, f" (the banded solver stopped: {result.status})"
+    t = time.perf_counter()
+    solver = cached_nlp(n, with_jerk, options.ipopt_key(), families)
+    timings["build"] += time.perf_counter() - t
+    t = time.perf_counter()
+    extra = () if data is None else (data,)
+    result = solve_ipopt(solver, x0, lbx, ubx, length_scaled, lbg, ubg, p_tail, *extra)
+    timings["solve"] += time.perf_counter() - t
+    return dataclasses.replace(result, iterations=result.iterations + spent, solver=f"ipopt{stopped}")
+
+
+def solve_ipopt(solver: ca.Function, x0: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, length_scaled: np.ndarray,
+                lbg: np.ndarray, ubg: np.ndarray, p_tail: np.ndarray, data: np.ndarray | None = None) -> NlpResult:
+    """One IPOPT solve of a cached NLP, all in scaled units.
+
+    Parameters
+    ----------
+    solver : casadi.Function
+        From :func:`cached_nlp`.
+    x0, lbx, ubx : numpy.ndarray, shape (N+1,)
+        Start point and bounds of y = b / b_ref.
+    length_scaled : numpy.ndarray, shape (N,)
+        Segment lengths / L_ref.
+    lbg, ubg : numpy.ndarray
+        Bounds of the rows (:func:`row_bounds`).
+    p_tail : numpy.ndarray, shape (6,)
+        :meth:`Scaling.tail`.
+    data : numpy.ndarray, shape (N, D), optional
+        The row families' data, columns in the order the NLP was built with.
+
+    Returns
+    -------
+    NlpResult
+    """
+    middle = [] if data is None else [np.asarray(data, dtype=float).T.ravel()]
+    result = solver(x0=x0, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg, p=np.concatenate([length_scaled, *middle, p_tail]))
+    stats = solver.stats()
+    success = bool(stats.get("success", False))
+    status = "optimal" if success else str(stats.get("return_status", "failed"))
+    return NlpResult(np.asarray(result["x"]).ravel(), np.asarray(result["lam_g"]).ravel(), success, status,
+                       int(stats.get("iter_count", 0)))

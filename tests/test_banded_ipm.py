@@ -1,0 +1,173 @@
+"""The banded interior-point solver (profileopt.planning.banded_ipm) and its use by plan().
+
+References, each independent of the solver:
+
+* its derivatives: the whole NLP written as one SX expression and differentiated by CasADi
+  (``reference_functions`` of tests/test_nlp_build.py);
+* its optima: IPOPT on that reference NLP, the exact forward-backward profile where the NLP
+  is convex (no jerk bound, no smoothing: issue 3's exact optimum), and a one-segment
+  problem solved by hand.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from profileopt import Route, load_vehicle, plan, read_route
+from profileopt.errors import InputError
+from profileopt.planning import SolverOptions
+from profileopt.planning import banded_ipm, solve as _solve
+from profileopt.planning.nlp import NlpResult
+from profileopt.planning.options import DEFAULT_IPOPT_OPTIONS
+from profileopt.synthetic import iso8608_sections
+
+from conftest import ROUTES
+from test_nlp_build import dense, random_point, random_problem, reference_functions, reference_nlp
+
+IPOPT = SolverOptions(nlp_solver="ipopt")
+ALL_ROUTES = ("curb", "iri_road", "krc_rms_1in", "krc_rms_2in", "krc_rms_4in", "trail", "washboard")
+
+
+def banded_matrices(oracle: banded_ipm.BandedOracle, x, p, lam_f, lam_g) -> tuple:
+    """f, g, grad f, J (dense) and the full Hessian (dense) assembled from the oracle's bands."""
+    out = [np.asarray(ca.DM(o).full()).ravel(order="F") for o in oracle.derivatives(x, p, lam_f, lam_g)]
+    n1 = x.size
+    jac, row = np.zeros((sum(oracle.counts), n1)), 0
+    for band, width, count in zip(out[3:-3], oracle.widths, oracle.counts):
+        band = band.reshape(width, count).T
+        for k in range(count):
+            jac[row + k, k:k + width] = band[k]
+        row += count
+    hess = np.zeros((n1, n1))
+    for offset, diagonal in enumerate(out[-3:]):
+        hess += np.diag(diagonal, offset) + (np.diag(diagonal, -offset) if offset else 0)
+    return out[0][0], out[2], out[1], jac, hess
+
+
+@pytest.mark.parametrize("n, with_jerk", [(1, True), (2, True), (2, False), (5, True), (37, True), (37, False)])
+def test_oracle_bands_equal_the_reference_derivatives(n: int, with_jerk: bool) -> None:
+    oracle = banded_ipm.build_banded_oracle(n, with_jerk)
+    ref = reference_functions(n, with_jerk)
+    ng = ref.size1_out(1)
+    rng = np.random.default_rng(100 + n)
+    for _ in range(4):
+        x, p, lam_f, lam_g = random_point(n, ng, rng)
+        got = banded_matrices(oracle, x, p, lam_f, lam_g)
+        f_ref, g_ref, grad_ref, jac_ref, hess_ref = (dense(o) for o in ref(x, p, lam_f, lam_g))
+        for value, reference in zip(got, (f_ref.item(), g_ref.ravel(), grad_ref.ravel(), jac_ref, hess_ref)):
+            np.testing.assert_allclose(value, reference, rtol=0, atol=1e-10 * max(np.abs(reference).max(), 1e-300))
+        f_values, g_values = (dense(o).ravel() for o in oracle.values(x, p))
+        np.testing.assert_allclose(f_values, f_ref.ravel(), rtol=1e-14)
+        np.testing.assert_allclose(g_values, g_ref.ravel(), rtol=0, atol=1e-14 * np.abs(g_ref).max())
+
+
+@pytest.mark.parametrize("n, with_jerk", [(1, True), (3, False), (37, True), (64, True), (150, True), (400, True)])
+def test_optimum_equals_ipopts_on_the_reference_nlp(n: int, with_jerk: bool) -> None:
+    args = random_problem(n, with_jerk, 7 + n)
+    reference = ca.nlpsol("reference", "ipopt", reference_nlp(n, with_jerk), dict(DEFAULT_IPOPT_OPTIONS))
+    x_ref = dense(reference(**args)["x"]).ravel()
+    assert reference.stats()["success"]
+    oracle = banded_ipm.build_banded_oracle(n, with_jerk)
+    result = banded_ipm.solve_banded(oracle, args["x0"], args["lbx"], args["ubx"], args["lbg"], args["ubg"], args["p"])
+    assert result.success and result.solver == "banded", result.status
+    # the same local optimum: f equal within the tolerances and never worse; y within 1e-5,
+    # since the smoothing term leaves directions so flat that IPOPT's stopping point differs
+    # by 1.6e-6 there (n = 64) while f differs by 1e-10
+    np.testing.assert_allclose(result.y, x_ref, rtol=0, atol=1e-5 * np.abs(x_ref).max())
+    f_ref, g = (dense(o).ravel() for o in oracle.values(x_ref, args["p"]))
+    f_new, g_new = (dense(o).ravel() for o in oracle.values(result.y, args["p"]))
+    assert f_ref[0] * (1 - 1e-8) <= f_new[0] <= f_ref[0] * (1 + 1e-10)
+    assert np.all(result.y >= args["lbx"]) and np.all(result.y <= args["ubx"])
+    assert np.all(g_new >= args["lbg"] - 1e-9) and np.all(g_new <= args["ubg"] + 1e-9)
+
+
+def test_one_segment_from_rest_reaches_the_closed_form() -> None:
+    # one segment of ds = 5 m from rest (b0 = 0 fixed), cap b1 <= b_ref = 100 m^2/s^2, a <= 1.5:
+    # travel time 2 ds / (v0 + v1) falls as b1 grows, so b1 = min(cap, 2 a ds) = 15 m^2/s^2
+    b_ref, ds, accel = 100.0, 5.0, 1.5
+    oracle = banded_ipm.build_banded_oracle(1, False)
+    p = np.array([1.0, b_ref, ds, accel, 30.0, 0.0, 0.0])
+    result = banded_ipm.solve_banded(oracle, np.array([0.0, 0.5]), np.zeros(2), np.array([0.0, 1.0]),
+                                     np.array([-2.0]), np.array([1.0]), p)
+    assert result.success
+    assert result.y[0] == 0.0  # fixed variables stay exactly where they are fixed
+    assert result.y[1] * b_ref == pytest.approx(2 * accel * ds, rel=1e-9)
+    assert result.lam_g[0] > 0  # the acceleration row holds at its upper bound
+
+
+def test_equal_row_bounds_are_a_stop_not_a_wrong_answer() -> None:
+    oracle = banded_ipm.build_banded_oracle(1, False)
+    p = np.array([1.0, 100.0, 5.0, 1.5, 30.0, 0.0, 0.0])
+    result = banded_ipm.solve_banded(oracle, np.array([0.0, 0.5]), np.zeros(2), np.ones(2), np.array([0.5]),
+                                     np.array([0.5]), p)
+    assert not result.success and "equality" in result.status
+
+
+@pytest.mark.parametrize("name", ALL_ROUTES)
+@pytest.mark.parametrize("vehicle_name", ["atv", "atv-resonant"])
+def test_convex_problem_reaches_the_exact_optimum(name: str, vehicle_name: str) -> None:
+    """Without jerk bound and smoothing the NLP is convex in b and the forward-backward
+    profile is its exact optimum (issue 3): the banded solver must reach it."""
+    route, vehicle = read_route(ROUTES / f"{name}.csv"), load_vehicle(vehicle_name)
+    convex = dict(smoothing=0.0, max_jerk_mps3=float("inf"))
+    exact = plan(route, vehicle, method="auto", **convex)
+    solved = plan(route, vehicle, method="ipopt", **convex)
+    assert exact.status == "exact" and solved.status == "optimal"
+    assert not any("IPOPT solved" in note for note in solved.notes)  # the banded solver's own answer
+    assert solved.travel_time_s == pytest.approx(exact.travel_time_s, rel=1e-9)
+
+
+@pytest.mark.parametrize("name", ALL_ROUTES)
+@pytest.mark.parametrize("vehicle_name", ["atv", "atv-resonant"])
+@pytest.mark.parametrize("options", [{}, {"smoothing": 0.0}], ids=["default", "min-time-jerk"])
+def test_banded_and_ipopt_reach_the_same_optimum(name: str, vehicle_name: str, options: dict) -> None:
+    route, vehicle = read_route(ROUTES / f"{name}.csv"), load_vehicle(vehicle_name)
+    banded = plan(route, vehicle, **options)
+    ipopt = plan(route, vehicle, solver_options=IPOPT, **options)
+    assert banded.status == ipopt.status == "optimal"
+    assert not any("IPOPT solved" in note for note in banded.notes)
+    # both are KKT points of the same NLP to the same tolerance; the banded one also closes
+    # the duality gap to 1e-10 of f, so it is never worse and at most IPOPT's slack better
+    assert banded.objective <= ipopt.objective * (1 + 1e-9)
+    assert banded.objective >= ipopt.objective * (1 - 1e-6)
+    np.testing.assert_allclose(banded.speed_mps, ipopt.speed_mps, rtol=0, atol=1e-3)
+
+
+def test_a_long_route_is_as_exact_as_a_short_one() -> None:
+    """20 km of 5 m segments (4,000), convex: the duality-gap test keeps the banded optimum
+    within 1e-9 of the exact forward-backward one, where a per-bound test alone lets the
+    total gap grow with the number of bounds."""
+    profile = iso8608_sections([("B", 5000.0), ("D", 5000.0), ("C", 5000.0), ("E", 5000.0)], 0.5, 3, n_max_cpm=0.9)
+    route, vehicle = Route(profile.s_m, profile.z_m, source="iso"), load_vehicle("atv")
+    convex = dict(smoothing=0.0, max_jerk_mps3=float("inf"))
+    exact = plan(route, vehicle, method="auto", **convex)
+    solved = plan(route, vehicle, method="ipopt", **convex)
+    assert solved.pieces == 1  # solved whole: the banded solver never splits by default
+    assert solved.travel_time_s == pytest.approx(exact.travel_time_s, rel=1e-9)
+
+
+def test_ipopt_takes_over_where_the_banded_solver_stops(monkeypatch) -> None:
+    route, vehicle = read_route(ROUTES / "washboard.csv"), load_vehicle("atv")
+
+    def stops(oracle, x0, *args, **kwargs):
+        return NlpResult(x0.copy(), np.zeros(0), False, "the line search failed", 7, "banded")
+
+    monkeypatch.setattr(_solve, "solve_banded", stops)
+    taken_over = plan(route, vehicle)
+    ipopt = plan(route, vehicle, solver_options=IPOPT)
+    assert taken_over.status == "optimal"
+    assert "IPOPT solved the NLP (the banded solver stopped: the line search failed)" in taken_over.notes
+    assert taken_over.iterations == ipopt.iterations + 7
+    np.testing.assert_array_equal(taken_over.speed_mps, ipopt.speed_mps)
+
+
+def test_solver_options_name_the_solver_and_its_split() -> None:
+    with pytest.raises(InputError, match=r"nlp_solver = 'mumps': choose one of banded, ipopt"):
+        SolverOptions(nlp_solver="mumps")
+    assert SolverOptions().split_threshold() == float("inf")
+    assert SolverOptions(nlp_solver="ipopt").split_threshold() == 10_000
+    assert SolverOptions(split_above_segments=300).split_threshold() == 300
+    with pytest.raises(InputError, match="split_above_segments"):
+        SolverOptions(split_above_segments=0)
