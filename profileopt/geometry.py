@@ -289,7 +289,8 @@ def path_grade_rad(s_m: ArrayLike, z_m: ArrayLike, *, scale_m: float) -> np.ndar
     first = np.minimum(first, np.maximum(index - 1, 0))  # at least two samples per window
     stop = np.maximum(stop, np.minimum(index + 2, m))
     extent = float(np.max(s[stop - 1] - s[first]))
-    _, var_s, cov, _ = window_line_moments(s, z, first, stop, block_m=extent * (1 + 1e-6) + tol)
+    _, var_s, cov, _ = window_line_moments(s, z, first, stop, block_m=extent * (1 + 1e-6) + tol,
+                                          with_var_z=False)
     return np.arctan(cov / var_s)
 
 

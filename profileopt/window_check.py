@@ -436,7 +436,7 @@ def check_windows(route: "Route", run: "QuarterCarRun", speed_mps: np.ndarray, v
         a_part, b_part, y_samples, y0, s_ref = _excitation_terms(route, run, k_spring, c_damp, detrend)
         first, last = windows.first_sample, windows.stop_sample
         _, var_s, cov, _ = window_line_moments(route.s_m, y_samples, first, last,
-                                               block_m=window_m * (1 + 1e-6) + 2 * tol)
+                                               block_m=window_m * (1 + 1e-6) + 2 * tol, with_var_z=False)
         slope = np.where(var_s > 0, cov / np.where(var_s > 0, var_s, 1.0), 0.0) if detrend else zeros
         count = (last - first).astype(float)
         mean_s = _window_sums(route.s_m - s_ref, first, last) / count  # relative to s0 and y0

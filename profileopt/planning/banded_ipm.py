@@ -293,7 +293,8 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
     # that a poor step (a short one, or one that needed the Hessian regularised: far from a
     # solution, in a nonconvex region) switches to for the rest of the solve
     mu_fixed: float | None = None
-    bounds_count = int(has_l.sum() + has_u.sum() + row_l.sum() + row_u.sum())
+    bound_mask = np.concatenate([has_l, has_u, row_l, row_u])
+    bounds_count = int(bound_mask.sum())
     mu_floor = tol / (10.0 * max(bounds_count, 1))  # the gap test below needs mu * count < tol
     for iteration in range(max_iter + 1):
         out = derivatives(x, p, 1.0, y)
@@ -304,8 +305,8 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
         dl, du, sl, su = slacks(x, s)
         r_d = np.where(free, grad + rows.transpose_times(y, n) - zl + zu, 0.0)
         r_c = g - s
-        compl = np.concatenate([(dl * zl)[has_l], (du * zu)[has_u], (sl * vl)[row_l], (su * vu)[row_u]])
-        mu_now = float(compl.mean()) if compl.size else 0.0
+        compl = np.concatenate([dl * zl, du * zu, sl * vl, su * vu])  # 0 where there is no bound (z = 0)
+        mu_now = float(compl.sum()) / bounds_count if bounds_count else 0.0
         s_d = max(100.0, (np.abs(y).sum() + zl.sum() + zu.sum()) / max(n + m, 1)) / 100.0
         error = max(float(np.max(np.abs(r_d))) / s_d, float(np.max(np.abs(r_c), initial=0.0)),
                     float(np.max(compl, initial=0.0)) / s_d)
@@ -359,7 +360,7 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
 
         if mu_fixed is not None:
             barrier_error = max(float(np.max(np.abs(r_d))) / s_d, float(np.max(np.abs(r_c), initial=0.0)),
-                                float(np.max(np.abs(compl - mu_fixed), initial=0.0)) / s_d)
+                                float(np.max(np.abs(compl - mu_fixed), initial=0.0, where=bound_mask)) / s_d)
             if barrier_error <= 10.0 * mu_fixed:  # its barrier problem solved: back to free mode
                 mu_fixed = None
         if mu_fixed is None:
@@ -368,11 +369,9 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
             zero_x, zero_g = np.zeros(n), np.zeros(m)
             dx, ds, dy, dzl, dzu, dvl, dvu = direction(zero_x, zero_x, zero_g, zero_g)
             a_p, a_d = step_limits(dx, ds, dzl, dzu, dvl, dvu, 1.0)
-            compl_aff = np.concatenate([((dl + a_p * dx) * (zl + a_d * dzl))[has_l],
-                                        ((du - a_p * dx) * (zu + a_d * dzu))[has_u],
-                                        ((sl + a_p * ds) * (vl + a_d * dvl))[row_l],
-                                        ((su - a_p * ds) * (vu + a_d * dvu))[row_u]])
-            mu_aff = float(compl_aff.mean()) if bounds_count else 0.0
+            compl_aff = np.concatenate([(dl + a_p * dx) * (zl + a_d * dzl), (du - a_p * dx) * (zu + a_d * dzu),
+                                        (sl + a_p * ds) * (vl + a_d * dvl), (su - a_p * ds) * (vu + a_d * dvu)])
+            mu_aff = float(compl_aff.sum()) / bounds_count if bounds_count else 0.0
             mu = max(min((mu_aff / mu_now) ** 3, 1.0) * mu_now if mu_now > 0 else 0.0, mu_floor)
             targets = (mu - dx * dzl, mu + dx * dzu, mu - ds * dvl, mu + ds * dvu)
         else:
