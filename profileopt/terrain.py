@@ -246,7 +246,7 @@ def segment_line_fit(positions_m: ArrayLike, elevations_m: ArrayLike, starts: Ar
 MIN_SAMPLES_PER_WINDOW = 8
 
 #: Windows whose moments are formed together: their samples' work arrays stay in cache.
-_WINDOW_BATCH = 1 << 15
+WINDOW_BATCH = 1 << 15
 
 
 @dataclasses.dataclass(frozen=True)
@@ -440,8 +440,8 @@ def roughness_windows(positions_m: ArrayLike, elevations_m: ArrayLike, clearance
     var_s, cov, var_z = (np.empty(first.size) for _ in range(3))
     block_m = width * (1 + 1e-6) + 2 * tol
     block = np.floor((s - s[0]) / block_m).astype(np.intp)
-    for lo in range(0, first.size, _WINDOW_BATCH):  # batches that stay in the processor's cache
-        hi = min(lo + _WINDOW_BATCH, first.size)
+    for lo in range(0, first.size, WINDOW_BATCH):  # batches that stay in the processor's cache
+        hi = min(lo + WINDOW_BATCH, first.size)
         # the slice starts at a block's first sample: the same sums, bit for bit, as unsliced
         a, b = int(np.searchsorted(block, block[first[lo]], side="left")), int(stop[lo:hi].max())
         _, var_s[lo:hi], cov[lo:hi], var_z[lo:hi] = window_line_moments(s[a:b], z[a:b], first[lo:hi] - a,

@@ -168,8 +168,22 @@ def test_batches_change_no_bit(monkeypatch) -> None:
     s = np.cumsum(rng.uniform(0.02, 0.08, 20000))
     z = 0.01 * rng.standard_normal(s.size) + 0.001 * s
     whole = roughness_windows(s, z, 0.1, window_m=5.0).ri
-    monkeypatch.setattr(terrain, "_WINDOW_BATCH", 997)
+    monkeypatch.setattr(terrain, "WINDOW_BATCH", 997)
     np.testing.assert_array_equal(roughness_windows(s, z, 0.1, window_m=5.0).ri, whole)
+
+
+def test_grade_batches_change_no_bit(monkeypatch) -> None:
+    # path_grade_rad forms its windows' moments in batches too (cache, at a million samples)
+    import profileopt.geometry as geometry
+
+    rng = np.random.default_rng(4)
+    s = 1000.0 + np.cumsum(rng.uniform(0.02, 0.08, 20000))
+    z = 300.0 + 0.01 * rng.standard_normal(s.size) + 0.05 * np.sin(s / 40.0) * s / 10.0
+    whole = geometry.path_grade_rad(s, z, scale_m=10.0)
+    monkeypatch.setattr(geometry, "WINDOW_BATCH", 997)
+    np.testing.assert_array_equal(geometry.path_grade_rad(s, z, scale_m=10.0), whole)
+    monkeypatch.setattr(geometry, "WINDOW_BATCH", 10**9)  # one pass over the whole route
+    np.testing.assert_array_equal(geometry.path_grade_rad(s, z, scale_m=10.0), whole)
 
 
 @pytest.mark.parametrize("vehicle_name", ["atv", "atv-resonant"])
