@@ -232,7 +232,7 @@ def test_summary_and_command_report_the_pieces(monkeypatch, capsys):
     monkeypatch.setattr(planner, "SolverOptions",
                         functools.partial(SolverOptions, piece_segments=200, split_above_segments=200))
     assert cli.main(["plan", str(ROUTES / "trail.csv"), "--vehicle", "atv"]) == 0
-    assert "IPOPT iterations over 3 pieces" in capsys.readouterr().out
+    assert "NLP iterations over 3 pieces" in capsys.readouterr().out
 
 
 def test_replace_cuts_between_neighbours_then_after_the_one_before_then_all():

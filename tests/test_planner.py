@@ -152,7 +152,7 @@ def test_fallback_keeps_every_limit_when_ipopt_fails(check_profile, monkeypatch,
     assert not profile.success
     assert profile.status == "fallback: Maximum_Iterations_Exceeded"
     assert profile.pieces == 0  # no IPOPT solution is in it
-    assert any("IPOPT gave no usable solution" in note for note in profile.notes)
+    assert any("the NLP solver gave no usable solution" in note for note in profile.notes)
     check_profile(profile, route, atv)
 
 

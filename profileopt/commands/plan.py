@@ -53,8 +53,8 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--v0", type=number_argument, default=0.0, metavar="MPS", help="speed at the start, m/s (default: 0)")
     parser.add_argument("--vend", type=number_argument, default=0.0, metavar="MPS", help="speed at the end, m/s (default: 0)")
     parser.add_argument("--method", default="auto", choices=["auto", "ipopt"],
-                        help="'auto': exact forward-backward profile when it is optimal, else IPOPT; "
-                             "'ipopt': always IPOPT")
+                        help="'auto': exact forward-backward profile when it is optimal, else the NLP "
+                             "(banded interior point; IPOPT where it stops); 'ipopt': always the NLP")
     parser.add_argument("--band", default="all", choices=list(PLAN_BANDS),
                         help="'all': any admissible speed band, chosen over the whole route (may cross "
                              "washboard above resonance); 'first': only speeds reachable from rest "
@@ -179,7 +179,7 @@ def _human(summary: dict, args: argparse.Namespace) -> str:
         + " of the distance",
         *([f"  limits off   {', '.join(summary['limits_off'])} (not in the vehicle file)"]
           if summary["limits_off"] else []),
-        f"  solver       {solver['status']} ({solver['iterations']} IPOPT iterations"
+        f"  solver       {solver['status']} ({solver['iterations']} NLP iterations"
         + (f" over {solver['pieces']} pieces" if solver["pieces"] > 1 else "")
         + f"), planned in {solver['time_s']:.3f} s",
     ]

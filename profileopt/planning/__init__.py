@@ -2,7 +2,8 @@
 
 Data flows route -> :mod:`.segments` (segments and their roughness) -> :mod:`.limits`
 (what each kind of limit allows) -> :mod:`.bands` (one band per segment, exact
-forward-backward profile) -> :mod:`.nlp` / :mod:`.pieces` (IPOPT polish) or
+forward-backward profile) -> :mod:`.solve` (the NLP of :mod:`.nlp`, solved by
+:mod:`.banded_ipm` or IPOPT, with IPOPT in :mod:`.pieces` on long routes) or
 :mod:`.fallback` -> :mod:`.result` (the :class:`Profile`). :mod:`.planner` holds the
 orchestration (:func:`plan`); :mod:`.options` the solver's tuning values.
 """

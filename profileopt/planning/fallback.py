@@ -1,4 +1,4 @@
-"""The profile returned when IPOPT fails: slower, but keeping every limit.
+"""The profile returned when the NLP cannot be solved: slower, but keeping every limit.
 
 It is the exact forward-backward profile (:func:`~profileopt.planning.bands.choose_bands`)
 with acceleration bounds so low that the jerk bound holds at every boundary whatever the
@@ -60,4 +60,4 @@ def fallback_choice(bands: SpeedBands, length_m: np.ndarray, boundaries_m: np.nd
         return choose_bands(bands.lower_mps, bands.upper_mps, bands.count, length_m, a, d, v0_mps, vend_mps,
                             boundaries_m, power)
     except InfeasibleError as exc:
-        raise PlanningError(f"IPOPT failed and no jerk-limited fallback exists ({exc})") from None
+        raise PlanningError(f"the NLP solvers failed and no jerk-limited fallback exists ({exc})") from None

@@ -6,9 +6,11 @@
 3. Choose one band per segment for the whole route and compute the exact minimum-time
    profile for it by a forward-backward pass (:mod:`.bands`); with smoothing and jerk off
    that is already the optimum (status ``exact``).
-4. Otherwise polish it with IPOPT on the NLP in the squared speed b = v^2 (:mod:`.nlp`),
-   a long route in exact pieces (:mod:`.pieces`); check the solution independently and,
-   if IPOPT failed, fall back to a slower profile that keeps every limit (:mod:`.fallback`).
+4. Otherwise polish it by solving the NLP in the squared speed b = v^2 (:mod:`.nlp`) with
+   the banded interior-point solver, IPOPT where it stops (:mod:`.solve`; with IPOPT alone
+   a long route in exact pieces, :mod:`.pieces`); check the solution independently and, if
+   no solver gave a usable one, fall back to a slower profile that keeps every limit
+   (:mod:`.fallback`).
 5. Build the :class:`~.result.Profile` and check it once more against every limit.
 """
 
@@ -154,7 +156,7 @@ def plan(
     InfeasibleError
         No profile keeps every limit (an impassable segment, unreachable boundary speeds).
     PlanningError
-        IPOPT failed and no limit-keeping fallback profile exists (please report it).
+        The NLP could not be solved and no limit-keeping fallback profile exists (please report it).
     """
     t_start = time.perf_counter()
     if bands is not None:
@@ -237,7 +239,7 @@ def plan(
             if max(worst.values()) > options.check_rtol:
                 status, success = f"solution breaks a limit ({max(worst, key=worst.get)})", False
         if not success:
-            notes.append(f"IPOPT gave no usable solution ({status}); returning a slower profile that keeps "
+            notes.append(f"the NLP solver gave no usable solution ({status}); returning a slower profile that keeps "
                          "every limit")
             inner_cap, inner_decel, inner_accel = cap, decel, accel
             for limit in limits:  # tighten the caps and bounds until no NLP row is needed
@@ -478,8 +480,8 @@ def _accel_scale(accel: np.ndarray, decel: np.ndarray) -> float:
 
 def _solve_nlp(seg: Segments, chosen: BandChoice, decel: np.ndarray, accel: np.ndarray, smoothing: float,
                jerk: float, options: SolverOptions, rows: dict[str, np.ndarray]) -> _NlpResult:
-    """IPOPT's optimum over the chosen bands: in pieces on a long route (exact, checked), or
-    whole (a short route, or a long one whose cuts do not check out)."""
+    """The NLP's optimum over the chosen bands (:func:`~.solve.solve_nlp`): in pieces on a long
+    route when IPOPT alone solves it (exact, checked), else whole."""
     n = seg.count
     with_jerk = math.isfinite(jerk)
     scaling = Scaling(b_ref=max(float(chosen.upper_b.max()), 1e-6), l_ref=float(seg.length_m.mean()),

@@ -52,9 +52,10 @@ class Profile:
         The segment's RI, worst-case elevation (m), the largest predicted force over the
         speeds driven inside it (N) and the model's force limit (N); last row repeats.
     status : str
-        ``"optimal"`` (IPOPT converged), ``"exact"`` (the forward-backward profile is the
-        optimum: smoothing and jerk off), ``"fallback: <IPOPT status>"`` (IPOPT failed; the
-        returned profile keeps every limit but is not optimal) or ``"read"`` (from a file).
+        ``"optimal"`` (the NLP solver converged), ``"exact"`` (the forward-backward profile is
+        the optimum: smoothing and jerk off), ``"fallback: <solver status>"`` (no solver gave
+        a usable solution; the returned profile keeps every limit but is not optimal) or
+        ``"read"`` (from a file).
     success : bool
         True unless the fallback was used.
     model : str
@@ -65,10 +66,12 @@ class Profile:
         Wall-clock seconds of the stages (``segment``, ``bands``, ``choose``, ``build``,
         ``solve``, ``total``).
     iterations : int
-        IPOPT iterations (0 if not run), of all its solves together.
+        NLP solver iterations (0 if not run), of all its solves together (the banded
+        solver's and IPOPT's where IPOPT took over).
     pieces : int
-        How many IPOPT solves make up the profile: 1 for a route solved whole, more for a
-        long route solved in pieces (exactly; see :data:`SPLIT_ABOVE_SEGMENTS`), 0 if none.
+        How many NLP solves make up the profile: 1 for a route solved whole, more for a
+        long route solved in pieces (exactly; IPOPT only, see
+        :attr:`~.options.SolverOptions.split_above_segments`), 0 if none.
     notes : tuple of str
         Remarks for the user (merged segments, fallback, ignored columns).
     allowable_first_mps, allowable_largest_mps : numpy.ndarray, shape (N,) or None

@@ -15,7 +15,7 @@ returns ``None`` (or the neutral value) when the limit has nothing to say:
   of :data:`profileopt.planning.nlp.ROW_FAMILIES`) where the bounds above do not imply it;
 - the name of what holds the speed, for the profile's ``binding`` column
   (:attr:`Limit.binding`, :meth:`Limit.cap_binding`);
-- the independent checks: of IPOPT's solution before it is used
+- the independent checks: of the NLP solver's solution before it is used
   (:meth:`Limit.violation`) and of the finished profile (:meth:`Limit.check`), and its
   margins for the summary (:meth:`Limit.margins`).
 
@@ -184,7 +184,7 @@ class Limit:
                      accel_mps2: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """Caps and acceleration bounds tight enough to keep this limit's NLP rows without them.
 
-        Used by the fallback profile when IPOPT fails: the forward-backward profile within
+        Used by the fallback profile when the NLP cannot be solved: the forward-backward profile within
         these keeps every row.
 
         Parameters
@@ -220,7 +220,7 @@ class Limit:
     def violation(self, context: PlanContext, b: np.ndarray) -> float:
         """Largest relative violation of this limit's NLP rows by squared speeds ``b``.
 
-        Checked on IPOPT's solution before it is used: above the plan's ``check_rtol`` the
+        Checked on the NLP solver's solution before it is used: above the plan's ``check_rtol`` the
         solution is replaced by the fallback profile.
 
         Parameters
@@ -306,7 +306,7 @@ class RowLimit(Limit):
     """A limit that a family of NLP rows keeps on each segment's two squared speeds
     (:data:`profileopt.planning.nlp.ROW_FAMILIES`), where it can bind.
 
-    The family's expressions are evaluated once for every use: on IPOPT's solution
+    The family's expressions are evaluated once for every use: on the NLP solver's solution
     (:meth:`violation`), and on a finished profile at its exact speeds (:meth:`row_values`,
     for :meth:`check` and a subclass's :meth:`margins`). A subclass names its ``family`` and
     gives its per-segment data (:meth:`row_data`).
@@ -330,7 +330,7 @@ class RowLimit(Limit):
         raise NotImplementedError
 
     def violation(self, context: PlanContext, b: np.ndarray) -> float:
-        """Largest row over 1, minus 1 (0 when the limit holds), as IPOPT's rows see it.
+        """Largest row over 1, minus 1 (0 when the limit holds), as the NLP's rows see it.
 
         Parameters
         ----------
