@@ -171,3 +171,30 @@ def test_solver_options_name_the_solver_and_its_split() -> None:
     assert SolverOptions(split_above_segments=300).split_threshold() == 300
     with pytest.raises(InputError, match="split_above_segments"):
         SolverOptions(split_above_segments=0)
+
+
+@pytest.mark.parametrize("n", [1, 2, 64, 400])
+def test_lapack_and_casadi_factorisations_give_the_same_optimum(monkeypatch, n: int) -> None:
+    """Long routes factorise with LAPACK, shorter ones with CasADi's CSparse and LDL^T
+    (banded_ipm.LAPACK_ABOVE): both are exact Cholesky factorisations of the same matrix,
+    so the iterates agree to rounding."""
+    args = random_problem(n, True, 70 + n)
+    oracle = banded_ipm.build_banded_oracle(n, True)
+    results = {}
+    for name, above in (("casadi", 10**9), ("lapack", 0)):
+        monkeypatch.setattr(banded_ipm, "LAPACK_ABOVE", above)
+        results[name] = banded_ipm.solve_banded(oracle, args["x0"], args["lbx"], args["ubx"], args["lbg"],
+                                                args["ubg"], args["p"])
+    assert results["casadi"].success and results["lapack"].success
+    assert results["casadi"].iterations == results["lapack"].iterations
+    np.testing.assert_allclose(results["casadi"].y, results["lapack"].y, rtol=0, atol=1e-9)
+
+
+def test_a_matrix_that_is_not_positive_definite_is_refused_by_both_factorisations(monkeypatch) -> None:
+    # diag(1, -1, 2): the Cholesky of either backend must fail (so that delta I is added)
+    for above in (10**9, 0):
+        monkeypatch.setattr(banded_ipm, "LAPACK_ABOVE", above)
+        band = banded_ipm._BandSolver(3)
+        assert band.solve(np.array([1.0, -1.0, 2.0]), np.zeros(2), np.zeros(1), np.ones(3), definite_only=True) is None
+        x = band.solve(np.array([1.0, 4.0, 2.0]), np.array([0.5, 0.0]), np.zeros(1), np.ones(3), definite_only=True)
+        np.testing.assert_allclose(x, np.linalg.solve([[1.0, 0.5, 0.0], [0.5, 4.0, 0.0], [0.0, 0.0, 2.0]], np.ones(3)))
