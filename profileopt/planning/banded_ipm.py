@@ -53,7 +53,8 @@ import numpy as np
 
 from .nlp import NlpResult, nlp_parts
 
-__all__ = ["BandedOracle", "build_banded_oracle", "cached_banded_oracle", "solve_banded", "LAPACK_ABOVE"]
+__all__ = ["BandedOracle", "build_banded_oracle", "cached_banded_oracle", "solve_banded", "LAPACK_ABOVE",
+           "band_solve_functions"]
 
 #: Largest multiple of I added to the condensed matrix before the solve gives up.
 _MAX_REGULARISATION = 1e20
@@ -255,6 +256,8 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
     n, m = x0.size, lbg.size
     if np.any(np.isfinite(lbg) & (lbg == ubg)):
         return NlpResult(x0.copy(), np.zeros(m), False, "equality rows are not supported", 0, "banded")
+    if np.any(lbx > ubx):
+        return NlpResult(x0.copy(), np.zeros(m), False, "a lower bound is above its upper bound", 0, "banded")
     free = lbx < ubx
     has_l, has_u = free & np.isfinite(lbx), free & np.isfinite(ubx)
     row_l, row_u = np.isfinite(lbg), np.isfinite(ubg)
@@ -295,6 +298,7 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
     # that a poor step (a short one, or one that needed the Hessian regularised: far from a
     # solution, in a nonconvex region) switches to for the rest of the solve
     mu_fixed: float | None = None
+    mu_solved: float | None = None  # the last fixed-mode barrier parameter whose problem was solved
     bound_mask = np.concatenate([has_l, has_u, row_l, row_u])
     bounds_count = int(bound_mask.sum())
     mu_floor = tol / (10.0 * max(bounds_count, 1))  # the gap test below needs mu * count < tol
@@ -309,9 +313,12 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
         r_c = g - s
         compl = np.concatenate([dl * zl, du * zu, sl * vl, su * vu])  # 0 where there is no bound (z = 0)
         mu_now = float(compl.sum()) / bounds_count if bounds_count else 0.0
-        s_d = max(100.0, (np.abs(y).sum() + zl.sum() + zu.sum()) / max(n + m, 1)) / 100.0
-        error = max(float(np.max(np.abs(r_d))) / s_d, float(np.max(np.abs(r_c), initial=0.0)),
-                    float(np.max(compl, initial=0.0)) / s_d)
+        # the slacks' stationarity, -y - v_l + v_u = 0 (y = 0 on a row without bounds): the
+        # row multipliers returned are y, so it belongs to the dual infeasibility, as in IPOPT
+        r_s = -y - vl + vu
+        s_d = max(100.0, (np.abs(y).sum() + zl.sum() + zu.sum() + vl.sum() + vu.sum()) / max(n + m, 1)) / 100.0
+        dual = max(float(np.max(np.abs(r_d))), float(np.max(np.abs(r_s), initial=0.0))) / s_d
+        error = max(dual, float(np.max(np.abs(r_c), initial=0.0)), float(np.max(compl, initial=0.0)) / s_d)
         # IPOPT's test, and the total complementarity (the duality gap: how far f can be
         # above the optimum) within tol of f, so that a long route's optimum is as exact as a
         # short one's (the per-bound test alone left f 1.6e-6 high at 100,000 segments)
@@ -363,10 +370,10 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
             return alpha_p, alpha_d
 
         if mu_fixed is not None:
-            barrier_error = max(float(np.max(np.abs(r_d))) / s_d, float(np.max(np.abs(r_c), initial=0.0)),
+            barrier_error = max(dual, float(np.max(np.abs(r_c), initial=0.0)),
                                 float(np.max(np.abs(compl - mu_fixed), initial=0.0, where=bound_mask)) / s_d)
             if barrier_error <= 10.0 * mu_fixed:  # its barrier problem solved: back to free mode
-                mu_fixed = None
+                mu_solved, mu_fixed = mu_fixed, None
         # the first step (Mehrotra's predictor, mu = 0, in free mode; the barrier step in fixed
         # mode), by Cholesky: where it fails, delta I is added as IPOPT does (first 1e-4, or a
         # third of the last delta; then x100 the first time, x8 after)
@@ -438,7 +445,9 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
             if alpha < 1e-14:
                 return NlpResult(x, y, False, "the line search failed", iteration, "banded")
         if mu_fixed is None and (alpha < 0.1 or delta > 0.0):
-            mu_fixed = max(mu_now, mu)
+            # back to fixed mode; below the last barrier parameter solved (IPOPT's monotone
+            # decrease, 0.2 mu), or free and fixed mode can take turns at one mu for ever
+            mu_fixed = max(mu_now, mu) if mu_solved is None else max(min(max(mu_now, mu), 0.2 * mu_solved), mu_floor)
         if trace is not None:
             trace({"mode": "free" if mu_fixed is None else "fixed", "iteration": iteration, "error": error, "mu_now": mu_now, "mu": mu, "delta": delta,
                    "violation": violation, "nu": nu, "alpha_max": alpha_p, "alpha": alpha, "alpha_dual": alpha_d,
@@ -456,13 +465,25 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
 
 
 @functools.lru_cache(maxsize=8)
-def _band_solve_functions(n: int) -> tuple[ca.Function, ca.Function]:
-    """``solve(a0, a1, a2, r) -> x`` with A x = r, A the symmetric n x n matrix of bandwidth 2
-    with diagonals a0 (n,), a1 (n-1,) and a2 (n-2,) (offsets 0, 1, 2): by CSparse's Cholesky
-    (which fails, raising, unless A is positive definite) and by CasADi's LDL^T. Both analyse
-    the pattern once, here; at n = 10,000 a solve takes 1.6 and 0.8 ms, against 1.0 ms for
-    LAPACK's banded Cholesky and solve, without importing scipy.linalg, which alone took
-    0.19 s of a command's 1.1 s."""
+def band_solve_functions(n: int) -> tuple[ca.Function, ca.Function]:
+    """The two CasADi solvers of symmetric band systems of one size, built once per size.
+
+    Both analyse the sparsity pattern once, here; at n = 10,000 a solve takes 1.6 and
+    0.8 ms, against 1.0 ms for LAPACK's banded Cholesky and solve, without importing
+    scipy.linalg, which alone took 0.19 s of a command's 1.1 s.
+
+    Parameters
+    ----------
+    n : int
+        Size of the matrix (the NLP's N+1 variables).
+
+    Returns
+    -------
+    cholesky, ldl : casadi.Function
+        ``(a0, a1, a2, r) -> x`` with A x = r, A symmetric with diagonals a0 (n,), a1 (n-1,)
+        and a2 (n-2,) at offsets 0, 1, 2: by CSparse's Cholesky (which raises unless A is
+        positive definite) and by CasADi's LDL^T.
+    """
     a0, a1, a2, r = (ca.MX.sym(name, max(size, 0)) for name, size in (("a0", n), ("a1", n - 1), ("a2", n - 2),
                                                                      ("r", n)))
 
@@ -487,7 +508,7 @@ LAPACK_ABOVE = 30_000
 
 
 class _BandSolver:
-    """Solves with symmetric band matrices of one size n (:func:`_band_solve_functions`)."""
+    """Solves with symmetric band matrices of one size n (:func:`band_solve_functions`)."""
 
     def __init__(self, n: int) -> None:
         self.lapack = n > LAPACK_ABOVE
@@ -496,7 +517,7 @@ class _BandSolver:
 
             self.linalg, self.factor = scipy.linalg, None
         else:
-            cholesky, ldl = _band_solve_functions(n)
+            cholesky, ldl = band_solve_functions(n)
             self.cholesky, self.ldl = _Buffered(cholesky), _Buffered(ldl)
 
     def solve(self, a0: np.ndarray, a1: np.ndarray, a2: np.ndarray, rhs: np.ndarray, *, definite_only: bool

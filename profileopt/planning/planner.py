@@ -229,7 +229,7 @@ def plan(
         result = _solve_nlp(seg, chosen, decel, accel, smoothing, jerk_bound, options, rows)
         b, status, iterations, pieces = result.b, result.status, result.iterations, result.pieces
         timings.update(result.timings)
-        if "stopped" in result.solver:  # IPOPT took over: worth knowing, never a different optimum
+        if "stopped" in result.solver and status == "optimal":  # IPOPT took over: worth knowing
             notes.append(f"IPOPT solved the NLP{result.solver.removeprefix('ipopt')}")
         success = status == "optimal"
         if success:

@@ -70,7 +70,7 @@ class Profile:
         solver's and IPOPT's where IPOPT took over).
     pieces : int
         How many NLP solves make up the profile: 1 for a route solved whole, more for a
-        long route solved in pieces (exactly; IPOPT only, see
+        long route solved in pieces (exactly; by default only with IPOPT, see
         :attr:`~.options.SolverOptions.split_above_segments`), 0 if none.
     notes : tuple of str
         Remarks for the user (merged segments, fallback, ignored columns).
