@@ -158,12 +158,14 @@ class _Buffered:
         for i, r in enumerate(self.outputs):
             self.buffer.set_res(i, memoryview(r))
 
-    def __call__(self, *args: np.ndarray | float) -> list[np.ndarray]:
-        """The outputs (dense, column-major) at ``args``; copies, safe to keep."""
+    def __call__(self, *args: np.ndarray | float, copy: bool = True) -> list[np.ndarray]:
+        """The outputs (dense, column-major) at ``args``: copies, safe to keep, or with
+        ``copy=False`` the buffers themselves, overwritten by the next call (at 100,000
+        segments the copies cost a tenth of the evaluation)."""
         for target, value in zip(self.inputs, args):
             target[:] = value
         self.evaluate()
-        return [r.copy() for r in self.outputs]
+        return [r.copy() for r in self.outputs] if copy else list(self.outputs)
 
 
 class _Rows:
@@ -286,24 +288,31 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
         return (np.where(has_l, x - lo_x, 1.0), np.where(has_u, up_x - x, 1.0),
                 np.where(row_l, s - lo_g, 1.0), np.where(row_u, up_g - s, 1.0))
 
-    def merit(fx: float, gx: np.ndarray, x: np.ndarray, s: np.ndarray, mu: float) -> float:
-        """phi_mu + nu ||g - s||_1; +inf outside the bounds or where f or g is not finite."""
+    def log_sum(x: np.ndarray, s: np.ndarray) -> float:
+        """The barrier's sum of log(slack) over every bound; -inf outside the bounds."""
         gaps = slacks(x, s)  # 1 where there is no bound: log 1 = 0
-        if not (math.isfinite(fx) and np.all(np.isfinite(gx)) and all(np.all(d > 0) for d in gaps)):
+        if not all(np.all(d > 0) for d in gaps):
+            return -math.inf
+        return sum(float(np.sum(np.log(d))) for d in gaps)
+
+    def merit(fx: float, gx: np.ndarray, logs: float, s: np.ndarray, mu: float) -> float:
+        """phi_mu + nu ||g - s||_1 (``logs``: :func:`log_sum` of the point); +inf outside the
+        bounds or where f or g is not finite."""
+        if not (math.isfinite(fx) and math.isfinite(logs) and np.all(np.isfinite(gx))):
             return math.inf
-        barrier = sum(float(np.sum(np.log(d))) for d in gaps)
-        return float(fx - mu * barrier + nu * np.sum(np.abs(gx - s)))
+        return float(fx - mu * logs + nu * np.sum(np.abs(gx - s)))
 
     # None: free mode (Mehrotra); a number: the fixed barrier parameter of the monotone mode
     # that a poor step (a short one, or one that needed the Hessian regularised: far from a
     # solution, in a nonconvex region) switches to for the rest of the solve
+    logs_here: float | None = None  # log_sum at (x, s), known after an accepted step
     mu_fixed: float | None = None
     mu_solved: float | None = None  # the last fixed-mode barrier parameter whose problem was solved
     bound_mask = np.concatenate([has_l, has_u, row_l, row_u])
     bounds_count = int(bound_mask.sum())
     mu_floor = tol / (10.0 * max(bounds_count, 1))  # the gap test below needs mu * count < tol
     for iteration in range(max_iter + 1):
-        out = derivatives(x, p, 1.0, y)
+        out = derivatives(x, p, 1.0, y, copy=False)  # consumed within this iteration
         f, grad, g = float(out[0][0]), out[1], out[2]
         rows = _Rows(oracle, [b.reshape(w, -1).T for b, w in zip(out[3:-3], oracle.widths)])
         hess = out[-3:]
@@ -417,13 +426,16 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
             slope = float(grad_phi_x @ dx + grad_phi_s @ ds) - nu * violation
         tau = max(0.99, 1.0 - mu)
         alpha_p, alpha_d = step_limits(dx, ds, dzl, dzu, dvl, dvu, tau)
-        phi0 = merit(f, g, x, s, mu)
+        if logs_here is None:
+            logs_here = log_sum(x, s)
+        phi0 = merit(f, g, logs_here, s, mu)
         alpha = alpha_p
         while True:
             x_t, s_t = x + alpha * dx, s + alpha * ds
-            f_t, g_t = values(x_t, p)
+            f_t, g_t = values(x_t, p, copy=False)
             s_t = np.where(row_l | row_u, s_t, g_t)
-            phi = merit(float(f_t[0]), g_t, x_t, s_t, mu)
+            logs_t = log_sum(x_t, s_t)
+            phi = merit(float(f_t[0]), g_t, logs_t, s_t, mu)
             if math.isfinite(phi) and phi <= phi0 + _ARMIJO * alpha * min(slope, 0.0):
                 break
             if alpha == alpha_p and math.isfinite(phi):
@@ -433,11 +445,12 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
                 soc = direction(*targets, r_c=alpha_p * r_c + (g_t - s_t))
                 a_soc, _ = step_limits(soc[0], soc[1], *soc[3:], tau)
                 x_c, s_c = x + a_soc * soc[0], s + a_soc * soc[1]
-                f_c, g_c = values(x_c, p)
+                f_c, g_c = values(x_c, p, copy=False)
                 s_c = np.where(row_l | row_u, s_c, g_c)
-                phi_c = merit(float(f_c[0]), g_c, x_c, s_c, mu)
+                logs_c = log_sum(x_c, s_c)
+                phi_c = merit(float(f_c[0]), g_c, logs_c, s_c, mu)
                 if math.isfinite(phi_c) and phi_c <= phi0 + _ARMIJO * alpha_p * min(slope, 0.0):
-                    x_t, s_t, alpha = x_c, s_c, a_soc
+                    x_t, s_t, alpha, logs_t = x_c, s_c, a_soc, logs_c
                     dx, ds, dy, dzl, dzu, dvl, dvu = soc
                     alpha_d = min(alpha_d, step_limits(*soc[:2], *soc[3:], tau)[1])
                     break
@@ -452,7 +465,7 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
             trace({"mode": "free" if mu_fixed is None else "fixed", "iteration": iteration, "error": error, "mu_now": mu_now, "mu": mu, "delta": delta,
                    "violation": violation, "nu": nu, "alpha_max": alpha_p, "alpha": alpha, "alpha_dual": alpha_d,
                    "max_abs_y": float(np.max(np.abs(y + alpha * dy), initial=0.0))})
-        x, s = x_t, s_t
+        x, s, logs_here = x_t, s_t, logs_t  # the barrier's logs of the new point, for the next phi0
         y = y + alpha * dy
         zl, zu = zl + alpha_d * dzl, zu + alpha_d * dzu
         vl, vu = vl + alpha_d * dvl, vu + alpha_d * dvu
