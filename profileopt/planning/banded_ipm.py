@@ -235,7 +235,7 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
     Parameters
     ----------
     oracle : BandedOracle
-        From :func:`profileopt.planning.nlp.build_banded_oracle`.
+        From :func:`build_banded_oracle` or :func:`cached_banded_oracle`.
     x0, lbx, ubx : numpy.ndarray, shape (N+1,)
         Start point and bounds of y = b / b_ref.
     lbg, ubg : numpy.ndarray, shape (M,)
