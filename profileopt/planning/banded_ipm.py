@@ -51,7 +51,7 @@ from typing import Callable
 import casadi as ca
 import numpy as np
 
-from .nlp import NlpResult, nlp_parts
+from .nlp import NlpResult, diagonal_matrix, nlp_parts
 
 __all__ = ["BandedOracle", "build_banded_oracle", "cached_banded_oracle", "solve_banded", "LAPACK_ABOVE",
            "band_solve_functions"]
@@ -263,6 +263,7 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
     free = lbx < ubx
     has_l, has_u = free & np.isfinite(lbx), free & np.isfinite(ubx)
     row_l, row_u = np.isfinite(lbg), np.isfinite(ubg)
+    bounded_row = row_l | row_u
     x = np.where(free, _push(np.clip(x0, lbx, ubx), lbx, ubx), lbx)
     values, derivatives = _Buffered(oracle.values), _Buffered(oracle.derivatives)
     band = _BandSolver(n)
@@ -316,9 +317,10 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
         f, grad, g = float(out[0][0]), out[1], out[2]
         rows = _Rows(oracle, [b.reshape(w, -1).T for b, w in zip(out[3:-3], oracle.widths)])
         hess = out[-3:]
-        s = np.where(row_l | row_u, s, g)  # a row without bounds keeps s = g
+        s = np.where(bounded_row, s, g)  # a row without bounds keeps s = g
         dl, du, sl, su = slacks(x, s)
-        r_d = np.where(free, grad + rows.transpose_times(y, n) - zl + zu, 0.0)
+        grad_jty = grad + rows.transpose_times(y, n)  # grad f + J^T y, in r_d and every step's right-hand side
+        r_d = np.where(free, grad_jty - zl + zu, 0.0)
         r_c = g - s
         compl = np.concatenate([dl * zl, du * zu, sl * vl, su * vu])  # 0 where there is no bound (z = 0)
         mu_now = float(compl.sum()) / bounds_count if bounds_count else 0.0
@@ -353,7 +355,7 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
             """The Newton step for complementarity targets mu_* (per bound) and constraint
             residual r_c (the second-order correction replaces it); ``first``: by Cholesky,
             None if the matrix (with the current delta) is not positive definite."""
-            rt_x = grad + rows.transpose_times(y, n) - np.where(has_l, mu_l / dl, 0.0) + np.where(has_u, mu_u / du, 0.0)
+            rt_x = grad_jty - np.where(has_l, mu_l / dl, 0.0) + np.where(has_u, mu_u / du, 0.0)
             rt_s = -y - np.where(row_l, mu_sl / sl, 0.0) + np.where(row_u, mu_su / su, 0.0)
             rhs = np.where(free, -rt_x - rows.transpose_times(sigma_s * r_c + rt_s, n), 0.0)
             a0 = diagonals[0] + np.where(free, delta, 0.0)
@@ -362,7 +364,7 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
                 return None
             dx = np.where(free, dx, 0.0)
             ds = rows.times(dx) + r_c
-            dy = np.where(row_l | row_u, sigma_s * ds + rt_s, 0.0)
+            dy = np.where(bounded_row, sigma_s * ds + rt_s, 0.0)
             dzl = np.where(has_l, (mu_l - dl * zl - zl * dx) / dl, 0.0)
             dzu = np.where(has_u, (mu_u - du * zu + zu * dx) / du, 0.0)
             dvl = np.where(row_l, (mu_sl - sl * vl - vl * ds) / sl, 0.0)
@@ -433,7 +435,7 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
         while True:
             x_t, s_t = x + alpha * dx, s + alpha * ds
             f_t, g_t = values(x_t, p, copy=False)
-            s_t = np.where(row_l | row_u, s_t, g_t)
+            s_t = np.where(bounded_row, s_t, g_t)
             logs_t = log_sum(x_t, s_t)
             phi = merit(float(f_t[0]), g_t, logs_t, s_t, mu)
             if math.isfinite(phi) and phi <= phi0 + _ARMIJO * alpha * min(slope, 0.0):
@@ -446,7 +448,7 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
                 a_soc, _ = step_limits(soc[0], soc[1], *soc[3:], tau)
                 x_c, s_c = x + a_soc * soc[0], s + a_soc * soc[1]
                 f_c, g_c = values(x_c, p, copy=False)
-                s_c = np.where(row_l | row_u, s_c, g_c)
+                s_c = np.where(bounded_row, s_c, g_c)
                 logs_c = log_sum(x_c, s_c)
                 phi_c = merit(float(f_c[0]), g_c, logs_c, s_c, mu)
                 if math.isfinite(phi_c) and phi_c <= phi0 + _ARMIJO * alpha_p * min(slope, 0.0):
@@ -500,13 +502,8 @@ def band_solve_functions(n: int) -> tuple[ca.Function, ca.Function]:
     a0, a1, a2, r = (ca.MX.sym(name, max(size, 0)) for name, size in (("a0", n), ("a1", n - 1), ("a2", n - 2),
                                                                      ("r", n)))
 
-    def diagonal(v: ca.MX, offset: int) -> ca.MX:
-        k = v.size1()
-        block = ca.horzcat(ca.MX(k, offset), ca.diag(v), ca.MX(k, n - offset - k)) if k else ca.MX(0, n)
-        return ca.vertcat(block, ca.MX(n - k, n))
-
-    upper = diagonal(a1, 1) + diagonal(a2, 2)
-    matrix = diagonal(a0, 0) + upper + upper.T
+    upper = diagonal_matrix(a1, n, n, 1) + diagonal_matrix(a2, n, n, 2)
+    matrix = diagonal_matrix(a0, n, n, 0) + upper + upper.T
     return tuple(ca.Function(f"band_{plugin}", [a0, a1, a2, r], [ca.solve(matrix, r, plugin)])
                  for plugin in ("csparsecholesky", "ldl"))
 

@@ -40,7 +40,7 @@ from ..symbolic import mx_replay
 from .options import DEFAULT_IPOPT_OPTIONS, SolverOptions
 
 __all__ = ["SPEED_EPS_MPS", "PARAMETERS", "ROW_FAMILIES", "NEUTRAL_DATA", "build_nlp", "cached_nlp", "Scaling",
-           "NlpResult", "row_bounds", "objective_s", "family_rows", "nlp_parts",
+           "NlpResult", "row_bounds", "objective_s", "family_rows", "nlp_parts", "diagonal_matrix",
            "NlpParts"]
 
 #: Speed (m/s) that keeps sqrt(b) differentiable at rest in the NLP's time and jerk terms.
@@ -218,8 +218,23 @@ def _shifted(v: ca.MX, before: int, after: int) -> ca.MX:
     return ca.vertcat(ca.MX.zeros(before, 1), v, ca.MX.zeros(after, 1)) if before or after else v
 
 
-def _diagonal(v: ca.MX, rows: int, cols: int, offset: int) -> ca.MX:
-    """A (rows x cols) sparse matrix whose entries (k, k + offset) are v[k] (v a column)."""
+def diagonal_matrix(v: ca.MX, rows: int, cols: int, offset: int) -> ca.MX:
+    """A (rows x cols) sparse matrix whose entries (k, k + offset) are v[k] (v a column of k
+    entries, possibly none).
+
+    Parameters
+    ----------
+    v : casadi.MX, shape (k, 1)
+        The entries.
+    rows, cols : int
+        Shape of the matrix.
+    offset : int
+        Column offset of the diagonal (>= 0).
+
+    Returns
+    -------
+    casadi.MX, shape (rows, cols)
+    """
     k = v.size1()
     block = ca.diag(v)  # k x k, sparse diagonal
     return ca.vertcat(ca.horzcat(ca.MX(k, offset), block, ca.MX(k, cols - offset - k)), ca.MX(rows - k, cols))
@@ -401,9 +416,9 @@ def build_nlp(n: int, with_jerk: bool, ipopt_options: Mapping[str, Any] = DEFAUL
     """
     parts = nlp_parts(n, with_jerk, families)
     x, p, nx = parts.x, parts.p, parts.x.size1()
-    jac = ca.vertcat(*(sum(_diagonal(block[r], block[r].size1(), nx, r) for r in range(len(block)))
+    jac = ca.vertcat(*(sum(diagonal_matrix(block[r], block[r].size1(), nx, r) for r in range(len(block)))
                        for block in parts.jac_blocks))
-    hess = sum(_diagonal(diagonal, nx, nx, offset) for offset, diagonal in enumerate(parts.hess_diagonals))
+    hess = sum(diagonal_matrix(diagonal, nx, nx, offset) for offset, diagonal in enumerate(parts.hess_diagonals))
     name = parts.name
     options = dict(ipopt_options)
     options["grad_f"] = ca.Function(f"{name}_grad_f", [x, p], [parts.f_d, parts.grad], ["x", "p"], ["f", "grad_f_x"])
