@@ -98,8 +98,8 @@ def read_route(path: str | os.PathLike) -> Route:
     if "s" in columns and ("x" in columns or "y" in columns):
         raise InputError(f"{name}: line {header_line}: give either 's' or 'x,y', not both")
     notes = tuple(f"{name}: ignoring column '{c}'" for c in ignored)
-    if len(table.rows) < 2:
-        raise InputError(f"{name}: {len(table.rows)} data row(s); a route needs at least 2 (better: many, "
+    if table.row_count < 2:
+        raise InputError(f"{name}: {table.row_count} data row(s); a route needs at least 2 (better: many, "
                          "dense enough to measure roughness)")
 
     values = table.numbers(sorted(columns.values()))

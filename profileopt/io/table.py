@@ -13,6 +13,7 @@ line, what is wrong and how to fix it.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import itertools
 import os
 from typing import Sequence
@@ -82,6 +83,10 @@ def read_text(path: str | os.PathLike, what: str) -> str:
 class Table:
     """The lines of a table file, split into header, data rows and comments.
 
+    The lines after the header are split only when something asks for them: a plain table
+    (every line after the header a data row with as many cells as the header, as every file
+    ``profileopt`` writes is) is converted to numbers in one pass over its text.
+
     Attributes
     ----------
     source : str
@@ -90,20 +95,86 @@ class Table:
         Column names as written (stripped of white space).
     header_line : int
         File line number of the header (1-based).
-    rows : list of str
-        The data lines (stripped).
-    line_numbers : numpy.ndarray of int, shape (M,)
-        File line number of each data row.
-    comments : tuple of (int, str)
-        Line number and text of every comment line (``#`` included), in order.
+    head_comments : tuple of (int, str)
+        Line number and text of the comment lines above the header.
+    body : str
+        The text after the header line.
     """
 
     source: str
     header: tuple[str, ...]
     header_line: int
-    rows: list[str]
-    line_numbers: np.ndarray
-    comments: tuple[tuple[int, str], ...]
+    head_comments: tuple[tuple[int, str], ...]
+    body: str
+
+    @functools.cached_property
+    def _lines(self) -> tuple[list[str], np.ndarray, tuple[tuple[int, str], ...]]:
+        """The data rows (stripped), their file line numbers, and the comments after the header."""
+        stripped = [raw.strip() for raw in split_lines(self.body)]
+        first = self.header_line + 1
+        # in comprehensions (a 100,000-line route: 30 ms instead of 80)
+        data = [i for i, line in enumerate(stripped) if line and line[0] != "#"]
+        comments = tuple((i + first, line) for i, line in enumerate(stripped) if line[:1] == "#")
+        return ([stripped[i] for i in data], np.asarray(data, dtype=np.int64) + first, comments)
+
+    @functools.cached_property
+    def _plain_rows(self) -> int | None:
+        """The number of data rows when every line after the header is one, else None.
+
+        Plain means: no comment, no blank line, and exactly ``len(header) - 1`` commas on
+        every line (so no line is blank or only white space either). Checked on the bytes
+        in a few vectorised passes; a one-column table is never plain.
+        """
+        body, width = self.body, len(self.header)
+        if width < 2 or not body or "#" in body or body[0] == "\n" or "\n\n" in body:
+            return None
+        text = body[:-1] if body[-1] == "\n" else body
+        n_rows = text.count("\n") + 1
+        if text.count(",") != n_rows * (width - 1):
+            return None
+        raw = np.frombuffer(text.encode("utf-8"), dtype=np.uint8)
+        commas_before_line_end = np.searchsorted(np.flatnonzero(raw == ord(",")), np.flatnonzero(raw == ord("\n")))
+        if np.any(np.diff(commas_before_line_end, prepend=0) != width - 1):
+            return None  # the last line's count follows from the total
+        return n_rows
+
+    @property
+    def rows(self) -> list[str]:
+        """The data lines (stripped), in order."""
+        return self._lines[0]
+
+    @property
+    def row_count(self) -> int:
+        """The number of data rows (without splitting a plain table into lines)."""
+        plain = self._plain_rows
+        return plain if plain is not None else len(self.rows)
+
+    @property
+    def line_numbers(self) -> np.ndarray:
+        """File line number of each data row, shape (M,)."""
+        plain = self._plain_rows
+        if plain is not None:
+            return np.arange(self.header_line + 1, self.header_line + 1 + plain, dtype=np.int64)
+        return self._lines[1]
+
+    @property
+    def comments(self) -> tuple[tuple[int, str], ...]:
+        """Line number and text of every comment line (``#`` included), in order."""
+        if "#" not in self.body:
+            return self.head_comments
+        return self.head_comments + self._lines[2]
+
+    def _plain_numbers(self) -> np.ndarray | None:
+        """Every cell of a plain table as floats in one conversion, or None (not plain, or a
+        cell that is not a number: the general path then finds and names it)."""
+        n_rows = self._plain_rows
+        if n_rows is None:
+            return None
+        body = self.body[:-1] if self.body[-1] == "\n" else self.body
+        try:
+            return np.array(body.replace("\n", ",").split(","), dtype=float).reshape(n_rows, len(self.header))
+        except ValueError:
+            return None
 
     def numbers(self, used: Sequence[int]) -> np.ndarray:
         """The cells of the columns ``used`` as finite floats, shape (M, len(header)).
@@ -128,6 +199,20 @@ class Table:
             NaN or infinite (the message names the line and the column).
         """
         width = len(self.header)
+        table = self._plain_numbers() if len(used) == width else None
+        if table is None:
+            table = self._general_numbers(used)
+        for col in used:
+            bad = np.flatnonzero(~np.isfinite(table[:, col]))
+            if bad.size:
+                i = bad[0]
+                raise InputError(f"{self.source}: line {self.line_numbers[i]}: {self.header[col]} = "
+                                 f"{table[i, col]} is not a finite number; remove the row or give a number")
+        return table
+
+    def _general_numbers(self, used: Sequence[int]) -> np.ndarray:
+        """:meth:`numbers` line by line, for any table (the one that names a bad line)."""
+        width = len(self.header)
         rows = self.rows
         commas = np.array(list(map(str.count, rows, itertools.repeat(","))), dtype=np.int64)
         bad = np.flatnonzero(commas != width - 1)
@@ -136,29 +221,21 @@ class Table:
             raise InputError(f"{self.source}: line {self.line_numbers[i]}: {commas[i] + 1} cells but the header "
                              f"has {width}; make every row match the header")
         flat = ",".join(rows).split(",")
-        table = None
         if len(used) == width:  # every column is used: one conversion of the whole table
             try:
-                table = np.array(flat, dtype=float).reshape(len(rows), width)
+                return np.array(flat, dtype=float).reshape(len(rows), width)
             except ValueError:
                 pass  # find the offending cell below
-        if table is None:
-            cells = np.array(flat, dtype=object).reshape(len(rows), width)
-            table = np.full((len(rows), width), np.nan)
-            for col in used:
-                try:
-                    table[:, col] = cells[:, col].astype(float)
-                except ValueError:
-                    i = next(i for i, cell in enumerate(cells[:, col]) if not _is_number(cell))
-                    raise InputError(f"{self.source}: line {self.line_numbers[i]}: {self.header[col]} = "
-                                     f"'{cells[i, col].strip()}' is not a number; every cell of that column must "
-                                     "be a number in SI units") from None
+        cells = np.array(flat, dtype=object).reshape(len(rows), width)
+        table = np.full((len(rows), width), np.nan)
         for col in used:
-            bad = np.flatnonzero(~np.isfinite(table[:, col]))
-            if bad.size:
-                i = bad[0]
+            try:
+                table[:, col] = cells[:, col].astype(float)
+            except ValueError:
+                i = next(i for i, cell in enumerate(cells[:, col]) if not _is_number(cell))
                 raise InputError(f"{self.source}: line {self.line_numbers[i]}: {self.header[col]} = "
-                                 f"{table[i, col]} is not a finite number; remove the row or give a number")
+                                 f"'{cells[i, col].strip()}' is not a number; every cell of that column must "
+                                 "be a number in SI units") from None
         return table
 
 
@@ -195,27 +272,23 @@ def read_table(path: str | os.PathLike, what: str, *, header_example: str, empty
     """
     source = str(path)
     text = read_text(path, what)
-    stripped = [raw.strip() for raw in split_lines(text)]
     comments: list[tuple[int, str]] = []
     header: tuple[str, ...] | None = None
     header_line = 0
-    start = len(stripped)
-    for index, line in enumerate(stripped):  # comments and blank lines, up to the header
+    start = 0
+    while start < len(text):  # comments and blank lines, up to the header (the rest is split lazily)
+        end = text.find("\n", start)
+        end = len(text) if end < 0 else end
+        line, header_line, start = text[start:end].strip(), header_line + 1, end + 1
         if line.startswith("#"):
-            comments.append((index + 1, line))
+            comments.append((header_line, line))
         elif line:
-            header, header_line, start = tuple(c.strip() for c in line.split(",")), index + 1, index + 1
+            header = tuple(c.strip() for c in line.split(","))
             break
-    # after the header, in comprehensions (a 100,000-line route: 30 ms instead of 80)
-    after = range(start, len(stripped))
-    data = [i for i in after if stripped[i] and stripped[i][0] != "#"]
-    comments += [(i + 1, stripped[i]) for i in after if stripped[i][:1] == "#"]
-    rows = [stripped[i] for i in data]
-    line_numbers = [i + 1 for i in data]
     if header is None:
         raise InputError(f"{source}: the {what} is empty; {empty_fix}")
     if all(_is_number(c) for c in header):
         raise InputError(f"{source}: line {header_line}: the first row is data, not a header; "
                          f"add a header line such as {header_example} above it")
-    return Table(source=source, header=header, header_line=header_line, rows=rows,
-                 line_numbers=np.asarray(line_numbers, dtype=np.int64), comments=tuple(comments))
+    return Table(source=source, header=header, header_line=header_line, head_comments=tuple(comments),
+                 body=text[start:])

@@ -416,7 +416,7 @@ def _read_csv(path: Path, notes: list[str]) -> tuple[_Points, bool]:
     if "x" not in columns or "y" not in columns:
         raise InputError(f"{path}: line {table.header_line}: header {','.join(table.header)!r} lacks the columns "
                          "'x,y' (or 'x_m,y_m'); rename the columns")
-    if not table.rows:
+    if not table.row_count:
         raise InputError(f"{path}: no data rows after the header; a track needs at least 2 points")
     values = table.numbers(sorted(columns.values()))
     lines = table.line_numbers
