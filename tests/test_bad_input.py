@@ -14,6 +14,7 @@ Each case runs ``python -m profileopt`` in a subprocess (about 0.6 s each, mostl
 from __future__ import annotations
 
 import concurrent.futures
+import contextlib
 import dataclasses
 import importlib
 import json
@@ -527,18 +528,35 @@ def test_failed_or_interrupted_write_leaves_nothing_behind(tmp_path: Path, error
 
 
 def test_profile_to_csv_failing_mid_write_leaves_no_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from profileopt.io import profiles
+
     profile = plan(read_route_text(tmp_path, SHORT_ROUTE), load_vehicle("atv"))
     calls = []
 
-    def savetxt_then_fail(handle, *args, **kwargs):  # noqa: ANN001
-        calls.append(1)
-        handle.write("0,0,0\n")  # a partial table ...
-        raise OSError("no space left on device")  # ... then the disk fills up
+    class FillsUp:
+        """A file whose disk fills up while the table is written (the third write)."""
 
-    monkeypatch.setattr(np, "savetxt", savetxt_then_fail)
+        def __init__(self, handle) -> None:  # noqa: ANN001
+            self.handle = handle
+
+        def write(self, text: str) -> int:
+            calls.append(text)
+            if len(calls) == 3:
+                self.handle.write(text[: len(text) // 2])  # a partial table ...
+                raise OSError("no space left on device")  # ... then the disk is full
+            return self.handle.write(text)
+
+    real = profiles.atomic_write
+
+    @contextlib.contextmanager
+    def filling_atomic_write(path):  # noqa: ANN001, ANN202
+        with real(path) as handle:
+            yield FillsUp(handle)
+
+    monkeypatch.setattr(profiles, "atomic_write", filling_atomic_write)
     with pytest.raises(OSError):
         profile.to_csv(tmp_path / "out.csv")
-    assert calls and sorted(p.name for p in tmp_path.iterdir()) == ["route.csv"]
+    assert len(calls) == 3 and sorted(p.name for p in tmp_path.iterdir()) == ["route.csv"]
 
 
 def read_route_text(folder: Path, text: str):  # noqa: ANN201
