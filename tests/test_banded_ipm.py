@@ -153,6 +153,26 @@ def test_the_duality_gap_and_not_only_each_bound_decides_when_to_stop() -> None:
     assert tight.travel_time_s == pytest.approx(exact.travel_time_s, rel=1e-9)
 
 
+def test_a_step_onto_a_bound_near_the_end_is_not_halved(monkeypatch) -> None:
+    """Near the optimum mu is tiny, so the fraction to the boundary, tau = 1 - mu, is 1 to
+    rounding: a full step onto a bound that becomes active leaves its slack at 0 or below
+    (log = -inf). The line search then used to halve the step, halving the violation, for
+    6 iterations running on this route of 200 segments (3 fewer iterations in all without
+    them; 24 to 21 at 10,000 segments). A step that only halves the violation, at alpha =
+    alpha_max / 2 exactly, is the sign; there must be none, and the optimum must not move."""
+    profile = iso8608_sections([("D", 300.0), ("F", 400.0), ("C", 300.0)], 0.5, 8608, n_max_cpm=0.9)
+    route, vehicle = Route(profile.s_m, profile.z_m, source="iso"), load_vehicle("atv")
+    steps = []
+    solve = banded_ipm.solve_banded
+    monkeypatch.setattr(banded_ipm, "solve_banded", lambda *a, **k: solve(*a, **k, trace=steps.append))
+    banded = plan(route, vehicle, smoothing=0.0)
+    assert banded.status == "optimal" and steps
+    assert not [t["iteration"] for t in steps if t["alpha"] == 0.5 * t["alpha_max"]]
+    monkeypatch.undo()
+    ipopt = plan(route, vehicle, smoothing=0.0, solver_options=IPOPT)
+    assert ipopt.objective * (1 - 1e-6) <= banded.objective <= ipopt.objective * (1 + 1e-9)
+
+
 def test_turns_and_hills_rows_are_solved_by_the_banded_solver() -> None:
     """The friction and power row families (winding 6 % hills, scarce grip and power): the
     banded solver converges on its own, to IPOPT's optimum or below."""

@@ -438,6 +438,13 @@ def solve_banded(oracle: BandedOracle, x0: np.ndarray, lbx: np.ndarray, ubx: np.
             s_t = np.where(bounded_row, s_t, g_t)
             logs_t = log_sum(x_t, s_t)
             phi = merit(float(f_t[0]), g_t, logs_t, s_t, mu)
+            if not math.isfinite(logs_t) and alpha == alpha_p and tau > 0.99:
+                # tau = 1 - mu left a slack at or below rounding (a bound that the step makes
+                # active, near the end, where mu is tiny): step 0.99 of the way instead of half
+                alpha_99 = step_limits(dx, ds, dzl, dzu, dvl, dvu, 0.99)[0]
+                if alpha_99 < alpha:
+                    alpha = alpha_99
+                    continue
             if math.isfinite(phi) and phi <= phi0 + _ARMIJO * alpha * min(slope, 0.0):
                 break
             if alpha == alpha_p and math.isfinite(phi):
