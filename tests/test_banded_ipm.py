@@ -245,6 +245,30 @@ def test_ipopt_takes_over_where_the_banded_solver_stops(monkeypatch) -> None:
     np.testing.assert_array_equal(taken_over.speed_mps, ipopt.speed_mps)
 
 
+def test_pieces_that_ipopt_took_over_are_named_in_a_note(monkeypatch) -> None:
+    """With the route split explicitly, a piece the banded solver stops on is solved by IPOPT,
+    and the note says on how many pieces that happened (it used to say nothing)."""
+    route, vehicle = read_route(ROUTES / "krc_rms_2in.csv"), load_vehicle("atv")
+    split = SolverOptions(piece_segments=50, split_above_segments=50)  # as in test_pieces.py
+    calls = []
+    solve = banded_ipm.solve_banded
+
+    def every_third_stops(oracle, x0, *args, **kwargs):
+        calls.append(1)
+        if len(calls) % 3 == 1:
+            return NlpResult(x0.copy(), np.zeros(0), False, "the line search failed", 7, "banded")
+        return solve(oracle, x0, *args, **kwargs)
+
+    clean = plan(route, vehicle, solver_options=split)
+    assert clean.pieces > 1 and not any("IPOPT solved" in note for note in clean.notes)
+    monkeypatch.setattr(banded_ipm, "solve_banded", every_third_stops)
+    taken_over = plan(route, vehicle, solver_options=split)
+    assert taken_over.status == "optimal" and taken_over.pieces > 1
+    stopped = (len(calls) + 2) // 3  # calls 1, 4, 7, ...: each a piece IPOPT then solved
+    notes = [note for note in taken_over.notes if note.startswith("IPOPT solved the NLP")]
+    assert notes == [f"IPOPT solved the NLP (the banded solver stopped on {stopped} of {taken_over.pieces} pieces)"]
+
+
 def test_solver_options_name_the_solver_and_its_split() -> None:
     with pytest.raises(InputError, match=r"nlp_solver = 'mumps': choose one of banded, ipopt"):
         SolverOptions(nlp_solver="mumps")

@@ -323,7 +323,7 @@ def cut_multipliers(grad_f: ca.Function, jac_g: ca.Function, y: np.ndarray, p_ta
 def solve_pieces(length_m: np.ndarray, chosen: "BandChoice", decel_mps2: np.ndarray, accel_mps2: np.ndarray,
                  scaling: "Scaling", with_jerk: bool, score: np.ndarray, cuts: np.ndarray,
                  options: "SolverOptions", timings: dict[str, float], rows: dict[str, np.ndarray] | None = None,
-                 ) -> tuple[np.ndarray | None, int, int]:
+                 ) -> tuple[np.ndarray | None, int, int, int]:
     """The NLP solved piece by piece between the fixed pairs at ``cuts``, each piece in the
     one NLP of ``options.piece_segments`` segments: the piece's boundaries, then (behind it, or in front of the last piece)
     padding boundaries fixed at the neighbouring fixed speed, whose rows are unbounded and
@@ -331,7 +331,8 @@ def solve_pieces(length_m: np.ndarray, chosen: "BandChoice", decel_mps2: np.ndar
     problem, or beside a piece IPOPT cannot solve, is replaced by another between its
     neighbours (or, if there is none, the cuts from the one before it onwards are chosen
     again without it) and the changed pieces are solved again. Returns (b, iterations,
-    pieces); b is None when no set of cuts checks out within ``options.cut_rounds`` rounds.
+    pieces, taken_over); b is None when no set of cuts checks out within ``options.cut_rounds``
+    rounds.
 
     Parameters
     ----------
@@ -360,8 +361,10 @@ def solve_pieces(length_m: np.ndarray, chosen: "BandChoice", decel_mps2: np.ndar
 
     Returns
     -------
-    (b, iterations, pieces) : tuple
-        b (m^2/s^2), shape (N+1,), or None.
+    (b, iterations, pieces, taken_over) : tuple
+        b (m^2/s^2), shape (N+1,), or None; NLP iterations of all the solves; the pieces of b;
+        how many of them IPOPT solved where the banded solver had stopped
+        (:func:`~.solve.solve_nlp`).
     """
     n, w = length_m.size, options.piece_segments
     rows = rows or {}
@@ -386,6 +389,7 @@ def solve_pieces(length_m: np.ndarray, chosen: "BandChoice", decel_mps2: np.ndar
     n_rows += n_family * w
     solved: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]] = {}
     iterations, cuts, tried = 0, cuts.copy(), set()
+    taken_over: set[tuple[int, int]] = set()  # pieces IPOPT solved after the banded solver stopped
 
     def solve(first: int, last: int) -> bool:
         nonlocal iterations
@@ -418,6 +422,8 @@ def solve_pieces(length_m: np.ndarray, chosen: "BandChoice", decel_mps2: np.ndar
         result = solve_nlp(w, with_jerk, families, options, x0, lbx, ubx, p_length, lbg, ubg, scaling.tail(t_ref),
                            *extra, timings=piece_timings)
         iterations += result.iterations
+        if result.success and "stopped" in result.solver:
+            taken_over.add((first, last))
         if result.success:
             rescale = t_ref / t_whole  # multipliers of f / t_ref, expressed for f / t_whole
             lam_family = (np.array([result.lam_g[r] for r in family_rows_real]) * rescale if n_family else None)
@@ -454,14 +460,14 @@ def solve_pieces(length_m: np.ndarray, chosen: "BandChoice", decel_mps2: np.ndar
                 pair = np.stack([cuts, cuts + 1], axis=1)
                 wrong = wrong_cuts(lam_x, scale, lower[pair] < upper[pair], row_inside[cuts])
                 if wrong.size == 0:
-                    return y * b_ref, iterations, len(pieces)
+                    return y * b_ref, iterations, len(pieces), len(taken_over.intersection(pieces))
             if round_ == options.cut_rounds:
                 break
             tried.update(int(k) for k in cuts[wrong])
             cuts = replace_cuts(score, cuts, wrong, w, tried)
             if cuts.size == 0:
                 break
-        return None, iterations, 0
+        return None, iterations, 0, 0
     finally:
         timings["solve"] += time.perf_counter() - t - piece_timings["build"]
         timings["build"] += piece_timings["build"]

@@ -468,7 +468,7 @@ class _NlpResult:
     iterations: int  # NLP solver iterations, all solves together
     pieces: int  # NLP solves whose solutions make up b
     timings: dict[str, float]
-    solver: str = "banded"  # NlpResult.solver of a whole-route solve
+    solver: str  # NlpResult.solver of a whole-route solve; for pieces, the same form
 
 
 def _accel_scale(accel: np.ndarray, decel: np.ndarray) -> float:
@@ -493,10 +493,12 @@ def _solve_nlp(seg: Segments, chosen: BandChoice, decel: np.ndarray, accel: np.n
         score = cut_scores(chosen.upper_b, chosen.greatest_b, seg.length_m)
         cuts = choose_cuts(score, options.piece_segments)
         if cuts.size:
-            b, iterations, pieces = solve_pieces(seg.length_m, chosen, decel, accel, scaling, with_jerk, score, cuts,
-                                                 options, timings, rows)
+            b, iterations, pieces, taken_over = solve_pieces(seg.length_m, chosen, decel, accel, scaling, with_jerk,
+                                                             score, cuts, options, timings, rows)
             if b is not None:
-                return _NlpResult(b, "optimal", iterations, pieces, timings)
+                solver = (f"ipopt (the banded solver stopped on {taken_over} of {pieces} pieces)" if taken_over
+                          else options.nlp_solver)
+                return _NlpResult(b, "optimal", iterations, pieces, timings, solver)
 
     families = tuple(rows)
     b_ref = scaling.b_ref
