@@ -21,7 +21,7 @@ same process and interleaved repeat by repeat, times:
     the convex subset: per-segment speed caps (the force model's allowable speed and
     v_max) plus acceleration bounds, nothing else (``smoothing=0``, ``max_jerk_mps3=inf``).
     Timed with ``plan(method="auto")`` (the exact forward-backward pass), with
-    ``plan(method="ipopt")`` (the NLP solved although the pass is exact: the banded
+    ``plan(method="nlp")`` (the NLP solved although the pass is exact: the banded
     interior-point solver), with TOPP-RA and with COPP's TOPP2-RA.
 ``jerk``
     the jerk-limited minimum-time problem: the convex subset plus the vehicle's jerk
@@ -647,7 +647,7 @@ def bench_size(n: int, repeats: int, workdir: Path, vehicle, spacing_m: float, s
         cases[("convex", "plan auto (exact FB)")] = lambda: run_plan(
             route_path, workdir / "auto.csv", vehicle, method="auto", **convex)
         cases[("convex", "plan NLP (forced)")] = lambda: run_plan(
-            route_path, workdir / "ipopt.csv", vehicle, method="ipopt", **convex)
+            route_path, workdir / "ipopt.csv", vehicle, method="nlp", **convex)
     else:
         cases[("convex", "plan (no `method` keyword: auto only)")] = lambda: run_plan(
             route_path, workdir / "auto.csv", vehicle, **convex)

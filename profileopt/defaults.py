@@ -7,7 +7,7 @@ them from here, so ``profileopt --help`` needs none of the numerical packages.
 from __future__ import annotations
 
 __all__ = ["MODEL_KEYS", "DEFAULT_MODEL", "DEFAULT_SMOOTHING", "DEFAULT_SEGMENT_LENGTH_M", "DEFAULT_ROUGHNESS_WINDOW_M",
-           "DEFAULT_PATH_TOLERANCE_M", "PLAN_BANDS", "MAX_C_BYTES", "DEFAULT_TRACK_SPACING_M",
+           "DEFAULT_PATH_TOLERANCE_M", "PLAN_BANDS", "PLAN_METHODS", "OLD_NLP_METHOD", "MAX_C_BYTES", "DEFAULT_TRACK_SPACING_M",
            "DEFAULT_CORRIDOR_M", "DEFAULT_MAX_GAP_M", "MIN_POINTS_PER_BIN", "MAX_ROUGHNESS_SPACING_M",
            "MAX_ROUGHNESS_CORRIDOR_M"]
 
@@ -61,6 +61,12 @@ MAX_ROUGHNESS_CORRIDOR_M = 0.3
 #: The values of :func:`profileopt.plan`'s ``band``: every band of each segment (chosen over
 #: the whole route), only the band from rest, or only the highest band.
 PLAN_BANDS = ("all", "first", "largest")
+#: Methods of ``plan`` (``--method``): "auto" (the exact forward-backward profile where it is
+#: optimal, else the NLP) and "nlp" (always the NLP, whichever solver solves it).
+PLAN_METHODS = ("auto", "nlp")
+#: The old name of method "nlp", from when IPOPT was the NLP's only solver; accepted for one
+#: release with a deprecation warning (``plan``) or note (``--method``).
+OLD_NLP_METHOD = "ipopt"
 #: Largest C export written (bytes, estimated from
 #: :data:`profileopt.codegen.C_BYTES_PER_STAGE` before any work): 64 MB is about 2700 stages
 #: of all four models (11 s to generate), far beyond an MPC horizon; 100,000 stages would be

@@ -113,7 +113,7 @@ def test_convex_problem_reaches_the_exact_optimum(name: str, vehicle_name: str) 
     route, vehicle = read_route(ROUTES / f"{name}.csv"), load_vehicle(vehicle_name)
     convex = dict(smoothing=0.0, max_jerk_mps3=float("inf"))
     exact = plan(route, vehicle, method="auto", **convex)
-    solved = plan(route, vehicle, method="ipopt", **convex)
+    solved = plan(route, vehicle, method="nlp", **convex)
     assert exact.status == "exact" and solved.status == "optimal"
     assert not any("IPOPT solved" in note for note in solved.notes)  # the banded solver's own answer
     assert solved.travel_time_s == pytest.approx(exact.travel_time_s, rel=1e-9)
@@ -145,8 +145,8 @@ def test_the_duality_gap_and_not_only_each_bound_decides_when_to_stop() -> None:
     route, vehicle = Route(profile.s_m, profile.z_m, source="iso"), load_vehicle("atv")
     convex = dict(smoothing=0.0, max_jerk_mps3=float("inf"))
     exact = plan(route, vehicle, method="auto", **convex)
-    loose = plan(route, vehicle, method="ipopt", solver_options=SolverOptions(ipopt={"ipopt.tol": 1e-6}), **convex)
-    tight = plan(route, vehicle, method="ipopt", **convex)
+    loose = plan(route, vehicle, method="nlp", solver_options=SolverOptions(ipopt={"ipopt.tol": 1e-6}), **convex)
+    tight = plan(route, vehicle, method="nlp", **convex)
     assert loose.pieces == tight.pieces == 1  # solved whole: the banded solver never splits by default
     assert not any("IPOPT solved" in note for note in loose.notes + tight.notes)
     assert exact.travel_time_s <= loose.travel_time_s <= exact.travel_time_s * (1 + 1e-6)

@@ -36,7 +36,7 @@ VEHICLES = ("atv", "atv-resonant")
 #: nonzero boundary speeds, another segment length).
 OPTION_CASES = {
     "trail-atv-exact": ("trail", "atv", ["--smoothing", "0", "--max-jerk", "inf"]),
-    "trail-atv-ipopt-nojerk": ("trail", "atv", ["--method", "ipopt", "--max-jerk", "inf"]),
+    "trail-atv-nlp-nojerk": ("trail", "atv", ["--method", "nlp", "--max-jerk", "inf"]),
     "krc_rms_1in-atv-iecm": ("krc_rms_1in", "atv", ["--model", "iecm"]),
     "krc_rms_1in-atv-prev_bem-seg2": ("krc_rms_1in", "atv", ["--model", "prev_bem", "--segment-length", "2"]),
     "curb-atv-sbem_ef-v0": ("curb", "atv", ["--model", "sbem_ef", "--v0", "3", "--vend", "2"]),

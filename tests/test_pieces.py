@@ -54,7 +54,7 @@ def assert_same_optimum(split, whole) -> None:
 @pytest.mark.parametrize("name, vehicle_name, piece_segments, options", [
     ("iso", "atv", 300, {}),
     ("iso", "atv", 300, {"max_jerk_mps3": float("inf")}),  # smoothing only: no jerk rows
-    ("iso", "atv", 150, {"smoothing": 0.0, "method": "ipopt"}),  # jerk bound only
+    ("iso", "atv", 150, {"smoothing": 0.0, "method": "nlp"}),  # jerk bound only
     ("trail.csv", "atv", 200, {}),
     ("krc_rms_2in.csv", "atv", 50, {}),  # measured ride course (real ground)
     ("iri_road.csv", "atv", 60, {}),  # measured road profile
@@ -98,7 +98,7 @@ def whole_solve_with_multipliers(monkeypatch, route, vehicle, **options):
     return y, lam_x, lam_g, ubx, length, p_tail
 
 
-@pytest.mark.parametrize("options", [{}, {"smoothing": 0.0, "method": "ipopt"}])
+@pytest.mark.parametrize("options", [{}, {"smoothing": 0.0, "method": "nlp"}])
 def test_cut_check_reproduces_ipopts_bound_multipliers(monkeypatch, iso_route, atv, options):
     """At pinned pairs of the whole solve, cut_multipliers on the whole solve's multipliers
     gives IPOPT's own multipliers of those bounds (lam_x = -(grad f + J^T lam_g))."""
@@ -126,7 +126,7 @@ def test_joined_multipliers_of_the_pieces_match_the_whole_solve(monkeypatch, iso
     """The cut check of a split solve (the pieces' multipliers, each rescaled from its own
     T_ref) gives the bound multipliers IPOPT finds at those pairs solving the route whole.
     Without smoothing the jerk rows carry them, so a wrong rescaling shows."""
-    options = {"smoothing": 0.0, "method": "ipopt"}
+    options = {"smoothing": 0.0, "method": "nlp"}
     y, lam_x, *_ = whole_solve_with_multipliers(monkeypatch, iso_route, atv, **options)
     checks = []
     original = _pieces.cut_multipliers

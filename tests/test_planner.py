@@ -75,12 +75,32 @@ def test_pure_minimum_time_nlp_matches_the_exact_optimum(check_profile, name, ve
     route = read_route(ROUTES / name)
     vehicle = load_vehicle(vehicle_name)
     exact = plan(route, vehicle, smoothing=0.0, max_jerk_mps3=math.inf)
-    nlp = plan(route, vehicle, smoothing=0.0, max_jerk_mps3=math.inf, method="ipopt")
+    nlp = plan(route, vehicle, smoothing=0.0, max_jerk_mps3=math.inf, method="nlp")
     assert exact.status == "exact" and nlp.status == "optimal"
     assert nlp.travel_time_s == pytest.approx(exact.travel_time_s, rel=1e-4)
     assert nlp.travel_time_s >= exact.travel_time_s * (1 - 1e-9)  # nothing beats the optimum
     for profile in (exact, nlp):
         check_profile(profile, route, vehicle, jerk=math.inf)
+
+
+def test_method_ipopt_is_the_old_name_of_nlp(tmp_path) -> None:
+    """method="ipopt" (from when IPOPT was the NLP's only solver) still works for one release:
+    the same plan as method="nlp", with a DeprecationWarning from plan() and a note from the
+    command line, and the profile records method=nlp."""
+    route, vehicle = read_route(ROUTES / "curb.csv"), load_vehicle("atv")
+    options = dict(smoothing=0.0, max_jerk_mps3=math.inf)
+    nlp = plan(route, vehicle, method="nlp", **options)
+    with pytest.warns(DeprecationWarning, match=r"method='ipopt'\) is deprecated; use plan\(method='nlp'\)"):
+        old = plan(route, vehicle, method="ipopt", **options)
+    assert nlp.status == old.status == "optimal" and old.settings["method"] == "nlp"
+    np.testing.assert_array_equal(old.speed_mps, nlp.speed_mps)
+    with pytest.raises(InputError, match=r"method = 'IPOPT': choose 'auto' or 'nlp'"):
+        plan(route, vehicle, method="IPOPT")
+    run = subprocess.run([*PROFILEOPT, "plan", str(ROUTES / "curb.csv"), "--method", "ipopt", "--smoothing", "0",
+                          "--max-jerk", "inf", "-o", str(tmp_path / "old.csv")], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert "profileopt plan: note: --method ipopt is deprecated; use --method nlp" in run.stderr
+    np.testing.assert_array_equal(read_profile(tmp_path / "old.csv").speed_mps, nlp.speed_mps)
 
 
 @pytest.mark.parametrize("name,vehicle_name", [("trail.csv", "atv"), ("curb.csv", "atv"),
@@ -145,7 +165,7 @@ def test_fallback_keeps_every_limit_when_ipopt_fails(check_profile, monkeypatch,
     route = read_route(ROUTES / "trail.csv")
 
     def failing(seg, chosen, decel, accel, smoothing, jerk, options, rows):
-        return planner._NlpResult(chosen.greatest_b * 0.5, "Maximum_Iterations_Exceeded", 300, 1, {})
+        return planner._NlpResult(chosen.greatest_b * 0.5, "Maximum_Iterations_Exceeded", 300, 1, {}, "ipopt")
 
     monkeypatch.setattr(planner, "_solve_nlp", failing)
     profile = plan(route, atv)

@@ -150,7 +150,7 @@ def problems(draw: st.DrawFn) -> dict:
             "v0_mps": draw(boundary),
             "vend_mps": draw(boundary),
             "band": draw(st.sampled_from(["all", "first"])),
-            "method": draw(st.sampled_from(["auto", "ipopt"])),
+            "method": draw(st.sampled_from(["auto", "nlp"])),
         },
     }
 

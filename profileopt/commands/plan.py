@@ -9,7 +9,8 @@ from pathlib import Path
 
 from ..cli import command
 from ..defaults import (DEFAULT_MODEL, DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M,
-                        DEFAULT_SEGMENT_LENGTH_M, DEFAULT_SMOOTHING, MODEL_KEYS, PLAN_BANDS)
+                        DEFAULT_SEGMENT_LENGTH_M, DEFAULT_SMOOTHING, MODEL_KEYS, OLD_NLP_METHOD, PLAN_BANDS,
+                        PLAN_METHODS)
 from ..errors import InputError
 from ..io.atomic import STDOUT, OutputSet
 from ..vehicle import load_vehicle
@@ -52,9 +53,10 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
                         help="jerk bound in m/s^3 (default: the vehicle file's; 'inf' turns it off)")
     parser.add_argument("--v0", type=number_argument, default=0.0, metavar="MPS", help="speed at the start, m/s (default: 0)")
     parser.add_argument("--vend", type=number_argument, default=0.0, metavar="MPS", help="speed at the end, m/s (default: 0)")
-    parser.add_argument("--method", default="auto", choices=["auto", "ipopt"],
+    parser.add_argument("--method", default="auto", choices=[*PLAN_METHODS, OLD_NLP_METHOD],
                         help="'auto': exact forward-backward profile when it is optimal, else the NLP "
-                             "(banded interior point; IPOPT where it stops); 'ipopt': always the NLP")
+                             "(banded interior point; IPOPT where it stops); 'nlp': always the NLP "
+                             "('ipopt' is its old name)")
     parser.add_argument("--band", default="all", choices=list(PLAN_BANDS),
                         help="'all': any admissible speed band, chosen over the whole route (may cross "
                              "washboard above resonance); 'first': only speeds reachable from rest "
@@ -90,6 +92,9 @@ def _run(args: argparse.Namespace) -> int:
                          "drop --map or give an x,y,z route")
     for note in route.notes:
         print(f"profileopt plan: note: {note}", file=sys.stderr)
+    if args.method == OLD_NLP_METHOD:
+        print(f"profileopt plan: note: --method {OLD_NLP_METHOD} is deprecated; use --method nlp", file=sys.stderr)
+        args.method = "nlp"
     profile = plan(
         route, vehicle, segment_length_m=args.segment_length, roughness_window_m=args.roughness_window,
         path_tolerance_m=args.path_tolerance, model=args.model, smoothing=args.smoothing,

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
-from ..defaults import DEFAULT_PATH_TOLERANCE_M, DEFAULT_SMOOTHING, PLAN_BANDS
+from ..defaults import DEFAULT_PATH_TOLERANCE_M, DEFAULT_SMOOTHING, OLD_NLP_METHOD, PLAN_BANDS, PLAN_METHODS
 from ..errors import InfeasibleError, InputError, PlanningError
 from ..forces import DEFAULT_MODEL, get_model
 from ..kinematics import segment_accel_mps2, segment_time_s
@@ -70,8 +70,8 @@ def _validate_options(vehicle: "Vehicle", smoothing: float, max_jerk_mps3: float
         if value > vehicle.max_speed_mps:
             raise InputError(f"{name} = {value:g} m/s is above the vehicle's max_speed_mps = "
                              f"{vehicle.max_speed_mps:g} m/s; give a lower boundary speed")
-    if method not in ("auto", "ipopt"):
-        raise InputError(f"method = {method!r}: choose 'auto' or 'ipopt'")
+    if method not in PLAN_METHODS:
+        raise InputError(f"method = {method!r}: choose {' or '.join(repr(m) for m in PLAN_METHODS)}")
     if band not in PLAN_BANDS:
         raise InputError(f"band = {band!r}: choose one of {', '.join(repr(b) for b in PLAN_BANDS)}")
 
@@ -125,10 +125,12 @@ def plan(
         it off.
     v0_mps, vend_mps : float, default 0
         Speed at the start and at the end of the route (m/s).
-    method : {"auto", "ipopt"}, default "auto"
-        ``"auto"`` returns the exact forward-backward profile without running IPOPT when it
-        is provably optimal (smoothing 0 and no jerk bound); ``"ipopt"`` always solves the
-        NLP (for benchmarks and tests of the NLP itself).
+    method : {"auto", "nlp"}, default "auto"
+        ``"auto"`` returns the exact forward-backward profile without solving the NLP when
+        it is provably optimal (smoothing 0, no jerk bound, no friction rows), else solves
+        the NLP; ``"nlp"`` always solves the NLP (for benchmarks and tests of the NLP
+        itself). Which solver solves it is ``solver_options.nlp_solver``. ``"ipopt"``, the
+        old name of ``"nlp"``, works for one release with a DeprecationWarning.
     band : {"all", "first", "largest"}, default "all"
         Which admissible speed bands each segment may use: ``"all"``, any band, chosen
         over the whole route (a resonant vehicle may cross washboard above resonance);
@@ -162,6 +164,10 @@ def plan(
     if bands is not None:
         warnings.warn("plan(bands=...) is deprecated; use plan(band=...)", DeprecationWarning, stacklevel=2)
         band = bands
+    if method == OLD_NLP_METHOD:
+        warnings.warn("plan(method='ipopt') is deprecated; use plan(method='nlp') (the solver is chosen by "
+                      "SolverOptions(nlp_solver=...))", DeprecationWarning, stacklevel=2)
+        method = "nlp"
     jerk = vehicle.max_jerk_mps3 if max_jerk_mps3 is None else float(max_jerk_mps3)
     limits = (*default_limits(vehicle, model=model, max_jerk_mps3=jerk), *extra_limits)  # refuses a bad model
     _validate_options(vehicle, smoothing, jerk, v0_mps, vend_mps, method, band)
