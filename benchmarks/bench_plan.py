@@ -4,8 +4,8 @@ Run by hand, never by the test suite (it takes minutes and its numbers depend on
 machine)::
 
     pip install -e '.[bench]'          # TOPP-RA and COPP, the independent peer solvers
-    python benchmarks/bench_plan.py    # sizes 1000 10000 100000, 3 repeats; table on stdout
-    python benchmarks/bench_plan.py --sizes 1000 10000 --repeats 5 --out /tmp/results.md
+    python benchmarks/bench_plan.py    # sizes 1000 10000 100000, 5 repeats; table on stdout
+    python benchmarks/bench_plan.py --sizes 1000 10000 --repeats 3 --out /tmp/results.md
 
 For every size N (segments of 5 m) it generates a seeded synthetic route (an ISO 8608
 random profile whose class changes along it, sampled every 0.5 m, so every segment holds
@@ -756,7 +756,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--sizes", nargs="+", default=["1000", "10000", "100000"],
                         help="numbers of 5 m segments (space- or comma-separated; default 1000 10000 100000)")
-    parser.add_argument("--repeats", type=int, default=3, help="timed runs of each method per size (default 3)")
+    parser.add_argument("--repeats", type=int, default=5, help="timed runs of each method per size (default 5)")
     parser.add_argument("--out", type=Path, default=None,
                         help="also write the table to this Markdown file (default: stdout only; the "
                              "committed table is benchmarks/results.md, written only when named)")
