@@ -235,7 +235,7 @@ def plan(
         result = _solve_nlp(seg, chosen, decel, accel, smoothing, jerk_bound, options, rows)
         b, status, iterations, pieces = result.b, result.status, result.iterations, result.pieces
         timings.update(result.timings)
-        if "stopped" in result.solver and status == "optimal":  # IPOPT took over: worth knowing
+        if result.solver.startswith("ipopt (") and status == "optimal":  # IPOPT took over: worth knowing
             notes.append(f"IPOPT solved the NLP{result.solver.removeprefix('ipopt')}")
         success = status == "optimal"
         if success:
