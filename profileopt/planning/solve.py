@@ -28,7 +28,7 @@ __all__ = ["solve_nlp", "solve_ipopt", "CROSS_CHECK_MAX_SEGMENTS", "CROSS_CHECK_
 #: speed, where a segment takes longer), and the two interior-point methods, started alike,
 #: can end in different local optima: at 0.5 m segments on krc_rms_1in.csv and curb.csv the
 #: banded solver crawled through a rough spot at 0.4 m/s where IPOPT's optimum keeps 5 m/s,
-#: 2.9 and 6 % more travel time. On 2,000 segments IPOPT adds about 0.2 s; on the long
+#: 2.9 and 6 % more travel time. On 2,000 segments IPOPT adds about 0.25 s (0.1 s on 400); on the long
 #: routes the banded solver is for (10,000 segments and more) no cross-check is made.
 CROSS_CHECK_MAX_SEGMENTS = 2000
 #: IPOPT's optimum replaces the banded solver's only when lower by more than this, relative
