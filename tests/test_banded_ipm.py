@@ -271,34 +271,45 @@ def test_pieces_that_ipopt_took_over_are_named_in_a_note(monkeypatch) -> None:
     assert notes == [f"IPOPT solved the NLP (the banded solver stopped on {stopped} of {taken_over.pieces} pieces)"]
 
 
-def test_a_short_route_keeps_the_lower_of_the_two_solvers_optima(monkeypatch) -> None:
+def test_a_short_route_or_a_crawl_keeps_the_lower_of_the_two_solvers_optima(monkeypatch) -> None:
     """The NLP is not convex: on krc_rms_1in.csv at 0.5 m segments (1,010 segments, jerk
     bound, smoothing 0) the banded solver alone crawls through a rough spot at 0.4 m/s, about
-    3 % more travel time than IPOPT's optimum, which keeps 5 m/s there. Up to
-    CROSS_CHECK_MAX_SEGMENTS IPOPT solves it too and the lower optimum is kept, with a note
-    that says by how much; above it IPOPT is not run."""
+    3 % more travel time than IPOPT's optimum, which keeps 5 m/s there. IPOPT solves it too,
+    and the lower optimum is kept with a note that says by how much, on a route of up to
+    CROSS_CHECK_MAX_SEGMENTS, or on a longer one whose optimum crawls (somewhere under
+    CRAWL_RATIO of its start's speed); otherwise IPOPT is not run."""
     from profileopt.planning import solve
 
     route, vehicle = read_route(ROUTES / "krc_rms_1in.csv"), load_vehicle("atv")
     options = dict(segment_length_m=0.5, smoothing=0.0)
-    calls = []
+    calls, crawl_ratio = [], solve.CRAWL_RATIO
     solve_ipopt = solve.solve_ipopt
     monkeypatch.setattr(solve, "solve_ipopt", lambda *a: calls.append(1) or solve_ipopt(*a))
     monkeypatch.setattr(solve, "CROSS_CHECK_MAX_SEGMENTS", 500)  # below this route's 1,010 segments
+    monkeypatch.setattr(solve, "CRAWL_RATIO", 0.0)  # no crawl check either
     alone = plan(route, vehicle, **options)
     assert not calls and not any("IPOPT" in note for note in alone.notes)
-    monkeypatch.undo()
     ipopt = plan(route, vehicle, solver_options=IPOPT, **options)
-    kept = plan(route, vehicle, **options)
-    assert kept.status == ipopt.status == alone.status == "optimal"
+    assert alone.status == ipopt.status == "optimal"
     assert alone.objective > ipopt.objective * 1.02  # the banded solver's own, worse, local optimum
-    assert kept.objective == pytest.approx(ipopt.objective, rel=1e-9)
-    found = [re.fullmatch(r"IPOPT solved the NLP \(an optimum (\S+) % lower than the banded solver's\)", note)
-             for note in kept.notes]
     lower_percent = 100 * (alone.objective - ipopt.objective) / alone.objective
-    assert [float(m.group(1)) for m in found if m] == [pytest.approx(lower_percent, rel=0.05)], kept.notes
-    # a route where both reach the same optimum: IPOPT runs, nothing changes, no note
-    monkeypatch.setattr(solve, "solve_ipopt", lambda *a: calls.append(1) or solve_ipopt(*a))
+    for threshold, crawl in ((5000, 0.0), (500, crawl_ratio)):  # short; long but crawling
+        monkeypatch.setattr(solve, "CROSS_CHECK_MAX_SEGMENTS", threshold)
+        monkeypatch.setattr(solve, "CRAWL_RATIO", crawl)
+        calls.clear()
+        kept = plan(route, vehicle, **options)
+        assert calls and kept.status == "optimal"
+        assert kept.objective == pytest.approx(ipopt.objective, rel=1e-9)
+        found = [re.fullmatch(r"IPOPT solved the NLP \(an optimum (\S+) % lower than the banded solver's\)", note)
+                 for note in kept.notes]
+        assert [float(m.group(1)) for m in found if m] == [pytest.approx(lower_percent, rel=0.05)], kept.notes
+    # longer than the threshold and no crawl: the banded solver's optimum alone
+    monkeypatch.setattr(solve, "CROSS_CHECK_MAX_SEGMENTS", 100)
+    calls.clear()
+    trail = plan(read_route(ROUTES / "trail.csv"), vehicle)  # 400 segments
+    assert not calls and not any("IPOPT" in note for note in trail.notes)
+    # short, and both reach the same optimum: IPOPT runs, nothing changes, no note
+    monkeypatch.setattr(solve, "CROSS_CHECK_MAX_SEGMENTS", 5000)
     washboard = plan(read_route(ROUTES / "washboard.csv"), vehicle)
     ipopt_only = plan(read_route(ROUTES / "washboard.csv"), vehicle, solver_options=IPOPT)
     assert calls and not any("IPOPT" in note for note in washboard.notes)

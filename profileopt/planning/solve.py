@@ -4,12 +4,15 @@
 so the whole-route solve (:mod:`.planner`) and the pieces of a long route (:mod:`.pieces`)
 are solved alike. The banded solver (:mod:`.banded_ipm`) and IPOPT solve the same NLP
 (:mod:`.nlp`) from the same start point to the same tolerance; when the banded solver does
-not converge, IPOPT solves the problem from the start and its iterations are added.
+not converge, IPOPT solves the problem from the start and its iterations are added. The NLP
+is not convex, so on a short route (:data:`CROSS_CHECK_MAX_SEGMENTS`), or where the banded
+optimum crawls (:data:`CRAWL_RATIO`), IPOPT solves it too and the lower optimum is kept.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 
 import numpy as np
@@ -21,7 +24,7 @@ import casadi as ca
 from .nlp import NlpResult, cached_nlp
 from .options import DEFAULT_IPOPT_OPTIONS, SolverOptions
 
-__all__ = ["solve_nlp", "solve_ipopt", "CROSS_CHECK_MAX_SEGMENTS", "CROSS_CHECK_RTOL"]
+__all__ = ["solve_nlp", "solve_ipopt", "CROSS_CHECK_MAX_SEGMENTS", "CRAWL_RATIO", "CROSS_CHECK_RTOL"]
 
 #: Routes of up to this many segments are also solved by IPOPT after the banded solver, and
 #: the lower optimum is kept. The NLP is not convex (a jerk row is easier to keep at a lower
@@ -31,6 +34,13 @@ __all__ = ["solve_nlp", "solve_ipopt", "CROSS_CHECK_MAX_SEGMENTS", "CROSS_CHECK_
 #: 2.9 and 6 % more travel time. On 2,000 segments IPOPT adds about 0.25 s (0.1 s on 400); on the long
 #: routes the banded solver is for (10,000 segments and more) no cross-check is made.
 CROSS_CHECK_MAX_SEGMENTS = 2000
+#: A longer route is cross-checked too when its banded optimum drives anywhere at less than
+#: this fraction of the speed of its start, the exact optimum without jerk rows: the wrong
+#: local optima seen crawl (0.00-0.08 of it, also on a 5,000-segment ISO class E route at
+#: 0.5 m, 0.7 % slower), while every optimum that equals IPOPT's keeps at least 0.71 of it
+#: (7 bundled routes x 2 vehicles x 5, 1 and 0.5 m, and 3 ISO routes of 5,000 segments).
+#: Where it is wrong, the check costs an IPOPT solve and changes nothing.
+CRAWL_RATIO = 0.3
 #: IPOPT's optimum replaces the banded solver's only when lower by more than this, relative
 #: (both stop at a tolerance of 1e-10 on the scaled problem; equal optima differ by less).
 CROSS_CHECK_RTOL = 1e-6
@@ -89,9 +99,9 @@ def solve_nlp(n: int, with_jerk: bool, families: tuple[str, ...], options: Solve
         result = banded_ipm.solve_banded(oracle, x0, lbx, ubx, lbg, ubg, np.concatenate([length_scaled, *middle, p_tail]),
                               tol=tol, max_iter=max_iter)
         timings["solve"] += time.perf_counter() - t
-        if result.success and n > CROSS_CHECK_MAX_SEGMENTS:
+        if result.success and n > CROSS_CHECK_MAX_SEGMENTS and _slowest_ratio(x0, result.y) >= CRAWL_RATIO:
             return result
-        if result.success:  # a short route: IPOPT's optimum too, and the lower of the two
+        if result.success:  # a short route, or a crawl: IPOPT's optimum too, and the lower of the two
             banded = result
             ipopt = _ipopt(n, with_jerk, families, options, x0, lbx, ubx, length_scaled, lbg, ubg, p_tail, data,
                            timings)
@@ -106,6 +116,15 @@ def solve_nlp(n: int, with_jerk: bool, families: tuple[str, ...], options: Solve
         spent, stopped = result.iterations, f" (the banded solver stopped: {result.status})"
     result = _ipopt(n, with_jerk, families, options, x0, lbx, ubx, length_scaled, lbg, ubg, p_tail, data, timings)
     return dataclasses.replace(result, iterations=result.iterations + spent, solver=f"ipopt{stopped}")
+
+
+def _slowest_ratio(x0: np.ndarray, y: np.ndarray) -> float:
+    """The least ratio of the speed of y to that of the start x0 (both b / b_ref, (N+1,)),
+    over the boundaries where the start moves (1 where it never does)."""
+    moving = x0 > 1e-6 * float(np.max(x0, initial=0.0))
+    if not np.any(moving):
+        return 1.0
+    return math.sqrt(max(float(np.min(y[moving] / x0[moving])), 0.0))
 
 
 def _ipopt(n: int, with_jerk: bool, families: tuple[str, ...], options: SolverOptions, x0: np.ndarray,
