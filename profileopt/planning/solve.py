@@ -31,8 +31,9 @@ __all__ = ["solve_nlp", "solve_ipopt", "CROSS_CHECK_MAX_SEGMENTS", "CRAWL_RATIO"
 #: speed, where a segment takes longer), and the two interior-point methods, started alike,
 #: can end in different local optima: at 0.5 m segments on krc_rms_1in.csv and curb.csv the
 #: banded solver crawled through a rough spot at 0.4 m/s where IPOPT's optimum keeps 5 m/s,
-#: 2.9 and 6 % more travel time. On 2,000 segments IPOPT adds about 0.25 s (0.1 s on 400); on the long
-#: routes the banded solver is for (10,000 segments and more) no cross-check is made.
+#: 2.9 and 6 % more travel time. On 2,000 segments IPOPT adds about 0.25 s (0.1 s on 400);
+#: on the long routes the banded solver is for (10,000 segments and more) no cross-check is
+#: made unless the optimum crawls (:data:`CRAWL_RATIO`).
 CROSS_CHECK_MAX_SEGMENTS = 2000
 #: A longer route is cross-checked too when its banded optimum drives anywhere at less than
 #: this fraction of the speed of its start, the exact optimum without jerk rows: the wrong
@@ -78,9 +79,10 @@ def solve_nlp(n: int, with_jerk: bool, families: tuple[str, ...], options: Solve
     Returns
     -------
     NlpResult
-        ``solver`` says which solver's answer it is (``"banded"``, ``"ipopt"``, or
-        ``"ipopt (the banded solver stopped: <why>)"``); ``iterations`` counts both when
-        IPOPT took over.
+        ``solver`` says which solver's answer it is (``"banded"``, ``"ipopt"``,
+        ``"ipopt (the banded solver stopped: <why>)"``, or ``"ipopt (an optimum <x> % lower
+        than the banded solver's)"`` after a cross-check); ``iterations`` counts both
+        solvers' whenever both ran.
     """
     timings = {} if timings is None else timings
     for key in ("build", "solve"):
