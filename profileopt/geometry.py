@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike
 from .defaults import DEFAULT_PATH_TOLERANCE_M  # why 0.1 m: see its comment there
 from .errors import InputError
 from .route import Route
-from .terrain import WINDOW_BATCH, window_line_moments
+from .window_sums import batched_window_moments
 
 if TYPE_CHECKING:
     from scipy.interpolate import BSpline
@@ -289,16 +289,7 @@ def path_grade_rad(s_m: ArrayLike, z_m: ArrayLike, *, scale_m: float) -> np.ndar
     first = np.minimum(first, np.maximum(index - 1, 0))  # at least two samples per window
     stop = np.maximum(stop, np.minimum(index + 2, m))
     extent = float(np.max(s[stop - 1] - s[first]))
-    block_m = extent * (1 + 1e-6) + tol
-    block = np.floor((s - s[0]) / block_m).astype(np.intp)
-    var_s, cov = np.empty(m), np.empty(m)
-    for lo in range(0, m, WINDOW_BATCH):  # batches that stay in the processor's cache, as roughness_windows
-        hi = min(lo + WINDOW_BATCH, m)
-        # the slice starts at a block's first sample: the same sums, bit for bit, as unsliced
-        a, b = int(np.searchsorted(block, block[first[lo]], side="left")), int(stop[lo:hi].max())
-        _, var_s[lo:hi], cov[lo:hi], _ = window_line_moments(s[a:b], z[a:b], first[lo:hi] - a, stop[lo:hi] - a,
-                                                            block_m=block_m, block_origin_m=float(s[0]),
-                                                            with_var_z=False)
+    var_s, cov, _ = batched_window_moments(s, z, first, stop, block_m=extent * (1 + 1e-6) + tol, with_var_z=False)
     return np.arctan(cov / var_s)
 
 

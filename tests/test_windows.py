@@ -162,27 +162,28 @@ def test_travel_time_converges_as_the_segments_shrink(atv) -> None:
 def test_batches_change_no_bit(monkeypatch) -> None:
     # the moments are formed in batches of windows (cache); every batch must give the very
     # bits of one pass over the whole route
-    import profileopt.terrain as terrain
+    import profileopt.window_sums as window_sums
 
     rng = np.random.default_rng(3)
     s = np.cumsum(rng.uniform(0.02, 0.08, 20000))
     z = 0.01 * rng.standard_normal(s.size) + 0.001 * s
     whole = roughness_windows(s, z, 0.1, window_m=5.0).ri
-    monkeypatch.setattr(terrain, "WINDOW_BATCH", 997)
+    monkeypatch.setattr(window_sums, "WINDOW_BATCH", 997)
     np.testing.assert_array_equal(roughness_windows(s, z, 0.1, window_m=5.0).ri, whole)
 
 
 def test_grade_batches_change_no_bit(monkeypatch) -> None:
     # path_grade_rad forms its windows' moments in batches too (cache, at a million samples)
     import profileopt.geometry as geometry
+    import profileopt.window_sums as window_sums
 
     rng = np.random.default_rng(4)
     s = 1000.0 + np.cumsum(rng.uniform(0.02, 0.08, 20000))
     z = 300.0 + 0.01 * rng.standard_normal(s.size) + 0.05 * np.sin(s / 40.0) * s / 10.0
     whole = geometry.path_grade_rad(s, z, scale_m=10.0)
-    monkeypatch.setattr(geometry, "WINDOW_BATCH", 997)
+    monkeypatch.setattr(window_sums, "WINDOW_BATCH", 997)
     np.testing.assert_array_equal(geometry.path_grade_rad(s, z, scale_m=10.0), whole)
-    monkeypatch.setattr(geometry, "WINDOW_BATCH", 10**9)  # one pass over the whole route
+    monkeypatch.setattr(window_sums, "WINDOW_BATCH", 10**9)  # one pass over the whole route
     np.testing.assert_array_equal(geometry.path_grade_rad(s, z, scale_m=10.0), whole)
 
 

@@ -98,8 +98,8 @@ def solve_nlp(n: int, with_jerk: bool, families: tuple[str, ...], options: Solve
         timings["build"] += time.perf_counter() - t
         t = time.perf_counter()
         middle = [] if data is None else [np.asarray(data, dtype=float).T.ravel()]
-        result = banded_ipm.solve_banded(oracle, x0, lbx, ubx, lbg, ubg, np.concatenate([length_scaled, *middle, p_tail]),
-                              tol=tol, max_iter=max_iter)
+        p = np.concatenate([length_scaled, *middle, p_tail])
+        result = banded_ipm.solve_banded(oracle, x0, lbx, ubx, lbg, ubg, p, tol=tol, max_iter=max_iter)
         timings["solve"] += time.perf_counter() - t
         if result.success and n > CROSS_CHECK_MAX_SEGMENTS and _slowest_ratio(x0, result.y) >= CRAWL_RATIO:
             return result
@@ -109,7 +109,6 @@ def solve_nlp(n: int, with_jerk: bool, families: tuple[str, ...], options: Solve
                            timings)
             iterations = banded.iterations + ipopt.iterations
             if ipopt.success:
-                p = np.concatenate([length_scaled, *middle, p_tail])
                 f_banded, f_ipopt = (float(oracle.values(r.y, p)[0]) for r in (banded, ipopt))  # the same f
                 if f_ipopt < f_banded - CROSS_CHECK_RTOL * abs(f_banded):
                     return dataclasses.replace(ipopt, iterations=iterations, solver=(
