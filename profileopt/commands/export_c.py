@@ -7,7 +7,6 @@ import contextlib
 
 from ..cli import command
 from ..defaults import MAX_C_BYTES, MODEL_KEYS
-from ..vehicle import load_vehicle
 from ._paths import check_folder, folder_outputs, vehicle_input
 
 
@@ -29,6 +28,8 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..vehicle import load_vehicle  # imported when the command runs, not for --help (issue 14)
+
     out = check_folder("-o", args.output)
     vehicle = load_vehicle(args.vehicle)
     # the four files checked before any work (none may be the vehicle file), written all or none

@@ -6,13 +6,13 @@ import argparse
 
 from ..cli import command
 from ..errors import InputError
-from ..vehicle import load_vehicle
 from ._paths import check_folder, folder_outputs, vehicle_input
 
 
 def run(args: argparse.Namespace) -> int:
     """Write the figures into ``args.out`` (created if missing); print each file written."""
     from ..figures import paper_figure_paths, write_paper_figures  # matplotlib: only when drawing (0.3 s)
+    from ..vehicle import load_vehicle
 
     out = check_folder("--out", args.out)
     inputs = [vehicle_input(args.vehicle), vehicle_input(args.resonant_vehicle)]

@@ -12,8 +12,6 @@ from ..defaults import (DEFAULT_MODEL, DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNE
                         DEFAULT_SEGMENT_LENGTH_M, DEFAULT_SMOOTHING, MODEL_KEYS, OLD_NLP_METHOD, PLAN_BANDS,
                         PLAN_METHODS)
 from ..errors import InputError
-from ..io.atomic import STDOUT, OutputSet
-from ..vehicle import load_vehicle
 from ._paths import vehicle_input
 from ._track import (add_track_arguments, assumed_roughness, is_track, number_argument, refuse_track_options,
                      track_inputs, track_route)
@@ -73,6 +71,9 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from ..io.atomic import OutputSet  # imported when the command runs, not for --help (issue 14)
+    from ..vehicle import load_vehicle
+
     # first, before any work: every output checked (none may be an input, nor both the same
     # file); then written together, all or none
     outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot), ("--map", args.map)],
@@ -161,6 +162,8 @@ def _ratio(m: dict) -> str:
 
 
 def _human(summary: dict, args: argparse.Namespace) -> str:
+    from ..io.atomic import STDOUT  # already imported by the run
+
     slow = summary["slowest_segment"]
     margins = summary["margins"]
     solver = summary["solver"]

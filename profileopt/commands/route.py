@@ -8,7 +8,6 @@ from pathlib import Path
 
 from .. import __version__
 from ..cli import command
-from ..io.atomic import STDOUT, OutputSet
 from ._track import add_track_arguments, track_inputs, track_route
 
 
@@ -21,6 +20,8 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from ..io.atomic import STDOUT, OutputSet  # imported when the command runs, not for --help (issue 14)
+
     outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot)], inputs=[args.track, *track_inputs(args)])
     result = track_route(args.track, args, "profileopt route")
     from ..io.routes import write_route
@@ -42,6 +43,8 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _human(result: object, args: argparse.Namespace) -> str:
+    from ..io.atomic import STDOUT  # already imported by the run
+
     route = result.route
     z = route.z_m
     roughness = (f"assumed, {route.assumed_roughness.label} ({result.resolution})" if route.assumed_roughness

@@ -20,11 +20,9 @@ import json
 import sys
 from pathlib import Path
 
-from ..io.atomic import STDOUT, OutputSet
 from ..cli import command
 from ..errors import InputError
 from ..defaults import MODEL_KEYS
-from ..vehicle import load_vehicle
 from ._paths import vehicle_input
 
 
@@ -82,6 +80,8 @@ def _verdict(check, result=None) -> tuple[int, str]:
 
 def _verify(args: argparse.Namespace) -> int:
     """Run ``profileopt verify``; returns the verdict's status (:data:`VERIFY_EXIT_STATUSES`)."""
+    from ..io.atomic import STDOUT, OutputSet  # imported when the command runs, not for --help (issue 14)
+    from ..vehicle import load_vehicle
     from ..forces import get_model
     from ..io import read_profile, read_route
     from ..plots import plot_verification
@@ -215,6 +215,7 @@ def _compare(args: argparse.Namespace) -> int:
     """Run ``profileopt compare``: plan and verify with each model, print one table."""
     from ..io.routes import read_route
     from ..study import compare_models
+    from ..vehicle import load_vehicle
 
     vehicle = load_vehicle(args.vehicle)
     route = read_route(args.route)
