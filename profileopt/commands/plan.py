@@ -35,6 +35,10 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
                         help="write the profile CSV here ('-': standard output, the summary then goes to stderr)")
     parser.add_argument("--segment-length", type=number_argument, default=DEFAULT_SEGMENT_LENGTH_M, metavar="M",
                         help=f"segment length in m, the planning resolution (default: {DEFAULT_SEGMENT_LENGTH_M:g})")
+    parser.add_argument("--refine", action="store_true",
+                        help="plan twice, cutting the segments where the plan meets its speed cap wherever the "
+                             "roughness changes: the travel time then hardly depends on --segment-length "
+                             "(more segments, 2-4 times the solve time)")
     parser.add_argument("--roughness-window", type=number_argument, default=DEFAULT_ROUGHNESS_WINDOW_M, metavar="M",
                         help="roughness window in m: every stretch this long, wherever it starts, is driven at "
                              f"speeds admissible for its own RI (default: {DEFAULT_ROUGHNESS_WINDOW_M:g})")
@@ -100,7 +104,7 @@ def _run(args: argparse.Namespace) -> int:
         route, vehicle, segment_length_m=args.segment_length, roughness_window_m=args.roughness_window,
         path_tolerance_m=args.path_tolerance, model=args.model, smoothing=args.smoothing,
         max_jerk_mps3=args.max_jerk, v0_mps=args.v0, vend_mps=args.vend, method=args.method,
-        band=args.band,
+        band=args.band, refine=args.refine,
     )
     with outputs:
         if args.output is not None:

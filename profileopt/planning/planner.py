@@ -41,18 +41,24 @@ from .path import SegmentPath, segment_path
 from .options import SolverOptions
 from .pieces import choose_cuts, cut_scores, solve_pieces
 from .result import Profile
-from .segments import DEFAULT_ROUGHNESS_WINDOW_M, DEFAULT_SEGMENT_LENGTH_M, Segments, roughness_source, segment_route
+from .segments import (DEFAULT_ROUGHNESS_WINDOW_M, DEFAULT_SEGMENT_LENGTH_M, Segments, refine_segments,
+                       roughness_source, segment_route)
 
 if TYPE_CHECKING:
     from ..route import Route
     from ..vehicle import Vehicle
 
-__all__ = ["plan", "DEFAULT_SMOOTHING", "PLAN_BANDS", "MIN_JERK_MPS3"]
+__all__ = ["plan", "DEFAULT_SMOOTHING", "PLAN_BANDS", "MIN_JERK_MPS3", "REFINE_AT_CAP"]
 
 #: The smallest jerk bound (m/s^3) a plan accepts: the smallest a vehicle file may give
 #: (:data:`profileopt.vehicle.PLAUSIBLE_RANGES`). Below it the jerk-limited profile crawls (a
 #: bound of 1e-13 left no usable profile at all, 1e-50 one standing still for ever).
 MIN_JERK_MPS3 = PLAUSIBLE_RANGES["max_jerk_mps3"][0]
+
+#: With ``refine``, the segments whose minimum-time speed comes within this fraction of
+#: their band's top are the ones cut (where the speed is below its cap, the cap does not
+#: decide the plan there).
+REFINE_AT_CAP = 0.02
 
 
 def _validate_options(vehicle: "Vehicle", smoothing: float, max_jerk_mps3: float, v0_mps: float,
@@ -93,6 +99,7 @@ def plan(
     extra_limits: Sequence[Limit] = (),
     solver_options: SolverOptions | None = None,
     bands: str | None = None,
+    refine: bool = False,
 ) -> Profile:
     """The fastest smooth speed profile along ``route`` that keeps every limit.
 
@@ -144,6 +151,13 @@ def plan(
         How the NLP is solved (pieces, IPOPT options); default ``SolverOptions()``.
     bands : str, optional
         Deprecated name of ``band``.
+    refine : bool, default False
+        Plan twice: then cut every segment where the minimum-time profile comes within
+        :data:`REFINE_AT_CAP` of its speed cap wherever its windows' roughness changes
+        (:func:`profileopt.planning.segments.refine_segments`), and plan on those segments.
+        A segment is held to every window that shares a point with it, so without this the
+        travel time converges only to first order in ``segment_length_m``; with it, it hardly
+        depends on it (README, "Choosing --segment-length"), for more segments.
 
     Returns
     -------
@@ -180,49 +194,69 @@ def plan(
     from ..geometry import route_geometry  # scipy: only when a plan is made
 
     geometry = route_geometry(route, tolerance_m=path_tolerance_m, grade_scale_m=2.0 * seg.roughness_window_m)
-    path = segment_path(route, seg, geometry)
     timings["path"] = time.perf_counter() - t
+    v0_requested, vend_requested = v0_mps, vend_mps
+    refine_note = ""
+    while True:  # twice with refine: on the segments asked for, then on the refined ones
+        t = time.perf_counter()
+        path = segment_path(route, seg, geometry)
+        timings["path"] = timings.get("path", 0.0) + time.perf_counter() - t
 
-    t = time.perf_counter()
-    context = PlanContext(route=route, vehicle=vehicle, segments=seg, path=path)
-    speed_sets, band_source = _speed_bands(limits, context)
-    cap, cap_source = _speed_caps(limits, context)
-    all_bands = speed_sets.capped(cap)  # every band, for reports and messages
-    if band == "first":
-        usable = speed_sets.first_band_only().capped(cap)
-    elif band == "largest":
-        usable = speed_sets.largest_band_only().capped(cap)
-    else:
-        usable = all_bands
-    timings["bands"] = time.perf_counter() - t
+        t = time.perf_counter()
+        context = PlanContext(route=route, vehicle=vehicle, segments=seg, path=path)
+        speed_sets, band_source = _speed_bands(limits, context)
+        cap, cap_source = _speed_caps(limits, context)
+        all_bands = speed_sets.capped(cap)  # every band, for reports and messages
+        if band == "first":
+            usable = speed_sets.first_band_only().capped(cap)
+        elif band == "largest":
+            usable = speed_sets.largest_band_only().capped(cap)
+        else:
+            usable = all_bands
+        timings["bands"] = timings.get("bands", 0.0) + time.perf_counter() - t
 
-    t = time.perf_counter()
-    decel, accel, decel_source, accel_source = _accel_bounds(limits, context)
-    _check_grades(route.source, seg, path, decel, accel, limits, accel_source, decel_source)
-    rows = _nlp_rows(limits, context, cap, decel, accel)
-    # the forward pass keeps the power limit only where it can bind (it then has NLP rows);
-    # elsewhere the acceleration bounds imply it and the vectorised pass stays exact
-    power = _drive_power(limits, context) if "power" in rows else None
-    jerk_bound = min(limit.jerk_bound_mps3(context) for limit in limits)
-    notes = list(seg.notes)
-    v0_mps, note_v0 = snap_to_band(v0_mps, usable.lower_mps[0], usable.upper_mps[0], int(usable.count[0]), "v0_mps")
-    vend_mps, note_vend = snap_to_band(vend_mps, usable.lower_mps[-1], usable.upper_mps[-1], int(usable.count[-1]),
-                                       "vend_mps")
-    notes += [note for note in (note_v0, note_vend) if note]
-    coarse = _coarse_power_segments(power, seg)
-    try:
-        chosen = choose_bands(usable.lower_mps, usable.upper_mps, usable.count, seg.length_m, accel, decel,
-                              v0_mps, vend_mps, seg.boundaries_m, power)
-    except InfeasibleError as exc:  # name the route, as every input message does
-        if coarse:
-            raise InfeasibleError(f"{route.source}: no profile found, but the segments are too long for the "
-                                  f"power-limited climb {coarse}: use segment_length_m <= "
-                                  f"{_shortest_exact(power, seg):.3g} m there and plan again") from None
-        stall = _stall_message(exc, seg, path, accel)
-        if stall:  # a climb the drive cannot hold explains it: say that, not the generic bound
-            raise InfeasibleError(f"{route.source}: {stall}") from None
-        raise InfeasibleError(f"{route.source}: {exc}{_grade_hint(exc, seg, path, decel, accel)}") from None
-    timings["choose"] = time.perf_counter() - t
+        t = time.perf_counter()
+        decel, accel, decel_source, accel_source = _accel_bounds(limits, context)
+        _check_grades(route.source, seg, path, decel, accel, limits, accel_source, decel_source)
+        rows = _nlp_rows(limits, context, cap, decel, accel)
+        # the forward pass keeps the power limit only where it can bind (it then has NLP rows);
+        # elsewhere the acceleration bounds imply it and the vectorised pass stays exact
+        power = _drive_power(limits, context) if "power" in rows else None
+        jerk_bound = min(limit.jerk_bound_mps3(context) for limit in limits)
+        notes = list(seg.notes)
+        v0_mps, note_v0 = snap_to_band(v0_requested, usable.lower_mps[0], usable.upper_mps[0],
+                                       int(usable.count[0]), "v0_mps")
+        vend_mps, note_vend = snap_to_band(vend_requested, usable.lower_mps[-1], usable.upper_mps[-1],
+                                           int(usable.count[-1]), "vend_mps")
+        notes += [note for note in (note_v0, note_vend) if note]
+        coarse = _coarse_power_segments(power, seg)
+        try:
+            chosen = choose_bands(usable.lower_mps, usable.upper_mps, usable.count, seg.length_m, accel, decel,
+                                  v0_mps, vend_mps, seg.boundaries_m, power)
+        except InfeasibleError as exc:  # name the route, as every input message does
+            if coarse:
+                raise InfeasibleError(f"{route.source}: no profile found, but the segments are too long for the "
+                                      f"power-limited climb {coarse}: use segment_length_m <= "
+                                      f"{_shortest_exact(power, seg):.3g} m there and plan again") from None
+            stall = _stall_message(exc, seg, path, accel)
+            if stall:  # a climb the drive cannot hold explains it: say that, not the generic bound
+                raise InfeasibleError(f"{route.source}: {stall}") from None
+            raise InfeasibleError(f"{route.source}: {exc}{_grade_hint(exc, seg, path, decel, accel)}") from None
+        timings["choose"] = timings.get("choose", 0.0) + time.perf_counter() - t
+        if not refine or refine_note:
+            break
+        # the segments where the minimum-time profile meets its band's top, cut where their
+        # windows' roughness changes (segments.refine_segments), and the bands chosen again
+        band_top = usable.upper_mps[np.arange(seg.count), chosen.band]
+        top_b = np.maximum(chosen.greatest_b[:-1], chosen.greatest_b[1:])
+        finer = refine_segments(seg, route.s_m, vehicle, top_b >= (1.0 - REFINE_AT_CAP) ** 2 * band_top ** 2)
+        if finer is seg:
+            break
+        refine_note = (f"refined: {finer.count - seg.count} segments added where the plan meets its speed cap "
+                       f"and the roughness changes ({seg.count} -> {finer.count})")
+        seg = finer
+    if refine_note:
+        notes.append(refine_note)
     if coarse:
         notes.append(f"the segments are longer than the power-limited climb {coarse} resolves exactly: the plan "
                      f"keeps every limit but may be slower than the optimum; segment_length_m <= "
@@ -267,6 +301,8 @@ def plan(
         # "bands" is the profile file's key for the band option (kept so files stay readable)
         "v0_mps": float(v0_mps), "vend_mps": float(vend_mps), "method": method, "bands": band,
     }
+    if refine:  # only then: the files of plans without it keep their bytes
+        settings["refine"] = True
     roughness = roughness_source(route, seg.windows)
     if roughness["source"] == "assumed":  # only then: a measured route's file keeps its bytes
         settings["roughness"] = roughness["label"]

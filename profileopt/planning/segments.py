@@ -28,12 +28,17 @@ if TYPE_CHECKING:
     from ..route import Route
     from ..vehicle import Vehicle
 
-__all__ = ["Segments", "segment_route", "segments_at", "route_roughness_windows", "roughness_source",
-           "MIN_SAMPLES_PER_SEGMENT", "DEFAULT_SEGMENT_LENGTH_M", "DEFAULT_ROUGHNESS_WINDOW_M"]
+__all__ = ["Segments", "segment_route", "segments_at", "refine_segments", "route_roughness_windows",
+           "roughness_source", "MIN_SAMPLES_PER_SEGMENT", "DEFAULT_SEGMENT_LENGTH_M", "DEFAULT_ROUGHNESS_WINDOW_M",
+           "REFINE_RI_TOLERANCE"]
 
 #: Samples a segment must hold: the roughness comes from the windows, but the simulator
 #: (verify) measures each segment's own samples.
 MIN_SAMPLES_PER_SEGMENT = 2
+
+#: :func:`refine_segments` cuts a segment where the RI range of the windows met between two
+#: samples departs by more than this fraction from the range where the piece began.
+REFINE_RI_TOLERANCE = 0.02
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -252,3 +257,67 @@ def segments_at(boundaries_m: np.ndarray, windows: RoughnessWindows, vehicle: "V
         windows=windows,
         notes=notes,
     )
+
+
+def refine_segments(segments: Segments, positions_m: np.ndarray, vehicle: "Vehicle", marked: np.ndarray, *,
+                    tolerance: float = REFINE_RI_TOLERANCE) -> Segments:
+    """Cut the marked segments where the roughness of their windows changes.
+
+    A segment's speeds are held to every window that shares a point with it, so a segment
+    that reaches into a rough stretch is held to the rough stretch's speeds over its whole
+    length: the travel time converges only to first order in the segment length. Cutting
+    a segment where the roughness changes (between two samples, the windows met change)
+    lets each piece keep only its own windows. Each marked segment is walked sample by
+    sample; a new piece starts at a sample where the least or the largest RI of the windows
+    met between it and the next sample departs from the values where the current piece
+    began by more than ``tolerance`` (relative), as long as both pieces keep
+    :data:`MIN_SAMPLES_PER_SEGMENT` samples. Unmarked segments are kept whole.
+
+    Parameters
+    ----------
+    segments : Segments
+        The route's segments (:func:`segment_route`).
+    positions_m : numpy.ndarray, shape (M,)
+        The route's sample positions s (m), those ``segments`` was cut from.
+    vehicle : Vehicle
+        Supplies Pe and h (for e_max).
+    marked : numpy.ndarray of bool, shape (N,)
+        The segments to cut (the planner marks those where its plan meets the speed cap).
+    tolerance : float, default :data:`REFINE_RI_TOLERANCE`
+        Relative change of the RI range that starts a new piece, > 0.
+
+    Returns
+    -------
+    Segments
+        The same boundaries and more (every new one at a sample), with each segment's
+        windows and RI range found afresh (:func:`segments_at`); ``notes`` unchanged.
+    """
+    s = np.asarray(positions_m, dtype=float)
+    marked = np.asarray(marked, dtype=bool)
+    if marked.shape != (segments.count,):
+        raise ValueError(f"marked has shape {marked.shape}; expected ({segments.count},)")
+    if not (math.isfinite(tolerance) and tolerance > 0):
+        raise InputError(f"tolerance = {tolerance!r}: must be a number > 0")
+    # the RI range of the windows met between consecutive samples j and j + 1
+    first, stop = segments.windows.overlapping(s[:-1], s[1:])
+    least, largest = range_extremes(segments.windows.ri, first, stop)
+    least, largest = least.tolist(), largest.tolist()
+    low, high = 1.0 - tolerance, 1.0 + tolerance
+    cuts: list[int] = []
+    for k in np.flatnonzero(marked):
+        a = int(segments.first_sample[k])
+        b = a + int(segments.samples[k])  # samples a .. b-1; a piece from sample j holds j .. next-1
+        start = a
+        base_lo, base_hi = least[a], largest[a]
+        for j in range(a + MIN_SAMPLES_PER_SEGMENT, b - MIN_SAMPLES_PER_SEGMENT + 1):
+            if j - start < MIN_SAMPLES_PER_SEGMENT:
+                continue
+            lo, hi = least[j], largest[j]
+            if hi > base_hi * high or hi < base_hi * low or lo > base_lo * high or lo < base_lo * low:
+                cuts.append(j)
+                start, base_lo, base_hi = j, lo, hi
+    if not cuts:
+        return segments
+    bounds = np.union1d(segments.boundaries_m, s[np.asarray(cuts, dtype=np.intp)])
+    starts, stops = segment_samples(s, bounds)
+    return segments_at(bounds, segments.windows, vehicle, starts=starts, stops=stops, notes=segments.notes)
