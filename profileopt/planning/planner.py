@@ -56,8 +56,8 @@ __all__ = ["plan", "DEFAULT_SMOOTHING", "PLAN_BANDS", "MIN_JERK_MPS3", "REFINE_A
 MIN_JERK_MPS3 = PLAUSIBLE_RANGES["max_jerk_mps3"][0]
 
 #: With ``refine``, the segments whose minimum-time speed comes within this fraction of
-#: their band's top are the ones cut (where the speed is below its cap, the cap does not
-#: decide the plan there).
+#: their band's top, where the force sets it, are the ones cut (where the speed is below
+#: it, or a speed cap holds it, the roughness does not decide the plan there).
 REFINE_AT_CAP = 0.02
 
 
@@ -245,11 +245,13 @@ def plan(
         timings["choose"] = timings.get("choose", 0.0) + time.perf_counter() - t
         if not refine or refine_note:
             break
-        # the segments where the minimum-time profile meets its band's top, cut where their
-        # windows' roughness changes (segments.refine_segments), and the bands chosen again
+        # the segments where the minimum-time profile meets its band's top, set by the force
+        # (not by a speed cap, which roughness does not move), cut where their windows'
+        # roughness changes (segments.refine_segments); then the bands are chosen again
         band_top = usable.upper_mps[np.arange(seg.count), chosen.band]
         top_b = np.maximum(chosen.greatest_b[:-1], chosen.greatest_b[1:])
-        finer = refine_segments(seg, route.s_m, vehicle, top_b >= (1.0 - REFINE_AT_CAP) ** 2 * band_top ** 2)
+        at_cap = (top_b >= (1.0 - REFINE_AT_CAP) ** 2 * band_top ** 2) & (band_top < cap * (1.0 - 1e-9))
+        finer = refine_segments(seg, route.s_m, vehicle, at_cap)
         if finer is seg:
             break
         refine_note = (f"refined: {finer.count - seg.count} segments added where the plan meets its speed cap "
