@@ -151,6 +151,7 @@ def problems(draw: st.DrawFn) -> dict:
             "vend_mps": draw(boundary),
             "band": draw(st.sampled_from(["all", "first"])),
             "method": draw(st.sampled_from(["auto", "nlp"])),
+            "refine": draw(st.booleans()),
         },
     }
 
@@ -188,9 +189,17 @@ def check_plan(profile, route: Route, vehicle: Vehicle, options: dict) -> None:
     assert n >= 1 and s[0] == route.s_m[0] and s[-1] == route.s_m[-1]
     ds = np.diff(s)
     assert np.all(ds > 0)
-    # segments cut where asked, except a merged short tail
-    assert np.all(ds[:-1] == pytest.approx(options["segment_length_m"], rel=1e-9))
-    assert ds[-1] < 2 * options["segment_length_m"] * (1 + 1e-9)
+    # segments cut where asked, except a merged short tail; refined, some of them cut again
+    # at samples, every piece keeping MIN_SAMPLES_PER_SEGMENT of them
+    asked = segment_route(route, vehicle, options["segment_length_m"]).boundaries_m
+    if options.get("refine"):
+        assert np.all(np.isin(asked, s)) and np.all(np.isin(s, asked) | np.isin(s, route.s_m))
+        counts = np.diff(np.searchsorted(route.s_m, s, side="left"))
+        assert counts[:-1].min(initial=MIN_SAMPLES_PER_SEGMENT) >= MIN_SAMPLES_PER_SEGMENT
+    else:
+        np.testing.assert_array_equal(s, asked)
+        assert np.all(ds[:-1] == pytest.approx(options["segment_length_m"], rel=1e-9))
+        assert ds[-1] < 2 * options["segment_length_m"] * (1 + 1e-9)
     # every roughness window, its RI recomputed directly (conftest.window_ri), and the
     # largest of those a segment meets is its ri column
     window_m = float(profile.settings["roughness_window_m"])
