@@ -1,6 +1,6 @@
 """How often does a plan really exceed the force limit? The four models on a fixed route set.
 
-Run:  python examples/safety_study.py [--out FILE.md]
+Run:  python examples/safety_study.py [--out FILE.md] [--refine]
 
 Every route of a fixed, seeded set, and copies of it shifted against the segment grid, is
 planned with each of the four force models for each bundled vehicle, every plan is driven
@@ -95,10 +95,11 @@ def route_set() -> list[Route]:
     return [shifted(route, fraction * SEGMENT_LENGTH_M) for route in base_routes() for fraction in SHIFT_FRACTIONS]
 
 
-def run_study() -> SafetyStudy:
-    """Plan, simulate and pool (the expensive part: about 2 minutes on 2 cores)."""
+def run_study(*, refine: bool = False) -> SafetyStudy:
+    """Plan, simulate and pool (the expensive part: about 2 minutes on 2 cores); ``refine``:
+    every plan with refined segments (``profileopt plan --refine``)."""
     return safety_study(route_set(), [load_vehicle(name) for name in VEHICLES],
-                        segment_length_m=SEGMENT_LENGTH_M)
+                        segment_length_m=SEGMENT_LENGTH_M, refine=refine)
 
 
 def report(study: SafetyStudy) -> str:
@@ -109,7 +110,8 @@ def report(study: SafetyStudy) -> str:
         f"{KERB_HEIGHT_M:g} m kerbs on and off the segment grid and {len(SYNTHETIC)} seeded ISO 8608 routes of "
         f"{SYNTHETIC_LENGTH_M:g} m, classes {'-'.join(sorted({c for c, _ in SYNTHETIC}))}, each shifted by "
         f"{shifts} of a segment, each driven by {' and '.join(VEHICLES)}), {study.segment_length_m:g} m "
-        f"segments, {study.roughness_window_m:g} m roughness windows, default planner options.",
+        f"segments{', refined' if study.refine else ''}, {study.roughness_window_m:g} m roughness windows, "
+        f"default planner options{' otherwise' if study.refine else ''}.",
         "",
         study.markdown(),
         "",
@@ -165,9 +167,11 @@ def _same_windows(study: SafetyStudy) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", type=Path, help="also write the Markdown to this file (default: print it only)")
+    parser.add_argument("--refine", action="store_true",
+                        help="plan with refined segments (plan(refine=True)); the README's figures are without")
     args = parser.parse_args(argv)
     started = time.perf_counter()
-    study = run_study()
+    study = run_study(refine=args.refine)
     text = report(study)
     print(text)
     if args.out:

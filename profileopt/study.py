@@ -214,7 +214,7 @@ def _exceedances(result: "Verification") -> tuple[Exceedance, ...]:
 
 
 def run_model(route: "Route", vehicle: "Vehicle", model: str, *, segment_length_m: float = 5.0,
-              roughness_window_m: float = 5.0) -> ModelRun:
+              roughness_window_m: float = 5.0, refine: bool = False) -> ModelRun:
     """Plan ``route`` with ``model`` (planner defaults otherwise) and verify the plan.
 
     Parameters
@@ -227,6 +227,8 @@ def run_model(route: "Route", vehicle: "Vehicle", model: str, *, segment_length_
         Segment length (m).
     roughness_window_m : float, default 5
         Roughness window length W (m), for the plan and for the check.
+    refine : bool, default False
+        Plan with ``refine`` (:func:`profileopt.planning.plan`).
 
     Returns
     -------
@@ -249,7 +251,7 @@ def run_model(route: "Route", vehicle: "Vehicle", model: str, *, segment_length_
               "label": force_model.label, "quantity": force_model.quantity}
     try:
         profile = plan(route, vehicle, segment_length_m=segment_length_m, model=force_model.key,
-                       roughness_window_m=roughness_window_m)
+                       roughness_window_m=roughness_window_m, refine=refine)
     except InfeasibleError as exc:
         return ModelRun(**common, outcome=INFEASIBLE, status=str(exc))
     except PlanningError as exc:
@@ -280,6 +282,7 @@ def compare_models(
     models: Sequence[str] | None = None,
     segment_length_m: float = 5.0,
     roughness_window_m: float = 5.0,
+    refine: bool = False,
 ) -> tuple[ModelRun, ...]:
     """:func:`run_model` for each model on one route (``profileopt compare``).
 
@@ -293,6 +296,8 @@ def compare_models(
         Segment length (m).
     roughness_window_m : float, default 5
         Roughness window length W (m).
+    refine : bool, default False
+        Plan with ``refine`` (:func:`profileopt.planning.plan`).
 
     Returns
     -------
@@ -301,7 +306,7 @@ def compare_models(
     """
     keys = list(MODELS) if models is None else list(models)
     return tuple(run_model(route, vehicle, key, segment_length_m=segment_length_m,
-                           roughness_window_m=roughness_window_m) for key in keys)
+                           roughness_window_m=roughness_window_m, refine=refine) for key in keys)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -392,6 +397,8 @@ class SafetyStudy:
         Segment length used for every plan (m).
     roughness_window_m : float
         Roughness window length W of every plan and check (m).
+    refine : bool
+        Whether every plan was made with ``refine``.
     """
 
     runs: tuple[ModelRun, ...]
@@ -400,6 +407,7 @@ class SafetyStudy:
     reference_model: str
     segment_length_m: float
     roughness_window_m: float = 5.0
+    refine: bool = False
 
     def total(self, model: str) -> ModelTotals:
         """The pooled totals of one model (by key).
@@ -548,6 +556,7 @@ def safety_study(
     segment_length_m: float = 5.0,
     roughness_window_m: float = 5.0,
     reference_model: str = "sbem_tf",
+    refine: bool = False,
 ) -> SafetyStudy:
     """Plan every route for every vehicle with every model, simulate, and pool the results.
 
@@ -566,6 +575,8 @@ def safety_study(
     reference_model : str, default ``"sbem_tf"``
         Model whose travel time the others are compared with (include it in ``models``,
         else every ``mean_time_ratio`` is nan).
+    refine : bool, default False
+        Plan with ``refine`` (:func:`profileopt.planning.plan`).
 
     Returns
     -------
@@ -584,7 +595,7 @@ def safety_study(
     reference_key = get_model(reference_model).key
     pairs = [
         compare_models(route, vehicle, models=keys, segment_length_m=segment_length_m,
-                       roughness_window_m=roughness_window_m)
+                       roughness_window_m=roughness_window_m, refine=refine)
         for route in routes
         for vehicle in vehicles
     ]
@@ -595,4 +606,5 @@ def safety_study(
         reference_model=reference_key,
         segment_length_m=float(segment_length_m),
         roughness_window_m=float(roughness_window_m),
+        refine=bool(refine),
     )

@@ -309,3 +309,20 @@ def test_refine_on_the_command_line_is_recorded_in_the_profile(tmp_path) -> None
     assert "refine" not in plain.read_text().splitlines()[0]
     assert read_profile(out).s_m.size > read_profile(plain).s_m.size
     assert main(["verify", str(ROUTES / "curb.csv"), str(out)]) == 0
+
+
+def test_compare_and_the_safety_study_plan_refined_segments_when_asked(atv_resonant) -> None:
+    # compare_models (profileopt compare) and safety_study pass refine to every plan: a
+    # refined plan of the curb has more segments and is faster, and the study's run is the
+    # same plan as compare's.
+    from conftest import ROUTES
+    from profileopt.io.routes import read_route
+    from profileopt.study import compare_models, safety_study
+
+    route = read_route(ROUTES / "curb.csv")
+    plain, refined = (compare_models(route, atv_resonant, models=["sbem_tf"], refine=refine)[0]
+                      for refine in (False, True))
+    assert refined.segments > plain.segments and refined.travel_time_s < plain.travel_time_s
+    study = safety_study([route], [atv_resonant], models=["sbem_tf"], refine=True)
+    assert study.refine and study.runs[0].segments == refined.segments
+    assert study.runs[0].travel_time_s == refined.travel_time_s

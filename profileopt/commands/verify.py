@@ -220,10 +220,11 @@ def _compare(args: argparse.Namespace) -> int:
     vehicle = load_vehicle(args.vehicle)
     route = read_route(args.route)
     rows = [run.to_dict() for run in compare_models(route, vehicle, segment_length_m=args.segment_length,
-                                                    roughness_window_m=args.roughness_window)]
+                                                    roughness_window_m=args.roughness_window, refine=args.refine)]
     if args.json:
         print(json.dumps({"route": args.route, "vehicle": args.vehicle, "segment_length_m": args.segment_length,
-                          "roughness_window_m": args.roughness_window, "models": rows}, indent=2))
+                          "roughness_window_m": args.roughness_window, "refine": args.refine, "models": rows},
+                         indent=2))
         return 0
     print(_table(args, route.length_m, rows))
     return 0
@@ -271,6 +272,8 @@ def _compare_arguments(parser: argparse.ArgumentParser) -> None:
                         help="bundled vehicle name or .toml file (default: atv)")
     parser.add_argument("--segment-length", type=float, default=5.0, metavar="M",
                         help="segment length in m (default: 5)")
+    parser.add_argument("--refine", action="store_true",
+                        help="plan with 'profileopt plan --refine' (segments cut where the roughness changes)")
     parser.add_argument("--roughness-window", type=float, default=5.0, metavar="M",
                         help="roughness window length in m, for the plans and the checks (default: 5)")
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
