@@ -106,7 +106,8 @@ def report(study: SafetyStudy) -> str:
     """The Markdown for the README: the pooled table, then where the exceedances are."""
     shifts = ", ".join(f"{f:g}" for f in SHIFT_FRACTIONS)
     return "\n".join([
-        f"`{COMMAND}{' --refine' if study.refine else ''}`: {len(study.pairs())} route-vehicle pairs ({len(BUNDLED)} bundled routes, a route of "
+        f"`{COMMAND}{' --refine' if study.refine else ''}`: {len(study.pairs())} route-vehicle pairs "
+        f"({len(BUNDLED)} bundled routes, a route of "
         f"{KERB_HEIGHT_M:g} m kerbs on and off the segment grid and {len(SYNTHETIC)} seeded ISO 8608 routes of "
         f"{SYNTHETIC_LENGTH_M:g} m, classes {'-'.join(sorted({c for c, _ in SYNTHETIC}))}, each shifted by "
         f"{shifts} of a segment, each driven by {' and '.join(VEHICLES)}), {study.segment_length_m:g} m "
