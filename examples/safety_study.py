@@ -25,7 +25,7 @@ import numpy as np
 from profileopt import get_model, load_vehicle
 from profileopt.io import atomic_write, read_route
 from profileopt.route import Route
-from profileopt.study import SafetyStudy, safety_study
+from profileopt.safety import SafetyStudy, safety_study
 from profileopt.synthetic import iso8608_profile, step
 
 ROUTES = Path(__file__).resolve().parent / "routes"

@@ -28,7 +28,7 @@ _LAZY = {
     "wheel_envelope_m": "wheel",
     "Verification": "verification", "verify": "verification",
     "plot_verification": "plots",
-    "ModelRun": "study", "SafetyStudy": "study", "compare_models": "study", "safety_study": "study",
+    "ModelRun": "study", "SafetyStudy": "safety", "compare_models": "study", "safety_study": "safety",
 }
 
 

@@ -317,7 +317,8 @@ def test_compare_and_the_safety_study_plan_refined_segments_when_asked(atv_reson
     # same plan as compare's.
     from conftest import ROUTES
     from profileopt.io.routes import read_route
-    from profileopt.study import compare_models, safety_study
+    from profileopt.safety import safety_study
+    from profileopt.study import compare_models
 
     route = read_route(ROUTES / "curb.csv")
     plain, refined = (compare_models(route, atv_resonant, models=["sbem_tf"], refine=refine)[0]
