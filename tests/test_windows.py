@@ -301,6 +301,7 @@ def test_refine_on_the_command_line_is_recorded_in_the_profile(tmp_path) -> None
     from conftest import ROUTES
     from profileopt.cli import main
     from profileopt.io import read_profile
+    from profileopt.vehicle import load_vehicle
 
     out, plain = tmp_path / "refined.csv", tmp_path / "plain.csv"
     assert main(["plan", str(ROUTES / "curb.csv"), "--refine", "-o", str(out)]) == 0
@@ -309,6 +310,8 @@ def test_refine_on_the_command_line_is_recorded_in_the_profile(tmp_path) -> None
     assert "refine" not in plain.read_text().splitlines()[0]
     assert read_profile(out).s_m.size > read_profile(plain).s_m.size
     assert main(["verify", str(ROUTES / "curb.csv"), str(out)]) == 0
+    with pytest.raises(InputError, match=r"refine = 'no': must be True or False"):
+        plan(_kerb_route(), load_vehicle("atv"), refine="no")  # a string would be true
 
 
 def test_compare_and_the_safety_study_plan_refined_segments_when_asked(atv_resonant) -> None:

@@ -62,7 +62,7 @@ REFINE_AT_CAP = 0.02
 
 
 def _validate_options(vehicle: "Vehicle", smoothing: float, max_jerk_mps3: float, v0_mps: float,
-                      vend_mps: float, method: str, band: str) -> None:
+                      vend_mps: float, method: str, band: str, refine: bool) -> None:
     if not (math.isfinite(smoothing) and smoothing >= 0):
         raise InputError(f"smoothing = {smoothing!r}: must be a finite number >= 0 (0 is pure minimum time)")
     if math.isnan(max_jerk_mps3) or not max_jerk_mps3 > 0:
@@ -80,6 +80,8 @@ def _validate_options(vehicle: "Vehicle", smoothing: float, max_jerk_mps3: float
         raise InputError(f"method = {method!r}: choose {' or '.join(repr(m) for m in PLAN_METHODS)}")
     if band not in PLAN_BANDS:
         raise InputError(f"band = {band!r}: choose one of {', '.join(repr(b) for b in PLAN_BANDS)}")
+    if not isinstance(refine, (bool, np.bool_)):  # "no" would be true
+        raise InputError(f"refine = {refine!r}: must be True or False")
 
 
 def plan(
@@ -184,7 +186,7 @@ def plan(
         method = "nlp"
     jerk = vehicle.max_jerk_mps3 if max_jerk_mps3 is None else float(max_jerk_mps3)
     limits = (*default_limits(vehicle, model=model, max_jerk_mps3=jerk), *extra_limits)  # refuses a bad model
-    _validate_options(vehicle, smoothing, jerk, v0_mps, vend_mps, method, band)
+    _validate_options(vehicle, smoothing, jerk, v0_mps, vend_mps, method, band, refine)
     options = SolverOptions() if solver_options is None else solver_options
     timings: dict[str, float] = {}
     seg = segment_route(route, vehicle, segment_length_m, roughness_window_m=roughness_window_m)
