@@ -36,9 +36,9 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--segment-length", type=number_argument, default=DEFAULT_SEGMENT_LENGTH_M, metavar="M",
                         help=f"segment length in m, the planning resolution (default: {DEFAULT_SEGMENT_LENGTH_M:g})")
     parser.add_argument("--refine", action="store_true",
-                        help="plan twice, cutting the segments where the plan meets its speed cap wherever the "
-                             "roughness changes: the travel time then hardly depends on --segment-length "
-                             "(more segments, 2-4 times the solve time)")
+                        help="cut the segments where the minimum-time plan meets the force's speed cap wherever "
+                             "the roughness changes, then plan: the travel time then hardly depends on "
+                             "--segment-length (1-11 times the segments, 1-6 times the plan time)")
     parser.add_argument("--roughness-window", type=number_argument, default=DEFAULT_ROUGHNESS_WINDOW_M, metavar="M",
                         help="roughness window in m: every stretch this long, wherever it starts, is driven at "
                              f"speeds admissible for its own RI (default: {DEFAULT_ROUGHNESS_WINDOW_M:g})")

@@ -154,9 +154,10 @@ def plan(
     bands : str, optional
         Deprecated name of ``band``.
     refine : bool, default False
-        Plan twice: then cut every segment where the minimum-time profile comes within
-        :data:`REFINE_AT_CAP` of its speed cap wherever its windows' roughness changes
-        (:func:`profileopt.planning.segments.refine_segments`), and plan on those segments.
+        Choose the bands, then cut every segment where the minimum-time profile comes within
+        :data:`REFINE_AT_CAP` of its band's top, set by the force, wherever its windows'
+        roughness changes (:func:`profileopt.planning.segments.refine_segments`), choose the
+        bands again on those segments, and solve once.
         A segment is held to every window that shares a point with it, so without this the
         travel time converges only to first order in ``segment_length_m``; with it, it hardly
         depends on it (README, "Choosing --segment-length"), for more segments.
