@@ -1,6 +1,6 @@
 """How often does a plan really exceed the force limit? The four models on a fixed route set.
 
-Run:  python examples/safety_study.py [--out FILE.md] [--refine]
+Run:  python examples/safety_study.py [--out FILE.md] [--no-refine]
 
 Every route of a fixed, seeded set, and copies of it shifted against the segment grid, is
 planned with each of the four force models for each bundled vehicle, every plan is driven
@@ -23,6 +23,7 @@ from typing import Sequence
 import numpy as np
 
 from profileopt import get_model, load_vehicle
+from profileopt.defaults import DEFAULT_REFINE
 from profileopt.io import atomic_write, read_route
 from profileopt.route import Route
 from profileopt.safety import SafetyStudy, safety_study
@@ -95,9 +96,10 @@ def route_set() -> list[Route]:
     return [shifted(route, fraction * SEGMENT_LENGTH_M) for route in base_routes() for fraction in SHIFT_FRACTIONS]
 
 
-def run_study(*, refine: bool = False) -> SafetyStudy:
+def run_study(*, refine: bool = DEFAULT_REFINE) -> SafetyStudy:
     """Plan, simulate and pool (the expensive part: about 2 minutes on 2 cores); ``refine``:
-    every plan with refined segments (``profileopt plan --refine``)."""
+    every plan with refined segments (the default, as ``profileopt plan``), or False for
+    uniform segments (``profileopt plan --no-refine``)."""
     return safety_study(route_set(), [load_vehicle(name) for name in VEHICLES],
                         segment_length_m=SEGMENT_LENGTH_M, refine=refine)
 
@@ -106,13 +108,13 @@ def report(study: SafetyStudy) -> str:
     """The Markdown for the README: the pooled table, then where the exceedances are."""
     shifts = ", ".join(f"{f:g}" for f in SHIFT_FRACTIONS)
     return "\n".join([
-        f"`{COMMAND}{' --refine' if study.refine else ''}`: {len(study.pairs())} route-vehicle pairs "
+        f"`{COMMAND}{'' if study.refine else ' --no-refine'}`: {len(study.pairs())} route-vehicle pairs "
         f"({len(BUNDLED)} bundled routes, a route of "
         f"{KERB_HEIGHT_M:g} m kerbs on and off the segment grid and {len(SYNTHETIC)} seeded ISO 8608 routes of "
         f"{SYNTHETIC_LENGTH_M:g} m, classes {'-'.join(sorted({c for c, _ in SYNTHETIC}))}, each shifted by "
         f"{shifts} of a segment, each driven by {' and '.join(VEHICLES)}), {study.segment_length_m:g} m "
-        f"segments{', refined' if study.refine else ''}, {study.roughness_window_m:g} m roughness windows, "
-        f"default planner options{' otherwise' if study.refine else ''}.",
+        f"segments{', refined' if study.refine else ' (not refined)'}, {study.roughness_window_m:g} m roughness "
+        f"windows, default planner options{'' if study.refine else ' otherwise'}.",
         "",
         study.markdown(),
         "",
@@ -168,8 +170,9 @@ def _same_windows(study: SafetyStudy) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", type=Path, help="also write the Markdown to this file (default: print it only)")
-    parser.add_argument("--refine", action="store_true",
-                        help="plan with refined segments (plan(refine=True)); the README's figures are without")
+    parser.add_argument("--refine", action=argparse.BooleanOptionalAction, default=DEFAULT_REFINE,
+                        help="plan with refined segments, as 'profileopt plan' does (default; the README's figures); "
+                             "--no-refine: uniform segments")
     args = parser.parse_args(argv)
     started = time.perf_counter()
     study = run_study(refine=args.refine)

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
+from .defaults import DEFAULT_REFINE
 from .forces import MODELS, get_model
 from .study import INFEASIBLE, ModelRun, compare_models
 
@@ -127,7 +128,7 @@ class SafetyStudy:
     reference_model: str
     segment_length_m: float
     roughness_window_m: float = 5.0
-    refine: bool = False
+    refine: bool = DEFAULT_REFINE
 
     def total(self, model: str) -> ModelTotals:
         """The pooled totals of one model (by key).
@@ -276,7 +277,7 @@ def safety_study(
     segment_length_m: float = 5.0,
     roughness_window_m: float = 5.0,
     reference_model: str = "sbem_tf",
-    refine: bool = False,
+    refine: bool = DEFAULT_REFINE,
 ) -> SafetyStudy:
     """Plan every route for every vehicle with every model, simulate, and pool the results.
 
@@ -295,8 +296,9 @@ def safety_study(
     reference_model : str, default ``"sbem_tf"``
         Model whose travel time the others are compared with (include it in ``models``,
         else every ``mean_time_ratio`` is nan).
-    refine : bool, default False
-        Plan with ``refine`` (:func:`profileopt.planning.plan`).
+    refine : bool, default True (:data:`profileopt.defaults.DEFAULT_REFINE`)
+        Plan with ``refine`` (:func:`profileopt.planning.plan`); False plans on uniform
+        segments.
 
     Returns
     -------

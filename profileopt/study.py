@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
+from .defaults import DEFAULT_REFINE
 from .errors import InfeasibleError
 from .forces import MODELS, get_model
 
@@ -209,7 +210,7 @@ def _exceedances(result: "Verification") -> tuple[Exceedance, ...]:
 
 
 def run_model(route: "Route", vehicle: "Vehicle", model: str, *, segment_length_m: float = 5.0,
-              roughness_window_m: float = 5.0, refine: bool = False) -> ModelRun:
+              roughness_window_m: float = 5.0, refine: bool = DEFAULT_REFINE) -> ModelRun:
     """Plan ``route`` with ``model`` (planner defaults otherwise) and verify the plan.
 
     Parameters
@@ -222,8 +223,9 @@ def run_model(route: "Route", vehicle: "Vehicle", model: str, *, segment_length_
         Segment length (m).
     roughness_window_m : float, default 5
         Roughness window length W (m), for the plan and for the check.
-    refine : bool, default False
-        Plan with ``refine`` (:func:`profileopt.planning.plan`).
+    refine : bool, default True (:data:`profileopt.defaults.DEFAULT_REFINE`)
+        Plan with ``refine`` (:func:`profileopt.planning.plan`); False plans on uniform
+        segments.
 
     Returns
     -------
@@ -277,7 +279,7 @@ def compare_models(
     models: Sequence[str] | None = None,
     segment_length_m: float = 5.0,
     roughness_window_m: float = 5.0,
-    refine: bool = False,
+    refine: bool = DEFAULT_REFINE,
 ) -> tuple[ModelRun, ...]:
     """:func:`run_model` for each model on one route (``profileopt compare``).
 
@@ -291,8 +293,9 @@ def compare_models(
         Segment length (m).
     roughness_window_m : float, default 5
         Roughness window length W (m).
-    refine : bool, default False
-        Plan with ``refine`` (:func:`profileopt.planning.plan`).
+    refine : bool, default True (:data:`profileopt.defaults.DEFAULT_REFINE`)
+        Plan with ``refine`` (:func:`profileopt.planning.plan`); False plans on uniform
+        segments.
 
     Returns
     -------

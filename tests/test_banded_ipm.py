@@ -11,13 +11,15 @@ References, each independent of the solver:
 
 from __future__ import annotations
 
+import functools
 import re
 
 import casadi as ca
 import numpy as np
 import pytest
 
-from profileopt import Route, load_vehicle, plan, read_route
+import profileopt
+from profileopt import Route, load_vehicle, read_route
 from profileopt.errors import InputError
 from profileopt.planning import SolverOptions
 from profileopt.planning import banded_ipm
@@ -27,6 +29,10 @@ from profileopt.synthetic import iso8608_sections
 
 from conftest import ROUTES
 from test_nlp_build import dense, random_point, random_problem, reference_functions, reference_nlp
+
+# These tests compare the solvers on the uniform segments their sizes name; refining (the
+# default, which cuts segments where the plan meets the force's cap) is tested in test_windows.py.
+plan = functools.partial(profileopt.plan, refine=False)
 
 IPOPT = SolverOptions(nlp_solver="ipopt")
 ALL_ROUTES = ("curb", "iri_road", "krc_rms_1in", "krc_rms_2in", "krc_rms_4in", "trail", "washboard")

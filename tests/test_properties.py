@@ -192,7 +192,7 @@ def check_plan(profile, route: Route, vehicle: Vehicle, options: dict) -> None:
     # segments cut where asked, except a merged short tail; refined, some of them cut again
     # at samples, every piece keeping MIN_SAMPLES_PER_SEGMENT of them
     asked = segment_route(route, vehicle, options["segment_length_m"]).boundaries_m
-    if options.get("refine"):
+    if options["refine"]:  # every caller says (plan refines by default)
         assert np.all(np.isin(asked, s)) and np.all(np.isin(s, asked) | np.isin(s, route.s_m))
         counts = np.diff(np.searchsorted(route.s_m, s, side="left"))
         assert counts[:-1].min(initial=MIN_SAMPLES_PER_SEGMENT) >= MIN_SAMPLES_PER_SEGMENT
@@ -358,7 +358,7 @@ def test_the_independent_check_catches_broken_plans() -> None:
     vehicle = BASES["atv-resonant"].replace(max_lateral_accel_mps2=None, track_width_m=None, cg_height_m=None,
                                             friction_coefficient=None, mass_kg=None, max_power_w=None)
     options = {"segment_length_m": 5.0, "model": "sbem_tf", "smoothing": 0.01, "max_jerk_mps3": None,
-               "v0_mps": 0.0, "vend_mps": 0.0, "band": "all", "method": "auto"}
+               "v0_mps": 0.0, "vend_mps": 0.0, "band": "all", "method": "auto", "refine": True}
     profile = plan(route, vehicle, **options)
     check_plan(profile, route, vehicle, options)
     force_ratio = profile.force_n[:-1].max() / vehicle.max_transmitted_force_n

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from ..cli import command
 from ..defaults import (DEFAULT_MODEL, DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M,
-                        DEFAULT_SEGMENT_LENGTH_M, DEFAULT_SMOOTHING, MODEL_KEYS, OLD_NLP_METHOD, PLAN_BANDS,
+                        DEFAULT_REFINE, DEFAULT_SEGMENT_LENGTH_M, DEFAULT_SMOOTHING, MODEL_KEYS, OLD_NLP_METHOD, PLAN_BANDS,
                         PLAN_METHODS)
 from ..errors import InputError
 from ._paths import vehicle_input
@@ -35,10 +35,11 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
                         help="write the profile CSV here ('-': standard output, the summary then goes to stderr)")
     parser.add_argument("--segment-length", type=number_argument, default=DEFAULT_SEGMENT_LENGTH_M, metavar="M",
                         help=f"segment length in m, the planning resolution (default: {DEFAULT_SEGMENT_LENGTH_M:g})")
-    parser.add_argument("--refine", action="store_true",
+    parser.add_argument("--refine", action=argparse.BooleanOptionalAction, default=DEFAULT_REFINE,
                         help="cut the segments where the minimum-time plan meets the force's speed cap wherever "
-                             "the roughness changes, then plan: the travel time then hardly depends on "
-                             "--segment-length (1-11 times the segments, 1-6 times the plan time)")
+                             "the roughness changes, then plan, so that the travel time hardly depends on "
+                             "--segment-length (default; 1-11 times the segments, 1-6 times the plan time); "
+                             "--no-refine plans on the uniform segments")
     parser.add_argument("--roughness-window", type=number_argument, default=DEFAULT_ROUGHNESS_WINDOW_M, metavar="M",
                         help="roughness window in m: every stretch this long, wherever it starts, is driven at "
                              f"speeds admissible for its own RI (default: {DEFAULT_ROUGHNESS_WINDOW_M:g})")

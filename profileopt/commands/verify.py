@@ -22,7 +22,7 @@ from pathlib import Path
 
 from ..cli import command
 from ..errors import InputError
-from ..defaults import MODEL_KEYS
+from ..defaults import DEFAULT_REFINE, MODEL_KEYS
 from ._paths import vehicle_input
 
 
@@ -272,8 +272,9 @@ def _compare_arguments(parser: argparse.ArgumentParser) -> None:
                         help="bundled vehicle name or .toml file (default: atv)")
     parser.add_argument("--segment-length", type=float, default=5.0, metavar="M",
                         help="segment length in m (default: 5)")
-    parser.add_argument("--refine", action="store_true",
-                        help="plan with 'profileopt plan --refine' (segments cut where the roughness changes)")
+    parser.add_argument("--refine", action=argparse.BooleanOptionalAction, default=DEFAULT_REFINE,
+                        help="plan as 'profileopt plan' does, with segments cut where the plan meets the force's "
+                             "speed cap and the roughness changes (default); --no-refine: uniform segments")
     parser.add_argument("--roughness-window", type=float, default=5.0, metavar="M",
                         help="roughness window length in m, for the plans and the checks (default: 5)")
     parser.add_argument("--json", action="store_true", help="print the results as JSON")

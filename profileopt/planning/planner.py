@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
-from ..defaults import DEFAULT_PATH_TOLERANCE_M, DEFAULT_SMOOTHING, OLD_NLP_METHOD, PLAN_BANDS, PLAN_METHODS
+from ..defaults import DEFAULT_PATH_TOLERANCE_M, DEFAULT_REFINE, DEFAULT_SMOOTHING, OLD_NLP_METHOD, PLAN_BANDS, PLAN_METHODS
 from ..errors import InfeasibleError, InputError, PlanningError
 from ..forces import DEFAULT_MODEL, get_model
 from ..kinematics import segment_accel_mps2, segment_time_s
@@ -101,7 +101,7 @@ def plan(
     extra_limits: Sequence[Limit] = (),
     solver_options: SolverOptions | None = None,
     bands: str | None = None,
-    refine: bool = False,
+    refine: bool = DEFAULT_REFINE,
 ) -> Profile:
     """The fastest smooth speed profile along ``route`` that keeps every limit.
 
@@ -153,14 +153,16 @@ def plan(
         How the NLP is solved (pieces, IPOPT options); default ``SolverOptions()``.
     bands : str, optional
         Deprecated name of ``band``.
-    refine : bool, default False
+    refine : bool, default True (:data:`profileopt.defaults.DEFAULT_REFINE`)
         Choose the bands, then cut every segment where the minimum-time profile comes within
         :data:`REFINE_AT_CAP` of its band's top, set by the force, wherever its windows'
         roughness changes (:func:`profileopt.planning.segments.refine_segments`), choose the
         bands again on those segments, and solve once.
         A segment is held to every window that shares a point with it, so without this the
         travel time converges only to first order in ``segment_length_m``; with it, it hardly
-        depends on it (README, "Choosing --segment-length"), for more segments.
+        depends on it (README, "Choosing --segment-length"), for more segments. False plans
+        on the uniform segments asked for (one band choice; the profile has exactly their
+        boundaries).
 
     Returns
     -------
@@ -306,8 +308,7 @@ def plan(
         # "bands" is the profile file's key for the band option (kept so files stay readable)
         "v0_mps": float(v0_mps), "vend_mps": float(vend_mps), "method": method, "bands": band,
     }
-    if refine:  # only then: the files of plans without it keep their bytes
-        settings["refine"] = True
+    settings["refine"] = bool(refine)
     roughness = roughness_source(route, seg.windows)
     if roughness["source"] == "assumed":  # only then: a measured route's file keeps its bytes
         settings["roughness"] = roughness["label"]
