@@ -29,6 +29,13 @@ same process and interleaved repeat by repeat, times:
     ``plan`` and ``SolverOptions(nlp_solver="ipopt")`` (IPOPT only, for comparison) and with
     COPP's TOPP3-LP.
 
+``plan`` refines its segments by default (issue 10: cut where the minimum-time profile
+meets the force's cap and the roughness changes), so N names the segments asked for and
+the table gives the segments planned beside it (about 2.4 N on this route). Every peer
+runs the same refinement in its timed pipeline (:func:`planner_segments`, the planner's
+own functions) and gets exactly the planner's boundaries and caps; the benchmark checks
+that the boundaries of every written plan are the peers'.
+
 TOPP-RA solves the same discrete problem: the path is the 1-D position p(s) = s (so
 p' = 1 and p'' = 0), the grid points are the segment boundaries, the velocity bound at
 each boundary is the smaller cap of the two segments meeting there (the planner's bound
@@ -87,11 +94,13 @@ import numpy as np
 
 import profileopt
 from profileopt import load_vehicle
+from profileopt.defaults import DEFAULT_REFINE
 from profileopt.vehicle import OPTIONAL_KEYS
 from profileopt.forces import get_model
 from profileopt.io import read_profile, read_route
 from profileopt.kinematics import boundary_jerk_mps3
 from profileopt.planning import DEFAULT_SMOOTHING, Profile, SolverOptions, greatest_profile, plan, segment_route
+from profileopt.planning.segments import at_force_cap, refine_segments
 from profileopt.speeds import speed_bands
 from profileopt.synthetic import iso8608_sections
 
@@ -201,9 +210,9 @@ def travel_time_s(b: np.ndarray, length_m: np.ndarray) -> float:
     return float(np.sum(2.0 * length_m / (v[:-1] + v[1:])))
 
 
-def convex_caps(route_path: Path, vehicle) -> ConvexProblem:
-    """Segment the route and compute the caps of the convex subset (not timed)."""
-    seg = segment_route(read_route(route_path), vehicle, SEGMENT_LENGTH_M)
+def _caps(seg, vehicle) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+    """Segment caps, boundary caps, the exact optimum's v^2 (v0 = vend = 0) and whether every
+    segment has one band [0, cap]."""
     bands = speed_bands(seg.ri, vehicle, model=MODEL)
     single = bool(np.all(bands.count == 1) and np.all(bands.lower_mps[:, 0] == 0.0))
     cap = np.minimum(bands.first(), vehicle.max_speed_mps)  # the benchmark routes have no speed_limit
@@ -212,6 +221,31 @@ def convex_caps(route_path: Path, vehicle) -> ConvexProblem:
     upper_b[0] = upper_b[-1] = 0.0  # v0 = vend = 0
     exact_b = greatest_profile(np.zeros_like(upper_b), upper_b, seg.length_m,
                                vehicle.max_accel_mps2, vehicle.max_decel_mps2)
+    return cap, boundary_cap, exact_b, single
+
+
+def planner_segments(route, vehicle):
+    """The segments ``plan`` solves on with its default ``refine``: the route cut every
+    SEGMENT_LENGTH_M, then, as the planner does, the segments where the minimum-time profile
+    meets the force's cap (:func:`profileopt.planning.segments.at_force_cap`) cut again where
+    the roughness changes (:func:`profileopt.planning.segments.refine_segments`). The peers
+    run this too, so that every solver gets the same boundaries and caps (issue 14: "the
+    identical problem")."""
+    seg = segment_route(route, vehicle, SEGMENT_LENGTH_M)
+    if not DEFAULT_REFINE:
+        return seg
+    cap, _, exact_b, _ = _caps(seg, vehicle)
+    marked = at_force_cap(exact_b, cap, np.full(seg.count, vehicle.max_speed_mps))
+    return refine_segments(seg, route.s_m, vehicle, marked)
+
+
+def convex_caps(route_path: Path, vehicle) -> ConvexProblem:
+    """Segment the route as the planner does and compute the caps of the convex subset and
+    its exact optimum (not timed)."""
+    seg = planner_segments(read_route(route_path), vehicle)
+    cap, boundary_cap, exact_b, single = _caps(seg, vehicle)
+    upper_b = boundary_cap**2
+    upper_b[0] = upper_b[-1] = 0.0
     return ConvexProblem(seg.boundaries_m, seg.length_m, seg.ri, seg.e_max_m, cap, boundary_cap, upper_b,
                          exact_b, travel_time_s(exact_b, seg.length_m), single)
 
@@ -425,13 +459,14 @@ def solve_toppra_peer(problem: ConvexProblem, vehicle) -> tuple[np.ndarray, str,
 
 def run_peer(route_path: Path, out_path: Path, vehicle,
              solver: Callable[[ConvexProblem, object], tuple[np.ndarray, str, int | None]], label: str) -> Run:
-    """The planner's pipeline with a peer as the solver: read, segment, bands, solve, write.
+    """The planner's pipeline with a peer as the solver: read, segment (refined as the planner
+    does: :func:`planner_segments`), bands, solve, write.
 
     ``solver(problem, vehicle)`` returns the boundary speeds (m/s), a status and its
     iteration count (or None); ``label`` names it in the profile's status and settings.
     """
     start = time.perf_counter()
-    seg = segment_route(read_route(route_path), vehicle, SEGMENT_LENGTH_M)
+    seg = planner_segments(read_route(route_path), vehicle)
     bands = speed_bands(seg.ri, vehicle, model=MODEL)
     cap = np.minimum(bands.first(), vehicle.max_speed_mps)  # the benchmark routes have no speed_limit
     boundary_cap = np.concatenate([[cap[0]], np.minimum(cap[:-1], cap[1:]), [cap[-1]]])
@@ -473,11 +508,12 @@ def run_toppra(route_path: Path, out_path: Path, vehicle) -> Run:
 class Row:
     """The repeats of one method on one size, summarised."""
 
-    segments: int
+    segments: int  # asked for: the route cut every SEGMENT_LENGTH_M
     problem: str
     method: str
     runs: list[Run]
     exact_time_s: float
+    planned: int = 0  # solved on, after refining (planner_segments)
     violation: float = math.nan
     note: str = ""
     ratio_e2e: float | None = None
@@ -538,13 +574,20 @@ HEADER = ("segments", "problem", "method", "end to end (s)", "optimiser (s)", "N
           "target", "met?")
 
 
+def _segments(row: Row) -> str:
+    """Segments asked for, and planned on where refining added some."""
+    if row.planned and row.planned != row.segments:
+        return f"{row.segments:,} (refined: {row.planned:,})"
+    return f"{row.segments:,}"
+
+
 def markdown_table(rows: list[Row]) -> str:
     lines = ["| " + " | ".join(HEADER) + " |", "|" + "|".join("---" for _ in HEADER) + "|"]
     for row in rows:
         iters = [r.iterations for r in row.runs if r.iterations]
         pieces = [r.pieces for r in row.runs if r.pieces]
         cells = (
-            f"{row.segments:,}", row.problem, row.method + (f" ({row.note})" if row.note else ""), _spread(row),
+            _segments(row), row.problem, row.method + (f" ({row.note})" if row.note else ""), _spread(row),
             _seconds(row.optimiser), _seconds(row.build), str(iters[-1]) if iters else "",
             str(pieces[-1]) if pieces else "",
             f"{row.travel:.6g}" if math.isfinite(row.travel) else "–", _gap(row),
@@ -557,7 +600,7 @@ def markdown_table(rows: list[Row]) -> str:
 
 #: Stages of ``plan`` in the second table: everything outside ``plan`` (reading the CSV,
 #: writing the profile), then ``Profile.timings_s`` keys.
-STAGES = ("read + write", "segment", "bands", "choose", "build", "solve")
+STAGES = ("read + write", "segment", "bands", "choose", "refine", "build", "solve")
 
 
 def stages_table(rows: list[Row]) -> str:
@@ -569,7 +612,7 @@ def stages_table(rows: list[Row]) -> str:
             continue
         medians = {k: statistics.median(r.stages_s[k] for r in row.runs) for k in STAGES}
         rest = statistics.median(r.end_to_end_s - sum(r.stages_s.values()) for r in row.runs)
-        cells = (f"{row.segments:,}", row.problem, row.method, *(_seconds(medians[k]) for k in STAGES),
+        cells = (_segments(row), row.problem, row.method, *(_seconds(medians[k]) for k in STAGES),
                  _seconds(rest))
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
@@ -631,8 +674,11 @@ def bench_size(n: int, repeats: int, workdir: Path, vehicle, spacing_m: float, s
     samples = write_route(route_path, n, spacing_m, seed)
     print(f"N = {n:,}: route of {samples:,} samples written in {time.perf_counter() - t:.1f} s", file=sys.stderr)
     problem = convex_caps(route_path, vehicle)
-    if problem.length_m.size != n:
-        raise RuntimeError(f"expected {n} segments, the planner made {problem.length_m.size}")
+    asked = segment_route(read_route(route_path), vehicle, SEGMENT_LENGTH_M).count
+    if asked != n:
+        raise RuntimeError(f"expected {n} segments, the route has {asked}")
+    planned = problem.length_m.size
+    print(f"N = {n:,}: {planned:,} segments planned (refine={DEFAULT_REFINE})", file=sys.stderr)
     has_method = "method" in inspect.signature(plan).parameters
 
     full = {"smoothing": DEFAULT_SMOOTHING, "max_jerk_mps3": None}
@@ -672,13 +718,15 @@ def bench_size(n: int, repeats: int, workdir: Path, vehicle, spacing_m: float, s
 
     rows = []
     for (kind, method), measured in runs.items():
-        row = Row(n, kind, method, measured, problem.exact_time_s)
+        row = Row(n, kind, method, measured, problem.exact_time_s, planned=planned)
         last = measured[-1]
         jerk = vehicle.max_jerk_mps3 if kind in ("full", "jerk") else math.inf
         if last.speed_mps is not None:  # a peer: check its speeds directly, as they left the solver
             row.violation = violation(last.speed_mps, None, problem, vehicle, jerk, last.force_ratio)
         else:
             written = read_profile(last.output)
+            if not np.array_equal(written.s_m, problem.boundaries_m):
+                raise RuntimeError(f"{method}: the plan's boundaries are not the peers' (planner_segments)")
             if not math.isfinite(row.travel):
                 row.runs[-1].travel_time_s = written.travel_time_s
             row.violation = violation(written.speed_mps, written.accel_mps2, problem, vehicle, jerk,

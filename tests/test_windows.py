@@ -215,7 +215,8 @@ def test_bands_of_a_range_for_a_vehicle_that_cannot_reach_its_limit_crawling_are
 
 
 # ---------------------------------------------------------------------------------------
-# Refined segments (plan(refine=True), --refine): the segment length stops deciding the answer
+# Refined segments (plan(refine=True), the default; --no-refine turns it off): the segment
+# length stops deciding the answer
 
 
 def _kerb_route(kerb_m: float = 100.0) -> Route:
@@ -241,8 +242,8 @@ def test_refining_shrinks_a_kerbs_slow_stretch_to_its_windows(atv) -> None:
     # kept whole and ends within 2 samples of it.
     route = _kerb_route()
     options = {"smoothing": 0.0, "max_jerk_mps3": math.inf}
-    coarse = plan(route, atv, **options)
-    fine = plan(route, atv, refine=True, **options)
+    coarse = plan(route, atv, refine=False, **options)
+    fine = plan(route, atv, **options)  # refined: the default
     windows = roughness_windows(route.s_m, route.z_m, atv.ground_clearance_m, window_m=5.0)
     rough = windows.ri > 0.05
     a_lo, a_hi = float(windows.start_m[rough].min()), float(windows.start_m[rough].max()) + windows.window_m
@@ -256,7 +257,7 @@ def test_refining_shrinks_a_kerbs_slow_stretch_to_its_windows(atv) -> None:
     assert np.diff(np.searchsorted(route.s_m, fine.s_m)).min() >= 2  # every segment keeps 2 samples
     assert fine.time_s[-1] < coarse.time_s[-1]  # less of the route held to the kerb's speed
     assert any(note.startswith("refined:") for note in fine.notes)
-    assert fine.settings["refine"] is True and "refine" not in coarse.settings
+    assert fine.settings["refine"] is True and coarse.settings["refine"] is False
 
 
 def _windows_force_over_limit(route: Route, profile, vehicle) -> float:
@@ -284,12 +285,13 @@ def test_refined_travel_time_hardly_depends_on_the_segment_length(name: str, veh
 
     route, vehicle = read_route(ROUTES / name), load_vehicle(vehicle_name)
     options = {"smoothing": 0.0, "max_jerk_mps3": math.inf}
-    uniform = {length: plan(route, vehicle, segment_length_m=length, **options).time_s[-1] for length in (1.0, 0.5)}
+    uniform = {length: plan(route, vehicle, segment_length_m=length, refine=False, **options).time_s[-1]
+               for length in (1.0, 0.5)}
     assert uniform[1.0] > 1.02 * uniform[0.5]  # the first-order error refining removes
-    reference = plan(route, vehicle, segment_length_m=0.125, **options).time_s[-1]
+    reference = plan(route, vehicle, segment_length_m=0.125, refine=False, **options).time_s[-1]
     refined = {}
     for length in (1.0, 0.5):
-        profile = plan(route, vehicle, segment_length_m=length, refine=True, **options)
+        profile = plan(route, vehicle, segment_length_m=length, **options)  # refined: the default
         refined[length] = profile.time_s[-1]
         assert _windows_force_over_limit(route, profile, vehicle) <= 1.0 + 1e-9
     assert refined[1.0] == pytest.approx(refined[0.5], rel=0.005)
@@ -303,30 +305,32 @@ def test_refine_on_the_command_line_is_recorded_in_the_profile(tmp_path) -> None
     from profileopt.io import read_profile
     from profileopt.vehicle import load_vehicle
 
-    out, plain = tmp_path / "refined.csv", tmp_path / "plain.csv"
-    assert main(["plan", str(ROUTES / "curb.csv"), "--refine", "-o", str(out)]) == 0
-    assert main(["plan", str(ROUTES / "curb.csv"), "-o", str(plain)]) == 0
+    out, plain, asked = tmp_path / "refined.csv", tmp_path / "plain.csv", tmp_path / "asked.csv"
+    assert main(["plan", str(ROUTES / "curb.csv"), "-o", str(out)]) == 0  # refined: the default
+    assert main(["plan", str(ROUTES / "curb.csv"), "--no-refine", "-o", str(plain)]) == 0
+    assert main(["plan", str(ROUTES / "curb.csv"), "--refine", "-o", str(asked)]) == 0
     assert " refine=True " in out.read_text().splitlines()[0]
-    assert "refine" not in plain.read_text().splitlines()[0]
+    assert " refine=False " in plain.read_text().splitlines()[0]
+    assert asked.read_bytes() == out.read_bytes()
     assert read_profile(out).s_m.size > read_profile(plain).s_m.size
     assert main(["verify", str(ROUTES / "curb.csv"), str(out)]) == 0
     with pytest.raises(InputError, match=r"refine = 'no': must be True or False"):
         plan(_kerb_route(), load_vehicle("atv"), refine="no")  # a string would be true
 
 
-def test_compare_and_the_safety_study_plan_refined_segments_when_asked(atv_resonant) -> None:
-    # compare_models (profileopt compare) and safety_study pass refine to every plan: a
-    # refined plan of the curb has more segments and is faster, and the study's run is the
-    # same plan as compare's.
+def test_compare_and_the_safety_study_plan_refined_segments_by_default(atv_resonant) -> None:
+    # compare_models (profileopt compare) and safety_study pass refine to every plan, True
+    # unless told: a refined plan of the curb has more segments and is faster, and the
+    # study's run is the same plan as compare's.
     from conftest import ROUTES
     from profileopt.io.routes import read_route
     from profileopt.safety import safety_study
     from profileopt.study import compare_models
 
     route = read_route(ROUTES / "curb.csv")
-    plain, refined = (compare_models(route, atv_resonant, models=["sbem_tf"], refine=refine)[0]
-                      for refine in (False, True))
+    plain = compare_models(route, atv_resonant, models=["sbem_tf"], refine=False)[0]
+    refined = compare_models(route, atv_resonant, models=["sbem_tf"])[0]
     assert refined.segments > plain.segments and refined.travel_time_s < plain.travel_time_s
-    study = safety_study([route], [atv_resonant], models=["sbem_tf"], refine=True)
+    study = safety_study([route], [atv_resonant], models=["sbem_tf"])
     assert study.refine and study.runs[0].segments == refined.segments
     assert study.runs[0].travel_time_s == refined.travel_time_s

@@ -41,8 +41,8 @@ from .path import SegmentPath, segment_path
 from .options import SolverOptions
 from .pieces import choose_cuts, cut_scores, solve_pieces
 from .result import Profile
-from .segments import (DEFAULT_ROUGHNESS_WINDOW_M, DEFAULT_SEGMENT_LENGTH_M, Segments, refine_segments,
-                       roughness_source, segment_route)
+from .segments import (DEFAULT_ROUGHNESS_WINDOW_M, DEFAULT_SEGMENT_LENGTH_M, REFINE_AT_CAP, Segments, at_force_cap,
+                       refine_segments, roughness_source, segment_route)
 
 if TYPE_CHECKING:
     from ..route import Route
@@ -54,12 +54,6 @@ __all__ = ["plan", "DEFAULT_SMOOTHING", "PLAN_BANDS", "MIN_JERK_MPS3", "REFINE_A
 #: (:data:`profileopt.vehicle.PLAUSIBLE_RANGES`). Below it the jerk-limited profile crawls (a
 #: bound of 1e-13 left no usable profile at all, 1e-50 one standing still for ever).
 MIN_JERK_MPS3 = PLAUSIBLE_RANGES["max_jerk_mps3"][0]
-
-#: With ``refine``, the segments whose minimum-time speed comes within this fraction of
-#: their band's top, where the force sets it, are the ones cut (where the speed is below
-#: it, or a speed cap holds it, the roughness does not decide the plan there).
-REFINE_AT_CAP = 0.02
-
 
 def _validate_options(vehicle: "Vehicle", smoothing: float, max_jerk_mps3: float, v0_mps: float,
                       vend_mps: float, method: str, band: str, refine: bool) -> None:
@@ -253,10 +247,10 @@ def plan(
         # the segments where the minimum-time profile meets its band's top, set by the force
         # (not by a speed cap, which roughness does not move), cut where their windows'
         # roughness changes (segments.refine_segments); then the bands are chosen again
+        t = time.perf_counter()
         band_top = usable.upper_mps[np.arange(seg.count), chosen.band]
-        top_b = np.maximum(chosen.greatest_b[:-1], chosen.greatest_b[1:])
-        at_cap = (top_b >= (1.0 - REFINE_AT_CAP) ** 2 * band_top ** 2) & (band_top < cap * (1.0 - 1e-9))
-        finer = refine_segments(seg, route.s_m, vehicle, at_cap)
+        finer = refine_segments(seg, route.s_m, vehicle, at_force_cap(chosen.greatest_b, band_top, cap))
+        timings["refine"] = time.perf_counter() - t
         if finer is seg:
             break
         refine_note = (f"refined: {finer.count - seg.count} segments added where the plan meets its speed cap "

@@ -63,8 +63,8 @@ class Profile:
     objective : float
         Travel time plus smoothing term (s), as minimised.
     timings_s : dict
-        Wall-clock seconds of the stages (``segment``, ``bands``, ``choose``, ``build``,
-        ``solve``, ``total``).
+        Wall-clock seconds of the stages (``segment``, ``path``, ``bands``, ``choose``,
+        ``refine`` when refining, ``build``, ``solve``, ``total``).
     iterations : int
         NLP solver iterations (0 if not run), of all its solves together (the banded
         solver's and IPOPT's where IPOPT took over).

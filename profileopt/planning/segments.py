@@ -30,7 +30,7 @@ if TYPE_CHECKING:
 
 __all__ = ["Segments", "segment_route", "segments_at", "refine_segments", "route_roughness_windows",
            "roughness_source", "MIN_SAMPLES_PER_SEGMENT", "DEFAULT_SEGMENT_LENGTH_M", "DEFAULT_ROUGHNESS_WINDOW_M",
-           "REFINE_RI_TOLERANCE"]
+           "REFINE_RI_TOLERANCE", "REFINE_AT_CAP", "at_force_cap"]
 
 #: Samples a segment must hold: the roughness comes from the windows, but the simulator
 #: (verify) measures each segment's own samples.
@@ -39,6 +39,10 @@ MIN_SAMPLES_PER_SEGMENT = 2
 #: :func:`refine_segments` cuts a segment where the RI range of the windows met between two
 #: samples departs by more than this fraction from the range where the piece began.
 REFINE_RI_TOLERANCE = 0.02
+#: With ``refine``, the segments whose minimum-time speed comes within this fraction of
+#: their band's top, where the force sets it, are the ones cut (where the speed is below
+#: it, or a speed cap holds it, the roughness does not decide the plan there).
+REFINE_AT_CAP = 0.02
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -257,6 +261,27 @@ def segments_at(boundaries_m: np.ndarray, windows: RoughnessWindows, vehicle: "V
         windows=windows,
         notes=notes,
     )
+
+
+def at_force_cap(greatest_b: np.ndarray, band_top_mps: np.ndarray, cap_mps: np.ndarray) -> np.ndarray:
+    """The segments ``refine`` cuts: where the minimum-time profile comes within
+    :data:`REFINE_AT_CAP` of the band's top and the force, not a speed cap, sets that top.
+
+    Parameters
+    ----------
+    greatest_b : numpy.ndarray, shape (N+1,)
+        The minimum-time profile's v^2 at the boundaries (m^2/s^2).
+    band_top_mps : numpy.ndarray, shape (N,)
+        Top of each segment's chosen band (m/s), speed caps included.
+    cap_mps : numpy.ndarray, shape (N,)
+        Each segment's speed cap (m/s): top speed, speed limits, turns.
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (N,)
+    """
+    top_b = np.maximum(greatest_b[:-1], greatest_b[1:])
+    return (top_b >= (1.0 - REFINE_AT_CAP) ** 2 * band_top_mps ** 2) & (band_top_mps < cap_mps * (1.0 - 1e-9))
 
 
 def refine_segments(segments: Segments, positions_m: np.ndarray, vehicle: "Vehicle", marked: np.ndarray, *,
