@@ -55,6 +55,7 @@ __all__ = ["plan", "DEFAULT_SMOOTHING", "PLAN_BANDS", "MIN_JERK_MPS3", "REFINE_A
 #: bound of 1e-13 left no usable profile at all, 1e-50 one standing still for ever).
 MIN_JERK_MPS3 = PLAUSIBLE_RANGES["max_jerk_mps3"][0]
 
+
 def _validate_options(vehicle: "Vehicle", smoothing: float, max_jerk_mps3: float, v0_mps: float,
                       vend_mps: float, method: str, band: str, refine: bool) -> None:
     if not (math.isfinite(smoothing) and smoothing >= 0):
