@@ -334,3 +334,18 @@ def test_compare_and_the_safety_study_plan_refined_segments_by_default(atv_reson
     study = safety_study([route], [atv_resonant], models=["sbem_tf"])
     assert study.refine and study.runs[0].segments == refined.segments
     assert study.runs[0].travel_time_s == refined.travel_time_s
+
+
+def test_refining_marks_the_segments_held_by_the_force_within_two_per_cent() -> None:
+    # at_force_cap by hand (REFINE_AT_CAP = 0.02; a segment's fastest speed is the larger of
+    # its end speeds, v^2 being linear in s): boundary speeds 0, 9.9, 9.7, 10 and 20 m/s, band
+    # tops 10, 12, 10 and 20 m/s, speed caps 20 m/s. Segment 0 reaches 9.9 >= 0.98 * 10
+    # (marked); segment 1 reaches 9.9 < 0.98 * 12 = 11.76 (not marked); segment 2 reaches its
+    # top, 10 (marked); segment 3 reaches its top, 20, but the speed cap sets that top, which
+    # no roughness moves (not marked).
+    from profileopt.planning.segments import REFINE_AT_CAP, at_force_cap
+
+    assert REFINE_AT_CAP == 0.02
+    v = np.array([0.0, 9.9, 9.7, 10.0, 20.0])
+    marked = at_force_cap(v**2, np.array([10.0, 12.0, 10.0, 20.0]), np.array([20.0, 20.0, 20.0, 20.0]))
+    assert marked.tolist() == [True, False, True, False]

@@ -325,19 +325,22 @@ def refine_segments(segments: Segments, positions_m: np.ndarray, vehicle: "Vehic
         raise InputError(f"tolerance = {tolerance!r}: must be a number > 0")
     # the RI range of the windows met between consecutive samples j and j + 1
     first, stop = segments.windows.overlapping(s[:-1], s[1:])
-    least, largest = range_extremes(segments.windows.ri, first, stop)
-    least, largest = least.tolist(), largest.tolist()
+    least_all, largest_all = range_extremes(segments.windows.ri, first, stop)
+    del first, stop
     low, high = 1.0 - tolerance, 1.0 + tolerance
     cuts: list[int] = []
     for k in np.flatnonzero(marked):
         a = int(segments.first_sample[k])
         b = a + int(segments.samples[k])  # samples a .. b-1; a piece from sample j holds j .. next-1
+        # one segment's values as Python floats (fast to index; the whole route's would take
+        # 64 bytes a sample at the peak, a third of a long route's plan)
+        least, largest = least_all[a:b].tolist(), largest_all[a:b].tolist()
         start = a
-        base_lo, base_hi = least[a], largest[a]
+        base_lo, base_hi = least[0], largest[0]
         for j in range(a + MIN_SAMPLES_PER_SEGMENT, b - MIN_SAMPLES_PER_SEGMENT + 1):
             if j - start < MIN_SAMPLES_PER_SEGMENT:
                 continue
-            lo, hi = least[j], largest[j]
+            lo, hi = least[j - a], largest[j - a]
             if hi > base_hi * high or hi < base_hi * low or lo > base_lo * high or lo < base_lo * low:
                 cuts.append(j)
                 start, base_lo, base_hi = j, lo, hi
