@@ -8,12 +8,11 @@ the numbers in README.md's "Segment length" section come from it):
 
 Each route is planned with its README vehicle, default options (smoothing 0.01, the
 vehicle's jerk bound) and pure minimum time (smoothing 0, no jerk bound: the exact
-forward-backward optimum), the default 5 m roughness window. Solve time is plan()'s own
-``timings_s["total"]``, median of 3, on this machine. With ``--refine`` each is also planned
-with ``refine=True`` (segments cut where the plan meets its cap and the roughness changes),
-and the table gives the number of segments planned after each time:
-
-    python benchmarks/bench_spacing.py --refine
+forward-backward optimum), the default 5 m roughness window, each on uniform segments
+(``refine=False``, ``--no-refine``) and refined (``refine=True``, the default: segments cut
+where the plan meets its cap and the roughness changes). Solve time is plan()'s own
+``timings_s["total"]``, median of 3, on this machine, and the table gives the number of
+segments planned after it.
 """
 
 from __future__ import annotations
@@ -36,7 +35,6 @@ LENGTHS_M = (5.0, 2.0, 1.0, 0.5)
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--refine", action="store_true", help="also plan with refine=True")
     args = parser.parse_args()
     head = " | ".join(f"{length:g} m" for length in LENGTHS_M)
     print(f"| route | vehicle | options | {head} | 1 m vs 0.5 m |")
@@ -44,9 +42,8 @@ def main() -> None:
     for name, vehicle_name in CASES:
         route, vehicle = read_route(ROUTES / name), load_vehicle(vehicle_name)
         cases = [("default", {}), ("min time", {"smoothing": 0.0, "max_jerk_mps3": math.inf})]
-        if args.refine:
-            cases = [(f"{label}{suffix}", {**options, "refine": refine})
-                     for label, options in cases for suffix, refine in (("", False), (", refined", True))]
+        cases = [(f"{label}{suffix}", {**options, "refine": refine})
+                 for label, options in cases for suffix, refine in ((", uniform", False), (", refined", True))]
         for label, options in cases:
             cells, times = [], []
             for length in LENGTHS_M:
@@ -54,7 +51,7 @@ def main() -> None:
                 travel = runs[0].time_s[-1]
                 solve = statistics.median(run.timings_s["total"] for run in runs)
                 times.append(travel)
-                count = f", {runs[0].s_m.size - 1} seg." if args.refine else ""
+                count = f", {runs[0].s_m.size - 1} seg."
                 cells.append(f"{travel:.2f} s ({solve:.2f} s{count})")
             gap = 100 * (times[-2] - times[-1]) / times[-1]
             print(f"| {name} | {vehicle_name} | {label} | " + " | ".join(cells) + f" | {gap:.1f} % |")
