@@ -104,6 +104,11 @@ class _Parser(argparse.ArgumentParser):
     """An argument parser whose errors are one line (no usage block), exit status 2."""
 
     def error(self, message: str) -> NoReturn:
+        # argparse's words for a value given to a switch (--refine=yes) read as if it ran on
+        switch = re.fullmatch(r"argument (\S+?)(?:/(\S+))?: ignored explicit argument '(.*)'", message)
+        if switch:
+            names = [name for name in switch.groups()[:2] if name]
+            message = f"{'/'.join(names)} takes no value ('{switch.group(3)}' given): write {' or '.join(names)}"
         self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
 
 

@@ -242,6 +242,10 @@ OPTION_CASES = [
               options=("--segment-length", "1e-9")),
     plan_case("segment-length-not-a-number", ("--segment-length", "'abc' is not a number"),
               options=("--segment-length", "abc")),
+    # a value given to a switch: argparse says "ignored explicit argument", which reads as if
+    # the run went on; the message says the switch takes none and what to write
+    plan_case("refine-with-a-value", ("--refine/--no-refine takes no value", "'yes' given",
+                                      "write --refine or --no-refine"), options=("--refine=yes",)),
     plan_case("v0-negative", ("--v0", ">= 0"), options=("--v0", "-1")),
     plan_case("vend-negative", ("--vend", ">= 0"), options=("--vend", "-2")),
     plan_case("v0-above-max-speed", ("--v0 = 25 m/s", "max_speed_mps = 20"), options=("--v0", "25")),
