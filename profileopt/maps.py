@@ -176,7 +176,8 @@ def plan_map_figure(profile: "Profile", result: "TrackRoute", *, title: str | No
                            label="the start or end speed" if name == "boundary" else f"{name} holds the speed from here")
     ax.plot(x[0], y[0], "^", color="black", ms=9, zorder=4, label="start")
     _map_axes(ax, result)
-    ax.legend(loc="best", fontsize="small")
+    # below the map: "best" cannot see the route (a LineCollection) and covered its end
+    fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", ncols=3, fontsize="small")
     fig.suptitle(title or f"planned speed along the route: {profile.distance_m:.0f} m in {profile.travel_time_s:.0f} s")
     return fig
 
