@@ -170,7 +170,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into a reader that stopped early (e.g. head)
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
-        return 1
+        # the status of a program ended by SIGPIPE in a shell (128 + 13), not 1 (an internal
+        # error): the reader chose to stop, nothing went wrong here
+        return 128 + getattr(signal, "SIGPIPE", 13)
     except KeyboardInterrupt:
         print(f"profileopt {args.command}: interrupted", file=sys.stderr)
         return 130

@@ -587,3 +587,19 @@ def test_plan_twice_gives_the_same_bytes(tmp_path: Path) -> None:
     assert runs[0][0] == runs[1][0]
     assert runs[0][1] == runs[1][1]
     assert runs[0][2] == runs[1][2]
+
+
+def test_a_reader_that_stops_early_ends_the_command_with_the_pipes_status() -> None:
+    # `profileopt plan ... -o - | head -2`: the reader closes the pipe after a few bytes; the
+    # command stops quietly with 128 + SIGPIPE (13) = 141, a shell's status for a program its
+    # pipe ended, not 1 (an internal error) and not a traceback (the profile, about 300 kB, is
+    # larger than a pipe's buffer, so writing it meets the closed pipe)
+    import sys
+
+    process = subprocess.Popen([sys.executable, "-m", "profileopt", "plan", str(ROOT / "examples" / "routes" / "trail.csv"),
+                                "-o", "-"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=ROOT)
+    assert process.stdout.read(100)  # the profile's header has started
+    process.stdout.close()
+    stderr = process.stderr.read().decode()
+    assert process.wait(timeout=300) == 141
+    assert "Traceback" not in stderr and "internal error" not in stderr
