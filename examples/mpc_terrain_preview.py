@@ -213,6 +213,8 @@ ax_r.set_ylabel("force / limit (-)")
 ax_r.set_xlabel("distance along the route s (m)")
 ax_r.set_xlim(s_start, s_stop)
 ax_r.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+fig.suptitle(f"{Path(args.route).name}, {Path(args.vehicle).stem}, {label}: closed-loop MPC "
+             f"with terrain preview against the offline plan, {s_start:g}-{s_stop:g} m", fontsize=11)
 fig.tight_layout()
 csv = out / "mpc_closed_loop.csv"  # one row per control step: the state, then the input applied
 with atomic_path(csv) as tmp:
