@@ -210,18 +210,23 @@ def travel_time_s(b: np.ndarray, length_m: np.ndarray) -> float:
     return float(np.sum(2.0 * length_m / (v[:-1] + v[1:])))
 
 
-def _caps(seg, vehicle) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
-    """Segment caps, boundary caps, the exact optimum's v^2 (v0 = vend = 0) and whether every
-    segment has one band [0, cap]."""
+def _segment_caps(seg, vehicle) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+    """Each segment's cap (its first band's top, at most v_max), each boundary's (the smaller
+    of the segments meeting there), the bound on b = v^2 at the boundaries (v0 = vend = 0), and
+    whether every segment has one band [0, cap] (then the caps are the whole force constraint)."""
     bands = speed_bands(seg.ri, vehicle, model=MODEL)
     single = bool(np.all(bands.count == 1) and np.all(bands.lower_mps[:, 0] == 0.0))
     cap = np.minimum(bands.first(), vehicle.max_speed_mps)  # the benchmark routes have no speed_limit
     boundary_cap = np.concatenate([[cap[0]], np.minimum(cap[:-1], cap[1:]), [cap[-1]]])
     upper_b = boundary_cap**2
     upper_b[0] = upper_b[-1] = 0.0  # v0 = vend = 0
-    exact_b = greatest_profile(np.zeros_like(upper_b), upper_b, seg.length_m,
-                               vehicle.max_accel_mps2, vehicle.max_decel_mps2)
-    return cap, boundary_cap, exact_b, single
+    return cap, boundary_cap, upper_b, single
+
+
+def _exact_b(seg, upper_b: np.ndarray, vehicle) -> np.ndarray:
+    """The exact optimum of the convex subset, v^2 at the boundaries (the forward-backward pass)."""
+    return greatest_profile(np.zeros_like(upper_b), upper_b, seg.length_m,
+                            vehicle.max_accel_mps2, vehicle.max_decel_mps2)
 
 
 def planner_segments(route, vehicle):
@@ -234,8 +239,8 @@ def planner_segments(route, vehicle):
     seg = segment_route(route, vehicle, SEGMENT_LENGTH_M)
     if not DEFAULT_REFINE:
         return seg
-    cap, _, exact_b, _ = _caps(seg, vehicle)
-    marked = at_force_cap(exact_b, cap, np.full(seg.count, vehicle.max_speed_mps))
+    cap, _, upper_b, _ = _segment_caps(seg, vehicle)
+    marked = at_force_cap(_exact_b(seg, upper_b, vehicle), cap, np.full(seg.count, vehicle.max_speed_mps))
     return refine_segments(seg, route.s_m, vehicle, marked)
 
 
@@ -243,9 +248,8 @@ def convex_caps(route_path: Path, vehicle) -> ConvexProblem:
     """Segment the route as the planner does and compute the caps of the convex subset and
     its exact optimum (not timed)."""
     seg = planner_segments(read_route(route_path), vehicle)
-    cap, boundary_cap, exact_b, single = _caps(seg, vehicle)
-    upper_b = boundary_cap**2
-    upper_b[0] = upper_b[-1] = 0.0
+    cap, boundary_cap, upper_b, single = _segment_caps(seg, vehicle)
+    exact_b = _exact_b(seg, upper_b, vehicle)
     return ConvexProblem(seg.boundaries_m, seg.length_m, seg.ri, seg.e_max_m, cap, boundary_cap, upper_b,
                          exact_b, travel_time_s(exact_b, seg.length_m), single)
 
@@ -467,9 +471,7 @@ def run_peer(route_path: Path, out_path: Path, vehicle,
     """
     start = time.perf_counter()
     seg = planner_segments(read_route(route_path), vehicle)
-    bands = speed_bands(seg.ri, vehicle, model=MODEL)
-    cap = np.minimum(bands.first(), vehicle.max_speed_mps)  # the benchmark routes have no speed_limit
-    boundary_cap = np.concatenate([[cap[0]], np.minimum(cap[:-1], cap[1:]), [cap[-1]]])
+    cap, boundary_cap, _, _ = _segment_caps(seg, vehicle)
     problem = ConvexProblem(seg.boundaries_m, seg.length_m, seg.ri, seg.e_max_m, cap, boundary_cap,
                             np.empty(0), np.empty(0), math.nan, True)
     t = time.perf_counter()
