@@ -167,7 +167,7 @@ def plan_map_figure(profile: "Profile", result: "TrackRoute", *, title: str | No
     if profile.binding is not None:
         # one mark at the start of each stretch that a limit holds (where the binding limit changes)
         change = np.flatnonzero(np.concatenate([[True], profile.binding[1:] != profile.binding[:-1]]))
-        markers = dict(zip(BINDING_NAMES, "osD^v<>ph*"))
+        markers = dict(zip(BINDING_NAMES, "osD^v<>ph*X"))
         for name in BINDING_NAMES:
             where = change[profile.binding[change] == name]
             if where.size:

@@ -1,6 +1,8 @@
 """The kinds of limit a plan keeps, one module each, and the set every plan starts from.
 
 - :class:`ForceLimit` (``force.py``): the terrain force model's admissible speed bands;
+- :class:`StepLimit` (``step.py``): SBEM:TF's caps where the wheel meets a step or lands
+  after a drop (with the ``sbem_tf`` model only);
 - :class:`SpeedLimit` (``speed.py``): the vehicle's top speed and the route's speed limits;
 - :class:`LateralLimit` (``lateral.py``): lateral acceleration in turns (and rollover);
 - :class:`FrictionLimit` (``friction.py``): the friction circle;
@@ -34,18 +36,20 @@ from .jerk import JerkLimit
 from .lateral import LateralLimit
 from .power import PowerLimit
 from .speed import SpeedLimit
+from .step import StepLimit
 
 if TYPE_CHECKING:
     from ...vehicle import Vehicle
 
 __all__ = ["Limit", "PlanContext", "worst_ratio", "ForceLimit", "SpeedLimit", "AccelLimit", "JerkLimit",
-           "LateralLimit", "FrictionLimit", "PowerLimit", "default_limits", "plans_on_grades"]
+           "LateralLimit", "FrictionLimit", "PowerLimit", "StepLimit", "default_limits", "plans_on_grades"]
 
 
 def default_limits(vehicle: "Vehicle", *, model: str, max_jerk_mps3: float) -> tuple[Limit, ...]:
     """The limits of a plan: force, speed caps, lateral, friction, acceleration, power, jerk
     (in this order, which is also the order of the summary's margins); lateral, friction and
-    power only when the vehicle gives their keys.
+    power only when the vehicle gives their keys; the step limit after the force with the
+    ``sbem_tf`` model (it bounds the same transmitted force where Eq. 13 falls short).
 
     Parameters
     ----------
@@ -60,7 +64,10 @@ def default_limits(vehicle: "Vehicle", *, model: str, max_jerk_mps3: float) -> t
     -------
     tuple of Limit
     """
-    limits: list[Limit] = [ForceLimit(model=model), SpeedLimit(max_speed_mps=vehicle.max_speed_mps)]
+    limits: list[Limit] = [ForceLimit(model=model)]
+    if model == "sbem_tf":
+        limits.append(StepLimit())
+    limits.append(SpeedLimit(max_speed_mps=vehicle.max_speed_mps))
     lateral = lateral_limit_mps2(vehicle)
     if math.isfinite(lateral):
         limits.append(LateralLimit(limit_mps2=lateral))

@@ -1,0 +1,128 @@
+"""The step limit of SBEM:TF: ramps of the wheel's path, their force bound, the cap, a plan."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from scipy import signal
+
+import profileopt
+from profileopt.forces import impulse_response_peak_s, ramp_force_n, ramp_speed_cap_mps
+from profileopt.planning.limits import StepLimit, default_limits
+from profileopt.planning.limits.step import step_speed_cap_mps
+from profileopt.ramps import wheel_ramps
+from profileopt.simulate import simulate_quarter_car
+from profileopt.wheel_path import wheel_path
+
+from conftest import ROUTES
+
+
+@pytest.fixture(scope="module", params=["atv", "atv-resonant"])
+def vehicle(request):
+    return profileopt.load_vehicle(request.param)
+
+
+@pytest.mark.parametrize("zeta", [0.05, 0.1, 0.5, 0.999, 1.0, 1.001, 2.0, 8.0])
+def test_impulse_response_peak_matches_scipy(zeta):
+    # Reference: scipy.signal.impulse of 1 / (s^2 + 2 zeta wn s + wn^2), the relative
+    # displacement after a unit step of the base velocity, sampled finely; its largest value.
+    vehicle = dataclasses.replace(profileopt.load_vehicle("atv"), damping_ratio=zeta)
+    wn = vehicle.natural_frequency_radps
+    t = np.linspace(0.0, 20.0 / wn, 400_001)
+    _, phi = signal.impulse(([1.0], [1.0, 2.0 * zeta * wn, wn * wn]), T=t)
+    assert impulse_response_peak_s(vehicle) == pytest.approx(float(np.max(phi)), rel=1e-6)
+
+
+@pytest.mark.parametrize("rise_m, slope", [(0.15, 3.0), (0.05, 1.0), (0.3, 0.5), (0.02, 6.0)])
+@pytest.mark.parametrize("speed_mps", [0.5, 2.0, 6.0, 15.0])
+def test_ramp_force_bounds_the_simulated_ramp(vehicle, rise_m, slope, speed_mps):
+    # Reference: the project's exact simulator on the bare polyline (envelope=False): flat
+    # ground, a straight ramp down of the given slope and height, flat ground. The body starts
+    # at rest; the largest |F_T| before and on the ramp (up to its foot, the landing) is
+    # bounded by ramp_force_n (|phi| <= t, |phi'| <= 1 for the impulse response phi).
+    dx = rise_m / slope
+    s = np.concatenate([np.linspace(0.0, 5.0, 101), [5.0 + dx], 5.0 + dx + np.linspace(0.05, 1.0, 20)])
+    z = np.where(s <= 5.0, rise_m, 0.0)
+    run = simulate_quarter_car(s, z, np.array([0.0, s[-1]]), np.array([speed_mps, speed_mps]), vehicle,
+                               envelope=False)
+    on_ramp = run.s_m <= 5.0 + dx + 1e-12
+    simulated = float(np.max(np.abs(run.transmitted_n[on_ramp])))
+    bound = float(ramp_force_n(speed_mps, rise_m, slope, vehicle))
+    assert simulated <= bound * (1 + 1e-6)
+    if speed_mps * slope * impulse_response_peak_s(vehicle) >= 10 * rise_m:
+        # a ramp too short for the body to follow: the bound is nearly what happens
+        # (k d + c V s at the landing, the body barely moved)
+        assert simulated >= 0.9 * bound
+
+
+def test_ramp_speed_cap_is_the_inverse(vehicle):
+    rng = np.random.default_rng(5)
+    rise = rng.uniform(0.0, 0.3, 400)
+    slope = rng.uniform(0.05, 8.0, 400)
+    limit = vehicle.max_transmitted_force_n
+    cap = ramp_speed_cap_mps(rise, slope, vehicle, limit)
+    # the bound is V s (k phi_max + c) near V = 0: every ramp has a positive cap
+    ok = cap > 0
+    assert np.all(ok)
+    force = ramp_force_n(cap[ok], rise[ok], slope[ok], vehicle)
+    np.testing.assert_allclose(force, limit, rtol=1e-12)
+    assert np.all(ramp_force_n(cap[ok] * 1.001, rise[ok], slope[ok], vehicle) > limit)
+    assert np.isinf(ramp_speed_cap_mps(np.array([0.1]), np.array([0.0]), vehicle, limit)[0])
+
+
+def test_wheel_ramps_of_a_sampled_drop_and_step():
+    # A 0.15 m drop sampled every 0.05 m (a ramp of slope -3 from x0 = 10 to 10.05), a rigid
+    # wheel of r = 0.1. Closed form of the landing: the centre, r above the floor, is r from
+    # the line z = 0.15 - 3 (x - x0): 3 x_c + r - 3 x0 - 0.15 = r sqrt(10), so
+    # x_c = x0 + (0.15 - r + r sqrt(10)) / 3. The path's slope before it is -3, the rise 0.15.
+    r = 0.1
+    s = np.round(np.arange(0.0, 20.0001, 0.05), 10)
+    z = np.where(s > 10.0 + 1e-9, 0.0, 0.15)
+    ramps = wheel_ramps(wheel_path(s, z, r))
+    steep = ramps.slope > 1
+    assert steep.sum() == 1 and ramps.landing[steep][0]
+    kink = 10.0 + (0.15 - r + r * math.sqrt(10.0)) / 3.0
+    assert ramps.kink_m[steep][0] == pytest.approx(kink, abs=1e-9)
+    assert ramps.end_m[steep][0] == pytest.approx(kink, abs=1e-9)
+    assert ramps.slope[steep][0] == pytest.approx(3.0, rel=1e-9)
+    assert ramps.rise_m[steep][0] == pytest.approx(0.15, abs=1e-9)
+    # the path's top: the wheel stands on the edge (its arc about the edge starts at x0)
+    assert ramps.start_m[steep][0] == pytest.approx(10.0, abs=1e-9)
+    # the same step climbed (a ramp from 9.95 to 10.0): the mirror image, the kink as far
+    # before the foot as the landing was after it
+    up = wheel_ramps(wheel_path(s, np.where(s < 9.95 + 1e-9, 0.0, 0.15), r))
+    steep = up.slope > 1
+    assert steep.sum() == 1 and not up.landing[steep][0]
+    assert up.kink_m[steep][0] == pytest.approx(9.95 - (kink - 10.05), abs=1e-9)
+    assert up.start_m[steep][0] == pytest.approx(up.kink_m[steep][0], abs=1e-12)
+    assert up.rise_m[steep][0] == pytest.approx(0.15, abs=1e-9)
+
+
+def test_no_cap_on_gentle_ground(vehicle):
+    # a 10 m sinusoid of 2 cm: slopes up to 0.0126, below F / (V_top (k phi_max + c)) for
+    # both vehicles (0.069 for atv-resonant), so no ramp can cap a speed
+    s = np.linspace(0.0, 100.0, 2001)
+    z = 0.02 * np.sin(2 * np.pi * s / 10.0)
+    cap = step_speed_cap_mps(s, z, np.linspace(0.0, 100.0, 21), vehicle)
+    assert np.all(np.isinf(cap))
+
+
+def test_step_limit_only_with_sbem_tf():
+    vehicle = profileopt.load_vehicle("atv")
+    for model in ("sbem_tf", "sbem_ef", "iecm", "prev_bem"):
+        has = any(isinstance(limit, StepLimit) for limit in default_limits(vehicle, model=model, max_jerk_mps3=5.0))
+        assert has == (model == "sbem_tf")
+
+
+def test_curb_drop_is_driven_within_the_limit():
+    # curb.csv's 0.15 m drop with atv-resonant: without the step limit the plan crawled at
+    # SBEM:TF's limit (1.45 m/s) and the simulated landing reached 1.007 x the limit (README,
+    # safety study); with it the speed there is capped and no window is over in simulation.
+    route = profileopt.read_route(ROUTES / "curb.csv")
+    vehicle = profileopt.load_vehicle("atv-resonant")
+    profile = profileopt.plan(route, vehicle)
+    assert "step" in set(profile.binding)
+    result = profileopt.verify(route, profile, vehicle)
+    assert result.windows.over_count == 0
+    assert result.windows.worst_ratio < 1.0
