@@ -12,7 +12,7 @@ envelope). Two kinds of kink start or end a ramp that the quarter car meets sudd
   up to the path's next highest point.
 
 The rise d of a ramp is the height between its kink and that highest point. The step limit
-of SBEM:TF bounds the force on each ramp with :func:`profileopt.forces.ramp_force_n` and
+of SBEM:TF bounds the force on each ramp with :func:`profileopt.ramp_force.ramp_force_n` and
 caps the speed of every segment that shares a point with it.
 """
 

@@ -8,7 +8,7 @@ import pytest
 from scipy import signal
 
 import profileopt
-from profileopt.forces import impulse_response_peak_s, ramp_force_n, ramp_speed_cap_mps
+from profileopt.ramp_force import impulse_response_peak_s, ramp_force_n, ramp_speed_cap_mps
 from profileopt.planning.limits import StepLimit, default_limits
 from profileopt.planning.limits.step import step_speed_cap_mps
 from profileopt.ramps import wheel_ramps
@@ -126,3 +126,22 @@ def test_curb_drop_is_driven_within_the_limit():
     result = profileopt.verify(route, profile, vehicle)
     assert result.windows.over_count == 0
     assert result.windows.worst_ratio < 1.0
+
+
+@pytest.mark.parametrize("name", ["curb.csv", "krc_rms_1in.csv", "krc_rms_4in.csv"])
+def test_caps_from_stretches_equal_caps_from_the_whole_path(vehicle, name):
+    # step_speed_cap_mps builds the wheel's path only around steep slopes; the reference
+    # builds it over the whole route and caps every segment a ramp meets, by hand.
+    route = profileopt.read_route(ROUTES / name)
+    boundaries = np.arange(route.s_m[0], route.s_m[-1] + 1e-9, 2.5)
+    ramps = wheel_ramps(wheel_path(route.s_m, route.z_m, vehicle.wheel_radius_m))
+    ramp_cap = ramp_speed_cap_mps(ramps.rise_m, ramps.slope, vehicle, vehicle.max_transmitted_force_n)
+    expected = np.full(boundaries.size - 1, np.inf)
+    for i in range(boundaries.size - 1):
+        meets = (ramps.start_m <= boundaries[i + 1]) & (ramps.end_m >= boundaries[i])
+        low = ramp_cap[meets & (ramp_cap < vehicle.max_speed_mps)]
+        if low.size:
+            expected[i] = low.min()
+    cap = step_speed_cap_mps(route.s_m, route.z_m, boundaries, vehicle)
+    np.testing.assert_array_equal(np.isfinite(cap), np.isfinite(expected))
+    np.testing.assert_allclose(cap[np.isfinite(cap)], expected[np.isfinite(expected)], rtol=1e-9)
