@@ -100,6 +100,7 @@ from profileopt.forces import get_model
 from profileopt.io import read_profile, read_route
 from profileopt.kinematics import boundary_jerk_mps3
 from profileopt.planning import DEFAULT_SMOOTHING, Profile, SolverOptions, greatest_profile, plan, segment_route
+from profileopt.planning.limits.step import step_speed_cap_mps
 from profileopt.planning.segments import at_force_cap, refine_segments
 from profileopt.speeds import speed_bands
 from profileopt.synthetic import iso8608_sections
@@ -210,13 +211,16 @@ def travel_time_s(b: np.ndarray, length_m: np.ndarray) -> float:
     return float(np.sum(2.0 * length_m / (v[:-1] + v[1:])))
 
 
-def _segment_caps(seg, vehicle) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
-    """Each segment's cap (its first band's top, at most v_max), each boundary's (the smaller
-    of the segments meeting there), the bound on b = v^2 at the boundaries (v0 = vend = 0), and
-    whether every segment has one band [0, cap] (then the caps are the whole force constraint)."""
+def _segment_caps(seg, vehicle, route) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+    """Each segment's cap (its first band's top, at most v_max and SBEM:TF's step limit), each
+    boundary's (the smaller of the segments meeting there), the bound on b = v^2 at the
+    boundaries (v0 = vend = 0), and whether every segment has one band [0, cap] (then the caps
+    are the whole force constraint)."""
     bands = speed_bands(seg.ri, vehicle, model=MODEL)
     single = bool(np.all(bands.count == 1) and np.all(bands.lower_mps[:, 0] == 0.0))
-    cap = np.minimum(bands.first(), vehicle.max_speed_mps)  # the benchmark routes have no speed_limit
+    # the benchmark routes have no speed_limit; the step limit is part of every sbem_tf plan
+    step = step_speed_cap_mps(route.s_m, route.z_m, seg.boundaries_m, vehicle)
+    cap = np.minimum(np.minimum(bands.first(), vehicle.max_speed_mps), step)
     boundary_cap = np.concatenate([[cap[0]], np.minimum(cap[:-1], cap[1:]), [cap[-1]]])
     upper_b = boundary_cap**2
     upper_b[0] = upper_b[-1] = 0.0  # v0 = vend = 0
@@ -239,16 +243,18 @@ def planner_segments(route, vehicle):
     seg = segment_route(route, vehicle, SEGMENT_LENGTH_M)
     if not DEFAULT_REFINE:
         return seg
-    cap, _, upper_b, _ = _segment_caps(seg, vehicle)
-    marked = at_force_cap(_exact_b(seg, upper_b, vehicle), cap, np.full(seg.count, vehicle.max_speed_mps))
+    cap, _, upper_b, _ = _segment_caps(seg, vehicle, route)
+    other = np.minimum(vehicle.max_speed_mps, step_speed_cap_mps(route.s_m, route.z_m, seg.boundaries_m, vehicle))
+    marked = at_force_cap(_exact_b(seg, upper_b, vehicle), cap, other)
     return refine_segments(seg, route.s_m, vehicle, marked)
 
 
 def convex_caps(route_path: Path, vehicle) -> ConvexProblem:
     """Segment the route as the planner does and compute the caps of the convex subset and
     its exact optimum (not timed)."""
-    seg = planner_segments(read_route(route_path), vehicle)
-    cap, boundary_cap, upper_b, single = _segment_caps(seg, vehicle)
+    route = read_route(route_path)
+    seg = planner_segments(route, vehicle)
+    cap, boundary_cap, upper_b, single = _segment_caps(seg, vehicle, route)
     exact_b = _exact_b(seg, upper_b, vehicle)
     return ConvexProblem(seg.boundaries_m, seg.length_m, seg.ri, seg.e_max_m, cap, boundary_cap, upper_b,
                          exact_b, travel_time_s(exact_b, seg.length_m), single)
@@ -470,8 +476,9 @@ def run_peer(route_path: Path, out_path: Path, vehicle,
     iteration count (or None); ``label`` names it in the profile's status and settings.
     """
     start = time.perf_counter()
-    seg = planner_segments(read_route(route_path), vehicle)
-    cap, boundary_cap, _, _ = _segment_caps(seg, vehicle)
+    route = read_route(route_path)
+    seg = planner_segments(route, vehicle)
+    cap, boundary_cap, _, _ = _segment_caps(seg, vehicle, route)
     problem = ConvexProblem(seg.boundaries_m, seg.length_m, seg.ri, seg.e_max_m, cap, boundary_cap,
                             np.empty(0), np.empty(0), math.nan, True)
     t = time.perf_counter()
