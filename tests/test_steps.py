@@ -145,3 +145,19 @@ def test_caps_from_stretches_equal_caps_from_the_whole_path(vehicle, name):
     cap = step_speed_cap_mps(route.s_m, route.z_m, boundaries, vehicle)
     np.testing.assert_array_equal(np.isfinite(cap), np.isfinite(expected))
     np.testing.assert_allclose(cap[np.isfinite(cap)], expected[np.isfinite(expected)], rtol=1e-9)
+
+
+def test_a_sampled_drop_is_capped_at_the_hand_computed_speed():
+    # A 0.15 m drop sampled every 0.05 m (slope 3) on flat ground, atv-resonant: k = 100 * 6^2
+    # = 3600 N/m, c = 2 * 0.1 * 100 * 6 = 120 N s/m. At the cap V s phi_max > d (phi_max =
+    # 0.1438 s), so k d + c V s = F: V = (1000 - 3600 * 0.15) / (120 * 3) = 1.2778 m/s; the
+    # segment before the drop (where the wheel runs down from the edge) is held there.
+    s = np.round(np.arange(0.0, 100.0001, 0.05), 10)
+    route = profileopt.Route(s_m=s, z_m=np.where(s > 50.0 + 1e-9, 0.0, 0.15), source="drop")
+    vehicle = profileopt.load_vehicle("atv-resonant")
+    profile = profileopt.plan(route, vehicle)
+    held = profile.speed_cap_mps[9]  # segment [45, 50] m: the edge at 50 m is its end
+    assert held == pytest.approx((1000.0 - 3600.0 * 0.15) / (120.0 * 3.0), rel=1e-9)
+    assert profile.binding[10] == "step" and profile.speed_mps[10] == pytest.approx(held, rel=1e-6)
+    slowest = profile.summary()["slowest_segment"]
+    assert "step limit" in slowest["reason"] and slowest["top_speed_mps"] == pytest.approx(held, rel=1e-9)
