@@ -35,7 +35,8 @@ Between the grid points, on the terrain ahead (:mod:`profileopt.horizon`)
     :func:`interval_force_constraints` holds the limit over every speed between a stage's
     two speeds, the resonance peak included. Together they keep the limit between the grid
     points of any controller (``casadi.Opti``, ``nlpsol``, do-mpc's ``set_nl_cons``,
-    rockit): see "Stages and segments" below.
+    rockit): see "Stages and segments" below. :func:`step_speed_envelope` gives SBEM:TF's
+    step limit (steps met, drops landed) as a smooth speed cap of the position.
 Named ``casadi.Function`` objects
     :func:`force_function` and :func:`constraint_function`, with named inputs and outputs,
     for ``map``, differentiation and code generation (:mod:`profileopt.codegen`);
@@ -121,7 +122,8 @@ from numpy.typing import ArrayLike
 from ._deprecation import OldCall, old_forms
 from .errors import InputError
 from .casadi_functions import constraint_function, force_function, jacobian_function
-from .horizon import ForceConstraints, force_peak_ratio, interval_force_constraints, terrain_envelope
+from .horizon import (ForceConstraints, force_peak_ratio, interval_force_constraints, step_speed_envelope,
+                      terrain_envelope)
 from .motion_constraints import MotionConstraints, friction_constraints, lateral_constraints, power_constraints
 from .forces import (
     DEFAULT_MODEL,
@@ -157,6 +159,7 @@ __all__ = [
     "friction_constraints",
     "power_constraints",
     "terrain_envelope",
+    "step_speed_envelope",
     "interval_force_constraints",
     "force_peak_ratio",
     "force_function",

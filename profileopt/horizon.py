@@ -16,7 +16,8 @@ window it passes. Two helpers make the limit hold there too:
     between them included (a plan cannot jump over a forbidden band of speeds).
 
 Composed, they make a stage safe: see :func:`interval_force_constraints` ("Why a stage is
-safe"). Both are also importable from :mod:`profileopt.constraints`. :class:`ForceConstraints`
+safe"). :func:`step_speed_envelope` adds SBEM:TF's step limit, as the planner keeps it: a
+smooth speed cap of the position where the wheel meets a step or lands after a drop. Both are also importable from :mod:`profileopt.constraints`. :class:`ForceConstraints`
 is the ``(g, lbg, ubg)`` triple both this module and :func:`~profileopt.constraints.force_constraints`
 return.
 
@@ -37,9 +38,12 @@ from numpy.typing import ArrayLike
 from .errors import InputError
 from .forces import (DEFAULT_MODEL, check_e_max_model, force_n, force_peak_ratio, get_model,
                      sbem_tf_envelope_force_n)
+from .ramp_force import ramp_speed_cap_mps
+from .ramps import wheel_ramps
 from .route import Route
 from .symbolic import is_symbolic
 from .terrain import check_e_max, range_extremes, roughness_windows, step_width, worst_case_elevation
+from .wheel_path import wheel_path
 
 if TYPE_CHECKING:
     from .vehicle import Vehicle
@@ -48,6 +52,7 @@ __all__ = [
     "ConstraintTriple",
     "ForceConstraints",
     "terrain_envelope",
+    "step_speed_envelope",
     "interval_force_constraints",
     "force_peak_ratio",
     "MAX_ENVELOPE_INTERVALS",
@@ -242,6 +247,105 @@ def terrain_envelope(
     first, stop = windows.overlapping(lo, hi + reach)
     coef = range_extremes(e_window, first, stop)[1]
     coef = coef + _ROUNDING_MARGIN * float(np.max(coef))
+    doc = (f"Largest worst-case elevation e_max (m) of the {window:g} m roughness windows overlapping "
+           f"[s_m, s_m + {reach:g} m] (an upper bound, cubic B-spline with knots {h:g} m apart); "
+           f"input s_m: position along the route (m); output e_max_m (m).")
+    return _spline_function(coef, start, h, n_intervals, "terrain_envelope", "e_max_m", doc)
+
+
+def step_speed_envelope(
+    positions_m: ArrayLike,
+    elevations_m: ArrayLike,
+    vehicle: "Vehicle",
+    *,
+    reach_m: float = 0.0,
+    knot_spacing_m: float = 0.25,
+) -> ca.Function:
+    """SBEM:TF's step limit for a stage starting at s: a speed cap (m/s), as a smooth
+    ``casadi.Function`` of s.
+
+    The planner keeps, beside Eq. (13), a cap wherever the rigid wheel meets a step or lands
+    after a drop (README, "Steps and drops"): each ramp of the wheel's path that starts or
+    ends in a kink (:func:`profileopt.ramps.wheel_ramps`) caps every speed driven while the
+    vehicle is on it at :func:`profileopt.ramp_force.ramp_speed_cap_mps`. The requirement at
+    s is the lowest cap of the ramps that overlap [s, s + reach_m], or the vehicle's top
+    speed; the Function is never above it. Built as :func:`terrain_envelope` is (a uniform
+    cubic B-spline whose coefficient j is the requirement's minimum over basis function j's
+    support: a weighted mean of coefficients that each cover s, twice continuously
+    differentiable, an ``SX`` expression without ``interpolant``), so it drops at most 4 h
+    before a ramp and rises at most 4 h after it. With ``cap = step_speed_envelope(...,
+    reach_m=ds)``, a stage from s_k to s_k + ds at constant acceleration keeps the step
+    limit when both v_k <= cap(s_k) and v_k1 <= cap(s_k).
+
+    Parameters
+    ----------
+    positions_m : array_like, shape (M,)
+        Distance along the route of each sample (m), strictly increasing.
+    elevations_m : array_like, shape (M,)
+        Elevation of each sample (m).
+    vehicle : Vehicle
+        Supplies the quarter car, the wheel radius, the top speed and
+        ``max_transmitted_force_n``.
+    reach_m : float, default 0.0
+        How far beyond s a stage can take the vehicle (m), >= 0.
+    knot_spacing_m : float, default 0.25
+        Knot spacing h (m), > 0.
+
+    Returns
+    -------
+    casadi.Function
+        ``step_speed_envelope``: input ``s_m`` (1 x 1, m), output ``speed_cap_mps`` (1 x 1,
+        m/s), at most the vehicle's top speed.
+
+    Raises
+    ------
+    InputError
+        Bad samples (as for a route), a negative or non-finite ``reach_m``, a
+        ``knot_spacing_m`` that is not > 0, or more than :data:`MAX_ENVELOPE_INTERVALS` knot
+        intervals.
+    """
+    route = Route(s_m=np.asarray(positions_m, dtype=float), z_m=np.asarray(elevations_m, dtype=float),
+                  source="step_speed_envelope")
+    reach = _finite_number(reach_m, "reach_m", "m")
+    if reach < 0:
+        raise InputError(f"step_speed_envelope: reach_m = {reach_m!r} m must be >= 0 (how far a stage can go)")
+    h = _finite_number(knot_spacing_m, "knot_spacing_m", "m")
+    if not h > 0:
+        raise InputError(f"step_speed_envelope: knot_spacing_m = {knot_spacing_m!r} m must be > 0")
+    s, z = route.s_m, route.z_m
+    s0, s1 = float(s[0]), float(s[-1])
+    n_intervals = math.ceil((s1 - s0) / h) + 8  # 4 flat intervals beyond each end
+    if n_intervals > MAX_ENVELOPE_INTERVALS:
+        raise InputError(
+            f"step_speed_envelope: {s1 - s0:g} m of route at knot_spacing_m = {h:g} m makes {n_intervals} knot "
+            f"intervals, above {MAX_ENVELOPE_INTERVALS}; build it for the stretch the controller will drive, "
+            "or choose a larger knot_spacing_m")
+    top = float(vehicle.max_speed_mps)
+    ramps = wheel_ramps(wheel_path(s, z, vehicle.wheel_radius_m))
+    ramp_cap = ramp_speed_cap_mps(ramps.rise_m, ramps.slope, vehicle, vehicle.max_transmitted_force_n)
+    start = s0 - 4.0 * h
+    j = np.arange(n_intervals + 3)
+    lo = np.clip(start + (j - 3) * h, s0, s1)  # basis function j's support, clipped to the route
+    hi = np.clip(start + (j + 1) * h, s0, s1)
+    coef = np.full(j.size, top)
+    for r in np.flatnonzero(ramp_cap < top):  # the supports whose [lo, hi + reach] meet the ramp
+        first = np.searchsorted(hi + reach, ramps.start_m[r], side="left")
+        last = np.searchsorted(lo, ramps.end_m[r], side="right")
+        np.minimum(coef[first:last], float(ramp_cap[r]), out=coef[first:last])
+    coef = coef - _ROUNDING_MARGIN * top
+    doc = (f"SBEM:TF's step limit (m/s) over the ramps of the wheel's path overlapping [s_m, s_m + {reach:g} m] "
+           f"(a lower bound, cubic B-spline with knots {h:g} m apart, at most the top speed {top:g} m/s); "
+           f"input s_m: position along the route (m); output speed_cap_mps (m/s).")
+    return _spline_function(coef, start, h, n_intervals, "step_speed_envelope", "speed_cap_mps", doc)
+
+
+def _spline_function(coef: np.ndarray, start: float, h: float, n_intervals: int, name: str, output: str,
+                     doc: str) -> ca.Function:
+    """The uniform cubic B-spline with coefficients ``coef`` (shape (n_intervals + 3,)) on
+    knots ``start + i h``, as a ``casadi.Function`` of ``s_m`` (see :func:`terrain_envelope`:
+    clamped to its end intervals outside, NaN for a non-finite s). At every s it is a weighted
+    mean, with non-negative weights summing to one, of the four coefficients whose support
+    holds s."""
     c0, c1, c2, c3 = (coef[k:k + n_intervals] for k in range(4))
     # the cubic of interval i in u in [0, 1]: sum_k c_{i+k} b_k(u), b_k the uniform cubic
     # B-spline pieces, in powers of u (written so that four equal coefficients give
@@ -268,10 +372,8 @@ def terrain_envelope(
     b0, b1, b2, b3 = selected
     value = b0 + u * (b1 + u * (b2 + u * b3))
     value = ca.if_else(ca.fabs(s_sym) < math.inf, value, math.nan)
-    fn = ca.Function("terrain_envelope", [s_sym], [value], ["s_m"], ["e_max_m"])
-    fn.__doc__ = (f"Largest worst-case elevation e_max (m) of the {window:g} m roughness windows overlapping "
-                  f"[s_m, s_m + {reach:g} m] (an upper bound, cubic B-spline with knots {h:g} m apart); "
-                  f"input s_m: position along the route (m); output e_max_m (m).")
+    fn = ca.Function(name, [s_sym], [value], ["s_m"], [output])
+    fn.__doc__ = doc
     return fn
 
 

@@ -3,12 +3,14 @@
 import dataclasses
 import math
 
+import casadi as ca
 import numpy as np
 import pytest
 from scipy import signal
 
 import profileopt
 from profileopt.ramp_force import impulse_response_peak_s, ramp_force_n, ramp_speed_cap_mps
+from profileopt.constraints import step_speed_envelope
 from profileopt.planning.limits import StepLimit, default_limits
 from profileopt.planning.limits.step import step_speed_cap_mps
 from profileopt.ramps import wheel_ramps
@@ -161,3 +163,97 @@ def test_a_sampled_drop_is_capped_at_the_hand_computed_speed():
     assert profile.binding[10] == "step" and profile.speed_mps[10] == pytest.approx(held, rel=1e-6)
     slowest = profile.summary()["slowest_segment"]
     assert "step limit" in slowest["reason"] and slowest["top_speed_mps"] == pytest.approx(held, rel=1e-9)
+
+
+# ------------------------------------------------------- the step limit in your own MPC
+
+@pytest.mark.parametrize("reach", [0.0, 1.3])
+@pytest.mark.parametrize("name, vehicle_name", [("curb.csv", "atv-resonant"), ("curb.csv", "atv"),
+                                                ("krc_rms_1in.csv", "atv-resonant")])
+def test_step_speed_envelope_is_never_above_the_caps_it_must_keep(name, vehicle_name, reach):
+    # Reference, by brute force: at each position x, the lowest ramp_speed_cap_mps of every
+    # ramp whose [start, end] shares a point with [x, x + reach], or the top speed.
+    route = profileopt.read_route(ROUTES / name)
+    vehicle = profileopt.load_vehicle(vehicle_name)
+    env = step_speed_envelope(route.s_m, route.z_m, vehicle, reach_m=reach)
+    assert env.name_in() == ["s_m"] and env.name_out() == ["speed_cap_mps"]
+    ramps = wheel_ramps(wheel_path(route.s_m, route.z_m, vehicle.wheel_radius_m))
+    cap = ramp_speed_cap_mps(ramps.rise_m, ramps.slope, vehicle, vehicle.max_transmitted_force_n)
+    low = np.flatnonzero(cap < vehicle.max_speed_mps)
+    assert low.size  # the test looks at routes where the step limit binds
+    x = np.linspace(route.s_m[0], route.s_m[-1], 40001)
+
+    def lowest_cap(a, b):  # the lowest cap of the ramps meeting [a, b] at each x, or the top speed
+        need = np.full(x.size, vehicle.max_speed_mps)
+        for r in low:
+            meets = (ramps.start_m[r] <= b) & (ramps.end_m[r] >= a)
+            need[meets] = np.minimum(need[meets], cap[r])
+        return need
+
+    need = lowest_cap(x, x + reach)
+    value = np.asarray(env.map(x.size)(x[None, :])).ravel()
+    assert np.all(value <= need), f"above by {np.max(value - need):.3g} m/s"
+    # ... and not far below: at least the lowest cap within 4 knot intervals (h = 0.25 m)
+    wider = lowest_cap(x - 1.0, x + reach + 1.0)
+    assert np.all(value >= wider * (1 - 1e-9) - 1e-9)
+    assert np.min(value) < 0.5 * vehicle.max_speed_mps  # the test saw a cap
+
+
+def test_step_speed_envelope_is_smooth_and_works_on_sx_mx_dm():
+    route = profileopt.read_route(ROUTES / "curb.csv")
+    vehicle = profileopt.load_vehicle("atv-resonant")
+    env = step_speed_envelope(route.s_m, route.z_m, vehicle, reach_m=0.5)
+    x = ca.SX.sym("x")
+    value = env(x)
+    d = ca.Function("d", [x], [value, ca.gradient(value, x), ca.hessian(value, x)[0]])
+    points = np.linspace(148.0, 158.0, 2001)
+    v, d1, d2 = (np.asarray(o).ravel() for o in d.map(points.size)(points[None, :]))
+    assert np.all(np.isfinite(d1)) and np.all(np.isfinite(d2)) and np.ptp(v) > 10  # it dips at the drop
+    step = 1e-6  # the first derivative against central differences
+    fd = (np.asarray(env.map(points.size)((points + step)[None, :])).ravel()
+          - np.asarray(env.map(points.size)((points - step)[None, :])).ravel()) / (2 * step)
+    np.testing.assert_allclose(d1, fd, rtol=1e-5, atol=1e-4)
+    xm = ca.MX.sym("x")
+    assert isinstance(env(xm), ca.MX)
+    assert float(env(ca.DM(152.6))) == pytest.approx(float(env(152.6)))
+    assert math.isnan(float(env(math.nan)))
+
+
+@pytest.mark.parametrize("kwargs, message", [({"reach_m": -1.0}, "reach_m"), ({"knot_spacing_m": 0.0}, "knot_spacing_m"),
+                                             ({"knot_spacing_m": 1e-4}, "knot intervals")])
+def test_step_speed_envelope_bad_input_is_one_input_error(kwargs, message):
+    route = profileopt.read_route(ROUTES / "curb.csv")
+    with pytest.raises(profileopt.InputError, match=message):
+        step_speed_envelope(route.s_m, route.z_m, profileopt.load_vehicle("atv"), **kwargs)
+
+
+def test_an_opti_problem_keeps_the_step_limit_over_the_curb_drop():
+    # Minimum time over 140-160 m of curb.csv (the 0.15 m drop at 152.5 m), stages of 0.5 m,
+    # atv-resonant: with v_k, v_k+1 <= cap(s_k) (reach = the stage) no stage's speeds exceed
+    # the cap of any ramp the stage meets, checked by brute force on every stage.
+    route = profileopt.read_route(ROUTES / "curb.csv")
+    vehicle = profileopt.load_vehicle("atv-resonant")
+    keep = (route.s_m >= 140.0) & (route.s_m <= 160.0)
+    s, z = route.s_m[keep], route.z_m[keep]
+    ds = 0.5
+    grid = np.arange(140.0, 160.0 + 1e-9, ds)
+    cap_fn = step_speed_envelope(s, z, vehicle, reach_m=ds)
+    opti = ca.Opti()
+    b = opti.variable(grid.size)  # squared speeds
+    opti.subject_to(opti.bounded(0.25, b, vehicle.max_speed_mps**2))
+    opti.subject_to(opti.bounded(-2 * vehicle.max_decel_mps2 * ds, ca.diff(b), 2 * vehicle.max_accel_mps2 * ds))
+    for k in range(grid.size - 1):
+        c = cap_fn(grid[k])
+        opti.subject_to(b[k] <= c**2)
+        opti.subject_to(b[k + 1] <= c**2)
+    opti.minimize(ca.sum1(2 * ds / (ca.sqrt(b[:-1]) + ca.sqrt(b[1:]))))
+    opti.set_initial(b, 1.0)
+    opti.solver("ipopt", {"print_time": False}, {"print_level": 0, "sb": "yes"})
+    speed = np.sqrt(np.asarray(opti.solve().value(b)).ravel())
+    ramps = wheel_ramps(wheel_path(s, z, vehicle.wheel_radius_m))
+    cap = ramp_speed_cap_mps(ramps.rise_m, ramps.slope, vehicle, vehicle.max_transmitted_force_n)
+    for k in range(grid.size - 1):
+        meets = (ramps.start_m <= grid[k + 1]) & (ramps.end_m >= grid[k])
+        if np.any(meets):
+            assert max(speed[k], speed[k + 1]) <= cap[meets].min() * (1 + 1e-6)
+    assert speed.max() > 3.0  # it is not a crawl everywhere
