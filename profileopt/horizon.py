@@ -213,44 +213,26 @@ def terrain_envelope(
         non-finite ``reach_m``, a ``knot_spacing_m`` that is not > 0, or more than
         :data:`MAX_ENVELOPE_INTERVALS` knot intervals.
     """
-    route = Route(s_m=np.asarray(positions_m, dtype=float), z_m=np.asarray(elevations_m, dtype=float),
-                  source="terrain_envelope")
-    reach = _finite_number(reach_m, "reach_m", "m")
-    if reach < 0:
-        raise InputError(f"terrain_envelope: reach_m = {reach_m!r} m must be >= 0 (how far a stage can go)")
     window = _finite_number(window_m, "window_m", "m")
     if not window > 0:
         raise InputError(f"terrain_envelope: window_m = {window_m!r} m must be > 0 (the roughness window length)")
-    h = window / 20.0 if knot_spacing_m is None else _finite_number(knot_spacing_m, "knot_spacing_m", "m")
-    if not h > 0:
-        raise InputError(f"terrain_envelope: knot_spacing_m = {knot_spacing_m!r} m must be > 0")
-    s, z = route.s_m, route.z_m
-    s0, s1 = float(s[0]), float(s[-1])
-    n_intervals = math.ceil((s1 - s0) / h) + 8  # 4 flat intervals beyond each end
-    if n_intervals > MAX_ENVELOPE_INTERVALS:
-        raise InputError(
-            f"terrain_envelope: {s1 - s0:g} m of route at knot_spacing_m = {h:g} m makes {n_intervals} knot "
-            f"intervals, above {MAX_ENVELOPE_INTERVALS}; build it for the stretch the controller will drive, "
-            "or choose a larger knot_spacing_m")
+    grid = _SplineGrid.of("terrain_envelope", positions_m, elevations_m, reach_m,
+                          window / 20.0 if knot_spacing_m is None else knot_spacing_m)
+    s, z, reach, h = grid.s_m, grid.z_m, grid.reach_m, grid.h_m
     try:
         windows = roughness_windows(s, z, vehicle.ground_clearance_m, window_m=window, source="terrain_envelope")
     except InputError as exc:
         raise InputError(str(exc)) from None
     e_window = np.asarray(worst_case_elevation(windows.ri, vehicle), dtype=float)
 
-    # Interval i is [start + i h, start + (i + 1) h] and uses coefficients i .. i + 3;
-    # coefficient j is the requirement's maximum over [start + (j - 3) h, start + (j + 1) h].
-    start = s0 - 4.0 * h
-    j = np.arange(n_intervals + 3)
-    lo = np.clip(start + (j - 3) * h, s0, s1)  # outside the route: the nearer end's value
-    hi = np.clip(start + (j + 1) * h, s0, s1)
-    first, stop = windows.overlapping(lo, hi + reach)
+    # coefficient j is the requirement's maximum over basis function j's support
+    first, stop = windows.overlapping(grid.lo_m, grid.hi_m + reach)
     coef = range_extremes(e_window, first, stop)[1]
     coef = coef + _ROUNDING_MARGIN * float(np.max(coef))
     doc = (f"Largest worst-case elevation e_max (m) of the {window:g} m roughness windows overlapping "
            f"[s_m, s_m + {reach:g} m] (an upper bound, cubic B-spline with knots {h:g} m apart); "
            f"input s_m: position along the route (m); output e_max_m (m).")
-    return _spline_function(coef, start, h, n_intervals, "terrain_envelope", "e_max_m", doc)
+    return _spline_function(coef, grid, "terrain_envelope", "e_max_m", doc)
 
 
 def step_speed_envelope(
@@ -304,48 +286,70 @@ def step_speed_envelope(
         ``knot_spacing_m`` that is not > 0, or more than :data:`MAX_ENVELOPE_INTERVALS` knot
         intervals.
     """
-    route = Route(s_m=np.asarray(positions_m, dtype=float), z_m=np.asarray(elevations_m, dtype=float),
-                  source="step_speed_envelope")
-    reach = _finite_number(reach_m, "reach_m", "m")
-    if reach < 0:
-        raise InputError(f"step_speed_envelope: reach_m = {reach_m!r} m must be >= 0 (how far a stage can go)")
-    h = _finite_number(knot_spacing_m, "knot_spacing_m", "m")
-    if not h > 0:
-        raise InputError(f"step_speed_envelope: knot_spacing_m = {knot_spacing_m!r} m must be > 0")
-    s, z = route.s_m, route.z_m
-    s0, s1 = float(s[0]), float(s[-1])
-    n_intervals = math.ceil((s1 - s0) / h) + 8  # 4 flat intervals beyond each end
-    if n_intervals > MAX_ENVELOPE_INTERVALS:
-        raise InputError(
-            f"step_speed_envelope: {s1 - s0:g} m of route at knot_spacing_m = {h:g} m makes {n_intervals} knot "
-            f"intervals, above {MAX_ENVELOPE_INTERVALS}; build it for the stretch the controller will drive, "
-            "or choose a larger knot_spacing_m")
+    grid = _SplineGrid.of("step_speed_envelope", positions_m, elevations_m, reach_m, knot_spacing_m)
+    reach, h = grid.reach_m, grid.h_m
     top = float(vehicle.max_speed_mps)
-    ramps = wheel_ramps(wheel_path(s, z, vehicle.wheel_radius_m))
+    ramps = wheel_ramps(wheel_path(grid.s_m, grid.z_m, vehicle.wheel_radius_m))
     ramp_cap = ramp_speed_cap_mps(ramps.rise_m, ramps.slope, vehicle, vehicle.max_transmitted_force_n)
-    start = s0 - 4.0 * h
-    j = np.arange(n_intervals + 3)
-    lo = np.clip(start + (j - 3) * h, s0, s1)  # basis function j's support, clipped to the route
-    hi = np.clip(start + (j + 1) * h, s0, s1)
-    coef = np.full(j.size, top)
+    coef = np.full(grid.lo_m.size, top)
     for r in np.flatnonzero(ramp_cap < top):  # the supports whose [lo, hi + reach] meet the ramp
-        first = np.searchsorted(hi + reach, ramps.start_m[r], side="left")
-        last = np.searchsorted(lo, ramps.end_m[r], side="right")
+        first = np.searchsorted(grid.hi_m + reach, ramps.start_m[r], side="left")
+        last = np.searchsorted(grid.lo_m, ramps.end_m[r], side="right")
         np.minimum(coef[first:last], float(ramp_cap[r]), out=coef[first:last])
     coef = coef - _ROUNDING_MARGIN * top
     doc = (f"SBEM:TF's step limit (m/s) over the ramps of the wheel's path overlapping [s_m, s_m + {reach:g} m] "
            f"(a lower bound, cubic B-spline with knots {h:g} m apart, at most the top speed {top:g} m/s); "
            f"input s_m: position along the route (m); output speed_cap_mps (m/s).")
-    return _spline_function(coef, start, h, n_intervals, "step_speed_envelope", "speed_cap_mps", doc)
+    return _spline_function(coef, grid, "step_speed_envelope", "speed_cap_mps", doc)
 
 
-def _spline_function(coef: np.ndarray, start: float, h: float, n_intervals: int, name: str, output: str,
-                     doc: str) -> ca.Function:
-    """The uniform cubic B-spline with coefficients ``coef`` (shape (n_intervals + 3,)) on
-    knots ``start + i h``, as a ``casadi.Function`` of ``s_m`` (see :func:`terrain_envelope`:
+@dataclasses.dataclass(frozen=True)
+class _SplineGrid:
+    """The knots of an envelope over a route's samples: interval i is [start + i h, start +
+    (i + 1) h] and uses coefficients i .. i + 3; basis function j's support, clipped to the
+    route (outside it, the nearer end's value), is [lo_m[j], hi_m[j]]."""
+
+    s_m: np.ndarray
+    z_m: np.ndarray
+    reach_m: float
+    h_m: float
+    start_m: float
+    n_intervals: int
+    lo_m: np.ndarray
+    hi_m: np.ndarray
+
+    @classmethod
+    def of(cls, name: str, positions_m: ArrayLike, elevations_m: ArrayLike, reach_m: Any, knot_spacing_m: Any
+           ) -> "_SplineGrid":
+        """Validate the samples, reach_m and knot_spacing_m (one InputError naming ``name``)."""
+        route = Route(s_m=np.asarray(positions_m, dtype=float), z_m=np.asarray(elevations_m, dtype=float),
+                      source=name)
+        reach = _finite_number(reach_m, "reach_m", "m")
+        if reach < 0:
+            raise InputError(f"{name}: reach_m = {reach_m!r} m must be >= 0 (how far a stage can go)")
+        h = _finite_number(knot_spacing_m, "knot_spacing_m", "m")
+        if not h > 0:
+            raise InputError(f"{name}: knot_spacing_m = {knot_spacing_m!r} m must be > 0")
+        s0, s1 = float(route.s_m[0]), float(route.s_m[-1])
+        n_intervals = math.ceil((s1 - s0) / h) + 8  # 4 flat intervals beyond each end
+        if n_intervals > MAX_ENVELOPE_INTERVALS:
+            raise InputError(
+                f"{name}: {s1 - s0:g} m of route at knot_spacing_m = {h:g} m makes {n_intervals} knot "
+                f"intervals, above {MAX_ENVELOPE_INTERVALS}; build it for the stretch the controller will drive, "
+                "or choose a larger knot_spacing_m")
+        start = s0 - 4.0 * h
+        j = np.arange(n_intervals + 3)
+        return cls(s_m=route.s_m, z_m=route.z_m, reach_m=reach, h_m=h, start_m=start, n_intervals=n_intervals,
+                   lo_m=np.clip(start + (j - 3) * h, s0, s1), hi_m=np.clip(start + (j + 1) * h, s0, s1))
+
+
+def _spline_function(coef: np.ndarray, grid: _SplineGrid, name: str, output: str, doc: str) -> ca.Function:
+    """The uniform cubic B-spline with coefficients ``coef`` (shape (n_intervals + 3,)) on the
+    knots of ``grid``, as a ``casadi.Function`` of ``s_m`` (see :func:`terrain_envelope`:
     clamped to its end intervals outside, NaN for a non-finite s). At every s it is a weighted
     mean, with non-negative weights summing to one, of the four coefficients whose support
     holds s."""
+    start, h, n_intervals = grid.start_m, grid.h_m, grid.n_intervals
     c0, c1, c2, c3 = (coef[k:k + n_intervals] for k in range(4))
     # the cubic of interval i in u in [0, 1]: sum_k c_{i+k} b_k(u), b_k the uniform cubic
     # B-spline pieces, in powers of u (written so that four equal coefficients give
