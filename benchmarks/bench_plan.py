@@ -211,20 +211,24 @@ def travel_time_s(b: np.ndarray, length_m: np.ndarray) -> float:
     return float(np.sum(2.0 * length_m / (v[:-1] + v[1:])))
 
 
-def _segment_caps(seg, vehicle, route) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
-    """Each segment's cap (its first band's top, at most v_max and SBEM:TF's step limit), each
-    boundary's (the smaller of the segments meeting there), the bound on b = v^2 at the
-    boundaries (v0 = vend = 0), and whether every segment has one band [0, cap] (then the caps
-    are the whole force constraint)."""
+def _segment_caps(seg, vehicle, other_cap) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+    """Each segment's cap (its first band's top, at most ``other_cap``: v_max and SBEM:TF's
+    step limit, :func:`_other_caps`), each boundary's (the smaller of the segments meeting
+    there), the bound on b = v^2 at the boundaries (v0 = vend = 0), and whether every segment
+    has one band [0, cap] (then the caps are the whole force constraint)."""
     bands = speed_bands(seg.ri, vehicle, model=MODEL)
     single = bool(np.all(bands.count == 1) and np.all(bands.lower_mps[:, 0] == 0.0))
-    # the benchmark routes have no speed_limit; the step limit is part of every sbem_tf plan
-    step = step_speed_cap_mps(route.s_m, route.z_m, seg.boundaries_m, vehicle)
-    cap = np.minimum(np.minimum(bands.first(), vehicle.max_speed_mps), step)
+    cap = np.minimum(bands.first(), other_cap)
     boundary_cap = np.concatenate([[cap[0]], np.minimum(cap[:-1], cap[1:]), [cap[-1]]])
     upper_b = boundary_cap**2
     upper_b[0] = upper_b[-1] = 0.0  # v0 = vend = 0
     return cap, boundary_cap, upper_b, single
+
+
+def _other_caps(route, seg, vehicle) -> np.ndarray:
+    """Each segment's cap besides the force's bands (m/s): v_max and, as in every sbem_tf plan,
+    the step limit (the benchmark routes have no speed_limit)."""
+    return np.minimum(vehicle.max_speed_mps, step_speed_cap_mps(route.s_m, route.z_m, seg.boundaries_m, vehicle))
 
 
 def _exact_b(seg, upper_b: np.ndarray, vehicle) -> np.ndarray:
@@ -243,8 +247,8 @@ def planner_segments(route, vehicle):
     seg = segment_route(route, vehicle, SEGMENT_LENGTH_M)
     if not DEFAULT_REFINE:
         return seg
-    cap, _, upper_b, _ = _segment_caps(seg, vehicle, route)
-    other = np.minimum(vehicle.max_speed_mps, step_speed_cap_mps(route.s_m, route.z_m, seg.boundaries_m, vehicle))
+    other = _other_caps(route, seg, vehicle)
+    cap, _, upper_b, _ = _segment_caps(seg, vehicle, other)
     marked = at_force_cap(_exact_b(seg, upper_b, vehicle), cap, other)
     return refine_segments(seg, route.s_m, vehicle, marked)
 
@@ -254,7 +258,7 @@ def convex_caps(route_path: Path, vehicle) -> ConvexProblem:
     its exact optimum (not timed)."""
     route = read_route(route_path)
     seg = planner_segments(route, vehicle)
-    cap, boundary_cap, upper_b, single = _segment_caps(seg, vehicle, route)
+    cap, boundary_cap, upper_b, single = _segment_caps(seg, vehicle, _other_caps(route, seg, vehicle))
     exact_b = _exact_b(seg, upper_b, vehicle)
     return ConvexProblem(seg.boundaries_m, seg.length_m, seg.ri, seg.e_max_m, cap, boundary_cap, upper_b,
                          exact_b, travel_time_s(exact_b, seg.length_m), single)
@@ -478,7 +482,7 @@ def run_peer(route_path: Path, out_path: Path, vehicle,
     start = time.perf_counter()
     route = read_route(route_path)
     seg = planner_segments(route, vehicle)
-    cap, boundary_cap, _, _ = _segment_caps(seg, vehicle, route)
+    cap, boundary_cap, _, _ = _segment_caps(seg, vehicle, _other_caps(route, seg, vehicle))
     problem = ConvexProblem(seg.boundaries_m, seg.length_m, seg.ri, seg.e_max_m, cap, boundary_cap,
                             np.empty(0), np.empty(0), math.nan, True)
     t = time.perf_counter()

@@ -17,7 +17,8 @@ window it passes. Two helpers make the limit hold there too:
 
 Composed, they make a stage safe: see :func:`interval_force_constraints` ("Why a stage is
 safe"). :func:`step_speed_envelope` adds SBEM:TF's step limit, as the planner keeps it: a
-smooth speed cap of the position where the wheel meets a step or lands after a drop. Both are also importable from :mod:`profileopt.constraints`. :class:`ForceConstraints`
+smooth speed cap of the position where the wheel meets a step or lands after a drop. All
+three are also importable from :mod:`profileopt.constraints`. :class:`ForceConstraints`
 is the ``(g, lbg, ubg)`` triple both this module and :func:`~profileopt.constraints.force_constraints`
 return.
 
@@ -38,12 +39,10 @@ from numpy.typing import ArrayLike
 from .errors import InputError
 from .forces import (DEFAULT_MODEL, check_e_max_model, force_n, force_peak_ratio, get_model,
                      sbem_tf_envelope_force_n)
-from .ramp_force import ramp_speed_cap_mps
-from .ramps import wheel_ramps
+from .ramp_force import step_caps
 from .route import Route
 from .symbolic import is_symbolic
 from .terrain import check_e_max, range_extremes, roughness_windows, step_width, worst_case_elevation
-from .wheel_path import wheel_path
 
 if TYPE_CHECKING:
     from .vehicle import Vehicle
@@ -249,7 +248,8 @@ def step_speed_envelope(
     The planner keeps, beside Eq. (13), a cap wherever the rigid wheel meets a step or lands
     after a drop (README, "Steps and drops"): each ramp of the wheel's path that starts or
     ends in a kink (:func:`profileopt.ramps.wheel_ramps`) caps every speed driven while the
-    vehicle is on it at :func:`profileopt.ramp_force.ramp_speed_cap_mps`. The requirement at
+    vehicle is on it at :func:`profileopt.ramp_force.ramp_speed_cap_mps`
+    (:func:`profileopt.ramp_force.step_caps`, the planner's very caps). The requirement at
     s is the lowest cap of the ramps that overlap [s, s + reach_m], or the vehicle's top
     speed; the Function is never above it. Built as :func:`terrain_envelope` is (a uniform
     cubic B-spline whose coefficient j is the requirement's minimum over basis function j's
@@ -289,13 +289,13 @@ def step_speed_envelope(
     grid = _SplineGrid.of("step_speed_envelope", positions_m, elevations_m, reach_m, knot_spacing_m)
     reach, h = grid.reach_m, grid.h_m
     top = float(vehicle.max_speed_mps)
-    ramps = wheel_ramps(wheel_path(grid.s_m, grid.z_m, vehicle.wheel_radius_m))
-    ramp_cap = ramp_speed_cap_mps(ramps.rise_m, ramps.slope, vehicle, vehicle.max_transmitted_force_n)
+    caps = step_caps(grid.s_m, grid.z_m, vehicle)
     coef = np.full(grid.lo_m.size, top)
-    for r in np.flatnonzero(ramp_cap < top):  # the supports whose [lo, hi + reach] meet the ramp
-        first = np.searchsorted(grid.hi_m + reach, ramps.start_m[r], side="left")
-        last = np.searchsorted(grid.lo_m, ramps.end_m[r], side="right")
-        np.minimum(coef[first:last], float(ramp_cap[r]), out=coef[first:last])
+    # the supports whose [lo, hi + reach] meet each ramp
+    first = np.searchsorted(grid.hi_m + reach, caps.start_m, side="left")
+    last = np.searchsorted(grid.lo_m, caps.end_m, side="right")
+    for a, b, value in zip(first.tolist(), last.tolist(), caps.cap_mps.tolist()):
+        np.minimum(coef[a:b], value, out=coef[a:b])
     coef = coef - _ROUNDING_MARGIN * top
     doc = (f"SBEM:TF's step limit (m/s) over the ramps of the wheel's path overlapping [s_m, s_m + {reach:g} m] "
            f"(a lower bound, cubic B-spline with knots {h:g} m apart, at most the top speed {top:g} m/s); "

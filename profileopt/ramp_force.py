@@ -11,18 +11,25 @@ Quarter-car constants: k = m wn^2, c = 2 zeta m wn (docs/paper-notes.md).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import TYPE_CHECKING, Any
 
 import casadi as ca
 import numpy as np
 
+from .ramps import wheel_ramps
 from .symbolic import elementwise
+from .wheel_path import wheel_path
 
 if TYPE_CHECKING:
     from .vehicle import Vehicle
 
-__all__ = ["impulse_response_peak_s", "ramp_force_n", "ramp_speed_cap_mps"]
+__all__ = ["impulse_response_peak_s", "ramp_force_n", "ramp_speed_cap_mps", "StepCaps", "step_caps", "MAX_STRETCHES"]
+
+#: Above this many steep stretches :func:`step_caps` builds the wheel's path over the whole
+#: route at once.
+MAX_STRETCHES = 16
 
 
 def impulse_response_peak_s(vehicle: "Vehicle") -> float:
@@ -112,3 +119,92 @@ def ramp_speed_cap_mps(rise_m: np.ndarray, slope: np.ndarray, vehicle: "Vehicle"
         long = (limit_n - k * d) / (c * s)  # once it is k d
         cap = np.where(steep * s * phi <= d, steep, long)
     return np.where(s > 0, cap, np.inf)
+
+
+@dataclasses.dataclass(frozen=True)
+class StepCaps:
+    """The ramps of a route's wheel path whose cap lies below the vehicle's top speed.
+
+    Attributes
+    ----------
+    start_m, end_m : numpy.ndarray, shape (R,)
+        Where each ramp starts and ends along the route (m).
+    cap_mps : numpy.ndarray, shape (R,)
+        Its :func:`ramp_speed_cap_mps` at the vehicle's ``max_transmitted_force_n`` (m/s).
+    """
+
+    start_m: np.ndarray
+    end_m: np.ndarray
+    cap_mps: np.ndarray
+
+
+def step_caps(s_m: np.ndarray, z_m: np.ndarray, vehicle: "Vehicle") -> StepCaps:
+    """The step limit's caps on a route: every ramp of the wheel's path
+    (:func:`profileopt.ramps.wheel_ramps`) whose cap is below the top speed.
+
+    The wheel's path is built only around slopes of the route that could need a cap: the
+    bound is at most V s (k phi_max + c), and the path's slopes never exceed the route's (its
+    pieces are the route's lines, offset, and arcs between them), so a ramp can cap a speed the
+    vehicle can drive only next to a slope above F / (V_top (k phi_max + c)); on a route
+    without one no path is built at all.
+
+    Parameters
+    ----------
+    s_m, z_m : numpy.ndarray, shape (M,)
+        The route's samples: distance (m), increasing, and elevation (m).
+    vehicle : Vehicle
+        Supplies the quarter car, the wheel radius, the top speed and
+        ``max_transmitted_force_n``.
+
+    Returns
+    -------
+    StepCaps
+    """
+    parts = []
+    for lo, hi in _steep_stretches(s_m, z_m, vehicle):
+        ramps = wheel_ramps(wheel_path(s_m[lo:hi], z_m[lo:hi], vehicle.wheel_radius_m))
+        cap = ramp_speed_cap_mps(ramps.rise_m, ramps.slope, vehicle, vehicle.max_transmitted_force_n)
+        binds = cap < vehicle.max_speed_mps
+        parts.append((ramps.start_m[binds], ramps.end_m[binds], cap[binds]))
+    if not parts:
+        return StepCaps(start_m=np.empty(0), end_m=np.empty(0), cap_mps=np.empty(0))
+    return StepCaps(*(np.concatenate(column) for column in zip(*parts)))
+
+
+def _steep_stretches(s_m: np.ndarray, z_m: np.ndarray, vehicle: "Vehicle") -> list[tuple[int, int]]:
+    """Sample ranges [lo, hi) whose wheel path holds every ramp that could cap a speed.
+
+    Only a slope above F / (V_top (k phi_max + c)) can (:func:`step_caps`). A ramp runs from
+    its kink, next to such a slope, to the path's highest point beside it, which lies within
+    r of a highest sample of the route (rolling a wheel over a falling polyline gives a
+    falling path); each steep slope's stretch reaches from the highest sample before it to
+    the one after it, and r and two samples beyond, so that the path there is the whole
+    route's. Overlapping stretches are merged; more than :data:`MAX_STRETCHES` of them are
+    one, the whole route (building the path is vectorised over its pieces, so one long call
+    costs less than many short ones).
+    """
+    if s_m.size < 2:
+        return []
+    limit = vehicle.max_transmitted_force_n
+    gentlest = limit / (vehicle.max_speed_mps * (vehicle.spring_n_per_m * impulse_response_peak_s(vehicle)
+                                                 + vehicle.damping_ns_per_m))
+    steep = np.flatnonzero(np.abs(np.diff(z_m)) > gentlest * np.diff(s_m))
+    if steep.size == 0:
+        return []
+    m = s_m.size
+    index = np.arange(m)
+    top = np.ones(m, dtype=bool)
+    top[1:-1] = (z_m[1:-1] >= z_m[:-2]) & (z_m[1:-1] >= z_m[2:])
+    before = np.maximum.accumulate(np.where(top, index, 0))[steep]  # the highest sample at or before
+    after = np.minimum.accumulate(np.where(top, index, m - 1)[::-1])[::-1][steep + 1]  # at or after
+    reach = vehicle.wheel_radius_m
+    lo = np.searchsorted(s_m, s_m[before] - reach, side="left") - 2
+    hi = np.searchsorted(s_m, s_m[after] + reach, side="right") + 2
+    lo, hi = np.clip(lo, 0, m), np.clip(hi, 0, m)
+    stretches: list[tuple[int, int]] = []
+    for a, b in zip(lo.tolist(), np.maximum.accumulate(hi).tolist()):
+        if stretches and a <= stretches[-1][1]:
+            stretches[-1] = (stretches[-1][0], b)
+        else:
+            stretches.append((a, b))
+    return stretches if len(stretches) <= MAX_STRETCHES else [(0, m)]

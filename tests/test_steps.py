@@ -257,3 +257,21 @@ def test_an_opti_problem_keeps_the_step_limit_over_the_curb_drop():
         if np.any(meets):
             assert max(speed[k], speed[k + 1]) <= cap[meets].min() * (1 + 1e-6)
     assert speed.max() > 3.0  # it is not a crawl everywhere
+
+
+def test_the_step_limit_reuses_a_routes_caps_only_for_that_route():
+    # A refined plan asks the limit twice on one route; the limit keeps the route's caps
+    # between the calls, and must not hand them to another route or vehicle.
+    from profileopt.planning import segment_route
+    from profileopt.planning.limits import PlanContext
+
+    limit = StepLimit()
+    curb = profileopt.read_route(ROUTES / "curb.csv")
+    s = np.round(np.arange(0.0, 100.0001, 0.05), 10)
+    drop = profileopt.Route(s_m=s, z_m=np.where(s > 50.0 + 1e-9, 0.0, 0.15), source="drop")
+    resonant, atv = profileopt.load_vehicle("atv-resonant"), profileopt.load_vehicle("atv")
+    for route, vehicle, length in ((curb, resonant, 5.0), (curb, resonant, 2.5), (drop, resonant, 5.0),
+                                   (drop, atv, 5.0), (curb, resonant, 5.0)):
+        seg = segment_route(route, vehicle, length)
+        got = limit.speed_cap_mps(PlanContext(route=route, vehicle=vehicle, segments=seg))
+        np.testing.assert_array_equal(got, step_speed_cap_mps(route.s_m, route.z_m, seg.boundaries_m, vehicle))
