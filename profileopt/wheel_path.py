@@ -171,7 +171,10 @@ def _raw_pieces(s: np.ndarray, z: np.ndarray, r: float) -> dict[str, np.ndarray]
     arc = np.zeros(slots, dtype=bool)
     lo[0::2], hi[0::2] = xs[:-1] - shift, xs[1:] - shift
     x_ref[0::2], z_ref[0::2], rise[0::2], slope[0::2] = xs[:-1], zs[:-1], lift, m
-    convex = m[:-1] > m[1:]
+    # a vertex carries an arc where the two offset lines leave a gap between their spans:
+    # decided by the very numbers that make the spans (a slope comparison can disagree with
+    # them by a rounding at a straight vertex, and leave a gap no piece covers)
+    convex = shift[:-1] > shift[1:]
     lo[1::2] = np.where(convex, xs[1:-1] - shift[:-1], np.inf)
     hi[1::2] = np.where(convex, xs[1:-1] - shift[1:], -np.inf)
     x_ref[1::2], z_ref[1::2], arc[1::2] = xs[1:-1], zs[1:-1], True

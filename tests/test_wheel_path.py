@@ -177,3 +177,20 @@ def test_bad_input_is_refused() -> None:
         wheel_path(s[::-1], 0 * s, 0.1)
     with pytest.raises(InputError, match="finite"):
         wheel_path(s, np.where(s > 0.5, np.nan, 0.0), 0.1)
+
+
+def test_a_straight_vertex_leaves_no_gap_between_the_offset_lines() -> None:
+    # Found by tests/test_properties.py (the step limit builds the path of a route's first
+    # metres): two samples, r = 0.4 m. The chord continued beyond the first sample is
+    # straight, but its offset line and the first segment's were computed with shifts an
+    # ulp apart, and a slope comparison called the vertex concave: a 1-ulp interval with no
+    # piece, and an IndexError. A vertex carries an arc wherever the spans leave a gap.
+    s = np.array([-0.004180029166969869, 0.06192404104749893])
+    z = np.array([0.09747487404780592, 0.09309106274632796])
+    path = wheel_path(s, z, 0.4)
+    assert path.breaks_m[0] == s[0] and path.breaks_m[-1] == s[-1]
+    # a straight chord of slope m: the wheel rests on it, its lowest point r (sqrt(1 + m^2) - 1)
+    # above it (the centre is r along the normal, r sqrt(1 + m^2) above the line)
+    m = (z[1] - z[0]) / (s[1] - s[0])
+    y = path.evaluate(s)[0]
+    np.testing.assert_allclose(y, z + 0.4 * (math.sqrt(1 + m * m) - 1), rtol=0, atol=1e-12)
