@@ -24,6 +24,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from matplotlib import patheffects
 from matplotlib.colors import LogNorm
 from matplotlib.figure import Figure
 
@@ -131,9 +132,12 @@ def main(argv: list[str] | None = None) -> int:
     mesh = ax_v.pcolormesh(east, north, speed_map.T, cmap="viridis", vmin=0.0, vmax=SLOW_MPS)
     fig.colorbar(mesh, ax=ax_v, shrink=0.8, extend="max", label="allowable speed from rest (m/s)")
     ax_v.set_title(f"SBEM:TF allowable speed from rest, {label}")
-    for ax, colour in ((ax_ri, "0.2"), (ax_v, "0.95")):
+    # each label has a halo of the opposite shade, so it reads on dark and light patches alike
+    for ax, colour, halo in ((ax_ri, "0.1", "white"), (ax_v, "0.95", "black")):
         contours = ax.contour(centres_x, centres_y, height_map.T, levels=levels, colors=colour, linewidths=0.7)
-        ax.clabel(contours, levels[::2], fontsize=7, fmt="%.0f m")
+        labels = ax.clabel(contours, levels[::2], fontsize=7, fmt="%.0f m")
+        for label in labels:
+            label.set_path_effects([patheffects.withStroke(linewidth=2.0, foreground=halo)])
         ax.set_aspect("equal")
         ax.set_facecolor("0.85")
         ax.set_xlabel(f"easting - {origin[0]:.0f} m (m)")
