@@ -10,7 +10,7 @@ import pytest
 import scipy.special
 
 from profileopt import MODELS, InputError, allowable_speed, force_n, get_model, load_vehicle, speed_bands
-from profileopt.speeds import BAND_CHOICES
+from profileopt.speeds import BAND_CHOICES, speed_bands_reusing
 from profileopt.figures import PAPER_AMPLITUDES_M, TERRAIN_FREQUENCY_CPM, sinusoid_terrain
 
 ATV = load_vehicle("atv")
@@ -276,3 +276,67 @@ def test_allowable_speed_semantics_keyword_still_works_with_a_warning():
     with pytest.warns(DeprecationWarning, match="semantics= is deprecated, use band="):
         old = allowable_speed(FIG_RI, RES, semantics="largest")
     np.testing.assert_array_equal(old, allowable_speed(FIG_RI, RES, band="largest"))
+
+
+# ------------------------------------------------------------ each distinct terrain value once
+
+def _row(bands, k):
+    """Row k of a SpeedBands without its NaN padding: (lower, upper, peaks)."""
+    count = int(bands.count[k])
+    peaks = bands.peaks_mps[k]
+    return bands.lower_mps[k, :count], bands.upper_mps[k, :count], peaks[~np.isnan(peaks)]
+
+
+@pytest.mark.parametrize("vehicle, model", [(RES, "sbem_tf"), (ATV, "sbem_tf"), (RES, "iecm")])
+def test_speed_bands_reusing_gives_each_row_what_it_gives_alone(vehicle, model):
+    # Reference: every row in a call of its own (no batch, no shared value, no memo). With
+    # atv-resonant every RI here is rough enough that even a crawl reaches the limit, so the
+    # RI range form is used alone and together (speed_bands decides it per call); atv and
+    # the monotone IECM use the plain form throughout. Repeated values on purpose.
+    rng = np.random.default_rng(5)
+    ri = rng.choice(np.linspace(0.06, 0.6, 12), 60)
+    ri_min = ri * rng.choice([0.5, 0.8, 1.0], 60)
+    first, memo = speed_bands_reusing(ri[:40], vehicle, model=model, ri_min=ri_min[:40])
+    second, _ = speed_bands_reusing(ri[20:], vehicle, model=model, ri_min=ri_min[20:], memo=memo)
+    for bands, rows in ((first, range(0, 40)), (second, range(20, 60))):
+        assert bands.count.shape == (len(rows),)
+        for k, i in enumerate(rows):
+            alone = speed_bands([ri[i]], vehicle, model=model, ri_min=[ri_min[i]])
+            for got, want in zip(_row(bands, k), _row(alone, 0)):
+                np.testing.assert_array_equal(got, want)
+        # the padding is what a single call makes: as wide as the widest row, at least 1
+        assert bands.lower_mps.shape[1] == max(int(bands.count.max()), 1)
+        assert not np.all(np.isnan(bands.peaks_mps[:, -1])) or bands.peaks_mps.shape[1] == 1
+
+
+def test_speed_bands_reusing_finds_only_values_it_has_not_seen(monkeypatch):
+    import profileopt.speeds as speeds
+
+    again = np.array([0.4, 0.5, 0.1, 0.5])
+    reference = speed_bands(again, RES, ri_min=0.5 * again)  # before counting
+    computed = []
+    real = speeds._speed_bands
+
+    def counting(terrain, vehicle, model):
+        computed.append(terrain[-1].size)
+        return real(terrain, vehicle, model)
+
+    monkeypatch.setattr(speeds, "_speed_bands", counting)
+    ri = np.array([0.1, 0.2, 0.2, 0.3, 0.1, 0.4])
+    _, memo = speed_bands_reusing(ri, RES, ri_min=0.5 * ri)
+    assert computed == [4]  # 0.1, 0.2, 0.3, 0.4 (with their ranges) once each
+    bands, _ = speed_bands_reusing(again, RES, ri_min=0.5 * again, memo=memo)
+    assert computed == [4, 1]  # only 0.5 is new
+    for k in range(again.size):
+        for got, want in zip(_row(bands, k), _row(reference, k)):
+            np.testing.assert_array_equal(got, want)
+    # another vehicle object (equal or not), or another model: nothing is taken from the memo
+    import dataclasses
+    speed_bands_reusing(again, dataclasses.replace(RES), ri_min=0.5 * again, memo=memo)
+    speed_bands_reusing(again, RES, model="sbem_ef", ri_min=0.5 * again, memo=memo)
+    assert computed == [4, 1, 3, 3]
+
+
+def test_speed_bands_of_no_terrain_is_empty():
+    bands = speed_bands(np.empty(0), RES)
+    assert bands.count.shape == (0,) and bands.lower_mps.shape[0] == 0

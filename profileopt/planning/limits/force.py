@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ...forces import DEFAULT_MODEL, get_model
-from ...speeds import SpeedBands, speed_bands
+from ...speeds import SpeedBands, speed_bands_reusing
 from .base import Limit, PlanContext
 
 if TYPE_CHECKING:
@@ -39,6 +39,9 @@ class ForceLimit(Limit):
     model: str = DEFAULT_MODEL
     name = "force"
     binding = "force"
+    #: The last call's distinct RI ranges and their bands (:class:`~profileopt.speeds.BandMemo`):
+    #: a refined plan asks again for every segment it kept whole.
+    _memo: list = dataclasses.field(default_factory=list, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         get_model(self.model)  # an unknown model is refused here, by name
@@ -56,7 +59,10 @@ class ForceLimit(Limit):
         SpeedBands
         """
         segments = context.segments
-        return speed_bands(segments.ri, context.vehicle, model=self.model, ri_min=segments.ri_min)
+        bands, memo = speed_bands_reusing(segments.ri, context.vehicle, model=self.model, ri_min=segments.ri_min,
+                                          memo=self._memo[0] if self._memo else None)
+        self._memo[:] = [memo]
+        return bands
 
     def check(self, profile: "Profile") -> float:
         """How far the largest predicted force inside any segment exceeds the limit (relative).
