@@ -345,7 +345,8 @@ def speed_bands_reusing(ri: ArrayLike, vehicle: "Vehicle", *, model: str = DEFAU
     key = terrain[0] + 1j * terrain[1] if len(terrain) == 2 else terrain[0] + 0j
     keys, inverse = np.unique(key, return_inverse=True)
     known = np.full(keys.size, -1)
-    if memo is not None and memo.vehicle is vehicle and memo.model == model and memo.form == len(terrain):
+    if (memo is not None and memo.keys.size and memo.vehicle is vehicle and memo.model == model
+            and memo.form == len(terrain)):
         at = np.minimum(np.searchsorted(memo.keys, keys), memo.keys.size - 1)
         known = np.where(memo.keys[at] == keys, at, -1)
     # (bands, rows of the distinct values they fill, their rows to take: None for all)

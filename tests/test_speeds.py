@@ -337,6 +337,9 @@ def test_speed_bands_reusing_finds_only_values_it_has_not_seen(monkeypatch):
     assert computed == [4, 1, 3, 3]
 
 
-def test_speed_bands_of_no_terrain_is_empty():
-    bands = speed_bands(np.empty(0), RES)
+def test_speed_bands_of_no_terrain_is_empty_and_its_memo_harmless():
+    bands, memo = speed_bands_reusing(np.empty(0), RES)
     assert bands.count.shape == (0,) and bands.lower_mps.shape[0] == 0
+    after, _ = speed_bands_reusing([0.2, 0.3], RES, memo=memo)
+    reference = speed_bands([0.2, 0.3], RES)
+    np.testing.assert_array_equal(after.upper_mps, reference.upper_mps)
