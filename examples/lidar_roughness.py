@@ -136,8 +136,8 @@ def main(argv: list[str] | None = None) -> int:
     for ax, colour, halo in ((ax_ri, "0.1", "white"), (ax_v, "0.95", "black")):
         contours = ax.contour(centres_x, centres_y, height_map.T, levels=levels, colors=colour, linewidths=0.7)
         labels = ax.clabel(contours, levels[::2], fontsize=7, fmt="%.0f m")
-        for label in labels:
-            label.set_path_effects([patheffects.withStroke(linewidth=2.0, foreground=halo)])
+        for text in labels:
+            text.set_path_effects([patheffects.withStroke(linewidth=2.0, foreground=halo)])
         ax.set_aspect("equal")
         ax.set_facecolor("0.85")
         ax.set_xlabel(f"easting - {origin[0]:.0f} m (m)")
