@@ -289,13 +289,8 @@ def step_speed_envelope(
     grid = _SplineGrid.of("step_speed_envelope", positions_m, elevations_m, reach_m, knot_spacing_m)
     reach, h = grid.reach_m, grid.h_m
     top = float(vehicle.max_speed_mps)
-    caps = step_caps(grid.s_m, grid.z_m, vehicle)
-    coef = np.full(grid.lo_m.size, top)
-    # the supports whose [lo, hi + reach] meet each ramp
-    first = np.searchsorted(grid.hi_m + reach, caps.start_m, side="left")
-    last = np.searchsorted(grid.lo_m, caps.end_m, side="right")
-    for a, b, value in zip(first.tolist(), last.tolist(), caps.cap_mps.tolist()):
-        np.minimum(coef[a:b], value, out=coef[a:b])
+    # coefficient j: the lowest cap of the ramps meeting [lo_j, hi_j + reach]
+    coef = step_caps(grid.s_m, grid.z_m, vehicle).lowest_over(grid.lo_m, grid.hi_m + reach, top)
     coef = coef - _ROUNDING_MARGIN * top
     doc = (f"SBEM:TF's step limit (m/s) over the ramps of the wheel's path overlapping [s_m, s_m + {reach:g} m] "
            f"(a lower bound, cubic B-spline with knots {h:g} m apart, at most the top speed {top:g} m/s); "

@@ -137,6 +137,29 @@ class StepCaps:
     end_m: np.ndarray
     cap_mps: np.ndarray
 
+    def lowest_over(self, lo_m: np.ndarray, hi_m: np.ndarray, fill: float) -> np.ndarray:
+        """The lowest cap of the ramps that share a point with each interval [lo_m[k], hi_m[k]]
+        (m/s), ``fill`` where none does.
+
+        Parameters
+        ----------
+        lo_m, hi_m : numpy.ndarray, shape (K,)
+            Interval ends (m), each non-decreasing in k.
+        fill : float
+            The value of an interval no ramp meets (m/s).
+
+        Returns
+        -------
+        numpy.ndarray, shape (K,)
+        """
+        out = np.full(np.shape(lo_m), float(fill))
+        # interval k meets [start, end] when lo_k <= end and hi_k >= start
+        first = np.searchsorted(hi_m, self.start_m, side="left")
+        stop = np.searchsorted(lo_m, self.end_m, side="right")
+        for a, b, value in zip(first.tolist(), stop.tolist(), self.cap_mps.tolist()):
+            np.minimum(out[a:b], value, out=out[a:b])
+        return out
+
 
 def step_caps(s_m: np.ndarray, z_m: np.ndarray, vehicle: "Vehicle") -> StepCaps:
     """The step limit's caps on a route: every ramp of the wheel's path

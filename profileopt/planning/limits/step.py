@@ -41,13 +41,7 @@ def segment_step_caps_mps(caps: StepCaps, boundaries_m: np.ndarray) -> np.ndarra
     -------
     numpy.ndarray, shape (N,)
     """
-    cap = np.full(boundaries_m.size - 1, np.inf)
-    # segment i covers [b_i, b_i+1]; it meets [start, end] when b_i <= end and b_i+1 >= start
-    first = np.searchsorted(boundaries_m[1:], caps.start_m, side="left")
-    stop = np.searchsorted(boundaries_m[:-1], caps.end_m, side="right")
-    for a, b, value in zip(first.tolist(), stop.tolist(), caps.cap_mps.tolist()):
-        np.minimum(cap[a:b], value, out=cap[a:b])
-    return cap
+    return caps.lowest_over(boundaries_m[:-1], boundaries_m[1:], np.inf)  # segment i: [b_i, b_i+1]
 
 
 def step_speed_cap_mps(s_m: np.ndarray, z_m: np.ndarray, boundaries_m: np.ndarray, vehicle: "Vehicle"
