@@ -154,15 +154,109 @@ def test_a_sampled_drop_is_capped_at_the_hand_computed_speed():
     # = 3600 N/m, c = 2 * 0.1 * 100 * 6 = 120 N s/m. At the cap V s phi_max > d (phi_max =
     # 0.1438 s), so k d + c V s = F: V = (1000 - 3600 * 0.15) / (120 * 3) = 1.2778 m/s; the
     # segment before the drop (where the wheel runs down from the edge) is held there.
-    s = np.round(np.arange(0.0, 100.0001, 0.05), 10)
-    route = profileopt.Route(s_m=s, z_m=np.where(s > 50.0 + 1e-9, 0.0, 0.15), source="drop")
+    route = _drop_route()
     vehicle = profileopt.load_vehicle("atv-resonant")
     profile = profileopt.plan(route, vehicle)
-    held = profile.speed_cap_mps[9]  # segment [45, 50] m: the edge at 50 m is its end
+    edge = int(np.searchsorted(profile.s_m, 50.0))  # the boundary at the edge
+    held = profile.speed_cap_mps[edge - 1]  # the segment that ends at the edge
     assert held == pytest.approx((1000.0 - 3600.0 * 0.15) / (120.0 * 3.0), rel=1e-9)
-    assert profile.binding[10] == "step" and profile.speed_mps[10] == pytest.approx(held, rel=1e-6)
+    assert profile.binding[edge] == "step" and profile.speed_mps[edge] == pytest.approx(held, rel=1e-6)
     slowest = profile.summary()["slowest_segment"]
     assert "step limit" in slowest["reason"] and slowest["top_speed_mps"] == pytest.approx(held, rel=1e-9)
+
+
+def _drop_route() -> profileopt.Route:
+    """100 m of flat ground with a 0.15 m drop at 50 m, sampled every 0.05 m."""
+    s = np.round(np.arange(0.0, 100.0001, 0.05), 10)
+    return profileopt.Route(s_m=s, z_m=np.where(s > 50.0 + 1e-9, 0.0, 0.15), source="drop")
+
+
+def _step_held_m(profile: profileopt.Profile) -> tuple[float, float, float]:
+    """Where the step limit's cap holds the plan: the first and last point of the segments
+    whose cap it sets and where the plan comes within 2 % of that cap, and their length (m)."""
+    mine = [k for k, limit in enumerate(profile.limits) if isinstance(limit, StepLimit)][0]
+    top = np.maximum(profile.speed_mps[:-1], profile.speed_mps[1:])
+    held = np.flatnonzero((profile.cap_source == mine) & (top >= 0.98 * profile.speed_cap_mps))
+    length = np.diff(profile.s_m)[held].sum()
+    return float(profile.s_m[held[0]]), float(profile.s_m[held[-1] + 1]), float(length)
+
+
+@pytest.mark.parametrize("segment_length_m", [2.5, 5.0, 10.0, 20.0])
+def test_refining_keeps_a_steps_cap_to_the_samples_around_its_ramp(segment_length_m):
+    # The drop's ramp runs from the edge at 50 m down to 50.122 m (step_caps). A segment
+    # held by the cap is cut at the last sample before the ramp (49.95 m) and the first
+    # after it (50.15 m). Where the grid has a boundary at the edge (2.5, 5 and 10 m
+    # segments), the piece that ends there must keep MIN_SAMPLES_PER_SEGMENT = 2 samples, so
+    # its cut moves out to 49.90 m; with 20 m segments (boundaries at 40 and 60 m) one piece
+    # [49.95, 50.15] m holds the ramp. So the cap holds 0.20-0.25 m wherever the grid falls;
+    # without refining it holds the whole segment that ends at the edge and the one that
+    # starts there (or the one around it).
+    from profileopt.planning.segments import MIN_SAMPLES_PER_SEGMENT
+    from profileopt.ramp_force import step_caps
+
+    route, vehicle = _drop_route(), profileopt.load_vehicle("atv-resonant")
+    caps = step_caps(route.s_m, route.z_m, vehicle)
+    assert caps.start_m.tolist() == [50.0] and 50.1 < caps.end_m[0] < 50.15
+    spacing = 0.05
+    edge_on_grid = math.isclose(50.0 / segment_length_m, round(50.0 / segment_length_m))
+    first, last, length = _step_held_m(profileopt.plan(route, vehicle, segment_length_m=segment_length_m))
+    expected_first = 50.0 - (MIN_SAMPLES_PER_SEGMENT if edge_on_grid else 1) * spacing
+    assert first == pytest.approx(expected_first, abs=1e-9)
+    assert last == pytest.approx(50.15, abs=1e-9)  # the first sample after the ramp's end
+    assert length == pytest.approx(50.15 - expected_first, abs=1e-9)
+    first, last, length = _step_held_m(profileopt.plan(route, vehicle, segment_length_m=segment_length_m,
+                                                       refine=False))
+    around = (50.0 - segment_length_m, 50.0 + segment_length_m) if edge_on_grid else (40.0, 60.0)
+    assert (first, last) == pytest.approx(around, abs=1e-9)
+
+
+def test_stretch_cuts_by_hand():
+    # Samples every 1 m from 0 to 30 m, segments [0, 10], [10, 20], [20, 30] m: segment 0
+    # holds samples 0-9, segment 1 samples 10-19, segment 2 samples 20-30.
+    from profileopt.planning.segments import segment_route, stretch_cuts
+
+    s = np.arange(0.0, 30.5, 1.0)
+    route = profileopt.Route(s_m=s, z_m=np.zeros_like(s), source="by hand")
+    seg = segment_route(route, profileopt.load_vehicle("atv"), 10.0, roughness_window_m=8.0)
+    both = np.array([True, True, True])
+    # a stretch [14.5, 15.2] inside segment 1: the last sample before it (14) and the first
+    # after it (16)
+    assert stretch_cuts(seg, s, both, np.array([14.5]), np.array([15.2])).tolist() == [14, 16]
+    # only marked segments are cut
+    assert stretch_cuts(seg, s, np.array([True, False, True]), np.array([14.5]), np.array([15.2])).size == 0
+    # a stretch [11, 18.5]: the cuts at sample 10 (segment 1's first) and 19 (a piece [19,
+    # 20] of one sample) cannot keep 2 samples a piece, and moving them away from the stretch
+    # cannot help: none
+    assert stretch_cuts(seg, s, both, np.array([11.0]), np.array([18.5])).size == 0
+    # a stretch [19.6, 20] that ends on the boundary: the cut before it at sample 19 would
+    # leave [19, 20] one sample, so it moves out to 18; the cut after it at sample 21 would
+    # leave [20, 21] one, so it moves out to 22
+    assert stretch_cuts(seg, s, both, np.array([19.6]), np.array([20.0])).tolist() == [18, 22]
+    # at the route's start there is no sample before; at its end, none after (the last
+    # segment holds the end sample 30, so [29, 30] keeps 2)
+    assert stretch_cuts(seg, s, both, np.array([0.0]), np.array([0.5])).tolist() == [2]
+    assert stretch_cuts(seg, s, both, np.array([29.5]), np.array([30.0])).tolist() == [29]
+
+
+@pytest.mark.parametrize("segment_length_m", [5.0, 20.0])
+def test_a_segment_a_steps_cap_held_is_also_cut_where_the_roughness_changes(segment_length_m):
+    # Off the drop the ground is flat (RI 0, no force cap); only the 5 m roughness windows
+    # that contain the edge (elevation changes between the samples at 50.00 and 50.05 m)
+    # are rough, and they share points with [45.00, 55.05] m only. The step's cap hid the
+    # force's cap of the segment around the edge; once refining frees the pieces off the
+    # step, they are cut where the windows' roughness changes too, so the force holds the
+    # plan only within one sample of that stretch (before, with 20 m segments, from 40 m on),
+    # and the simulated vehicle keeps both limits.
+    from profileopt.defaults import DEFAULT_ROUGHNESS_WINDOW_M
+
+    route, vehicle = _drop_route(), profileopt.load_vehicle("atv-resonant")
+    profile = profileopt.plan(route, vehicle, segment_length_m=segment_length_m)
+    spacing = 0.05
+    rough = (50.0 - DEFAULT_ROUGHNESS_WINDOW_M - spacing, 50.05 + DEFAULT_ROUGHNESS_WINDOW_M + spacing)
+    held = profile.s_m[profile.binding == "force"]
+    assert held.size and np.all((held >= rough[0]) & (held <= rough[1])), held
+    result = profileopt.verify(route, profile, vehicle)
+    assert result.windows.over_count == 0 and result.windows.worst_ratio < 1.0
 
 
 # ------------------------------------------------------- the step limit in your own MPC
@@ -267,8 +361,7 @@ def test_the_step_limit_reuses_a_routes_caps_only_for_that_route():
 
     limit = StepLimit()
     curb = profileopt.read_route(ROUTES / "curb.csv")
-    s = np.round(np.arange(0.0, 100.0001, 0.05), 10)
-    drop = profileopt.Route(s_m=s, z_m=np.where(s > 50.0 + 1e-9, 0.0, 0.15), source="drop")
+    drop = _drop_route()
     resonant, atv = profileopt.load_vehicle("atv-resonant"), profileopt.load_vehicle("atv")
     for route, vehicle, length in ((curb, resonant, 5.0), (curb, resonant, 2.5), (drop, resonant, 5.0),
                                    (drop, atv, 5.0), (curb, resonant, 5.0)):

@@ -41,8 +41,9 @@ from .path import SegmentPath, segment_path
 from .options import SolverOptions
 from .pieces import choose_cuts, cut_scores, solve_pieces
 from .result import Profile
-from .segments import (DEFAULT_ROUGHNESS_WINDOW_M, DEFAULT_SEGMENT_LENGTH_M, REFINE_AT_CAP, Segments, at_force_cap,
-                       refine_segments, roughness_source, segment_route)
+from .refine import refined_segments
+from .segments import (DEFAULT_ROUGHNESS_WINDOW_M, DEFAULT_SEGMENT_LENGTH_M, REFINE_AT_CAP, Segments, roughness_source,
+                       segment_route)
 
 if TYPE_CHECKING:
     from ..route import Route
@@ -151,8 +152,10 @@ def plan(
     refine : bool, default True (:data:`profileopt.defaults.DEFAULT_REFINE`)
         Choose the bands, then cut every segment where the minimum-time profile comes within
         :data:`REFINE_AT_CAP` of its band's top, set by the force, wherever its windows'
-        roughness changes (:func:`profileopt.planning.segments.refine_segments`), choose the
-        bands again on those segments, and solve once.
+        roughness changes (:func:`profileopt.planning.segments.refine_segments`), and every
+        segment where it comes that close to a step's cap just outside the step's ramp
+        (:func:`profileopt.planning.segments.stretch_cuts`), choose the bands again on those
+        segments, and solve once.
         A segment is held to every window that shares a point with it, so without this the
         travel time converges only to first order in ``segment_length_m``; with it, it hardly
         depends on it (README, "Choosing --segment-length"), for more segments. False plans
@@ -245,17 +248,16 @@ def plan(
         timings["choose"] = timings.get("choose", 0.0) + time.perf_counter() - t
         if not refine or refine_note:
             break
-        # the segments where the minimum-time profile meets its band's top, set by the force
-        # (not by a speed cap, which roughness does not move), cut where their windows'
-        # roughness changes (segments.refine_segments); then the bands are chosen again
+        # cut where the profile meets the force's cap and the roughness changes, or a step's
+        # cap (refine.py); then the bands are chosen again
         t = time.perf_counter()
         band_top = usable.upper_mps[np.arange(seg.count), chosen.band]
-        finer = refine_segments(seg, route.s_m, vehicle, at_force_cap(chosen.greatest_b, band_top, cap))
+        finer = refined_segments(limits, context, chosen.greatest_b, band_top, cap, cap_source)
         timings["refine"] = time.perf_counter() - t
         if finer is seg:
             break
         refine_note = (f"refined: {finer.count - seg.count} segments added where the plan meets its speed cap "
-                       f"and the roughness changes ({seg.count} -> {finer.count})")
+                       f"and the roughness changes, or meets a step's cap ({seg.count} -> {finer.count})")
         seg = finer
     if refine_note:
         notes.append(refine_note)

@@ -30,7 +30,7 @@ if TYPE_CHECKING:
 
 __all__ = ["Segments", "segment_route", "segments_at", "refine_segments", "route_roughness_windows",
            "roughness_source", "MIN_SAMPLES_PER_SEGMENT", "DEFAULT_SEGMENT_LENGTH_M", "DEFAULT_ROUGHNESS_WINDOW_M",
-           "REFINE_RI_TOLERANCE", "REFINE_AT_CAP", "at_force_cap"]
+           "REFINE_RI_TOLERANCE", "REFINE_AT_CAP", "at_force_cap", "at_cap", "stretch_cuts"]
 
 #: Samples a segment must hold: the roughness comes from the windows, but the simulator
 #: (verify) measures each segment's own samples.
@@ -280,13 +280,80 @@ def at_force_cap(greatest_b: np.ndarray, band_top_mps: np.ndarray, cap_mps: np.n
     -------
     numpy.ndarray of bool, shape (N,)
     """
+    return at_cap(greatest_b, band_top_mps) & (band_top_mps < cap_mps * (1.0 - 1e-9))
+
+
+def at_cap(greatest_b: np.ndarray, cap_mps: np.ndarray) -> np.ndarray:
+    """The segments where the minimum-time profile comes within :data:`REFINE_AT_CAP` of
+    ``cap_mps`` at either boundary.
+
+    Parameters
+    ----------
+    greatest_b : numpy.ndarray, shape (N+1,)
+        The minimum-time profile's v^2 at the boundaries (m^2/s^2).
+    cap_mps : numpy.ndarray, shape (N,)
+        A speed cap of each segment (m/s).
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (N,)
+    """
     top_b = np.maximum(greatest_b[:-1], greatest_b[1:])
-    return (top_b >= (1.0 - REFINE_AT_CAP) ** 2 * band_top_mps ** 2) & (band_top_mps < cap_mps * (1.0 - 1e-9))
+    return top_b >= (1.0 - REFINE_AT_CAP) ** 2 * np.asarray(cap_mps, dtype=float) ** 2
+
+
+def stretch_cuts(segments: Segments, positions_m: np.ndarray, marked: np.ndarray, start_m: np.ndarray,
+                 end_m: np.ndarray) -> np.ndarray:
+    """The samples at which to cut the marked segments so that only one piece of each shares a
+    point with a stretch [start_m, end_m]: the last sample before each stretch and the first
+    after it, where that sample lies inside a marked segment, moved away from the stretch as
+    far as both pieces need to keep :data:`MIN_SAMPLES_PER_SEGMENT` samples.
+
+    A cap that holds every segment sharing a point with a stretch (the step limit's, around a
+    ramp of the wheel's path) then holds that piece only, not the whole segment.
+
+    Parameters
+    ----------
+    segments : Segments
+        The route's segments.
+    positions_m : numpy.ndarray, shape (M,)
+        The route's sample positions s (m), those ``segments`` was cut from.
+    marked : numpy.ndarray of bool, shape (N,)
+        The segments that may be cut (the planner's: where the plan meets such a cap).
+    start_m, end_m : numpy.ndarray, shape (R,)
+        The stretches' ends (m), start_m <= end_m.
+
+    Returns
+    -------
+    numpy.ndarray of int, shape (C,)
+        Sample indices, increasing, for :func:`refine_segments`' ``cut_at``.
+    """
+    s = np.asarray(positions_m, dtype=float)
+    marked = np.asarray(marked, dtype=bool)
+    if marked.shape != (segments.count,):
+        raise ValueError(f"marked has shape {marked.shape}; expected ({segments.count},)")
+    first, count = segments.first_sample, segments.samples
+
+    def within(j: np.ndarray, outward: int) -> np.ndarray:
+        # the marked segment holding sample j (segment k holds samples first_k .. first_k +
+        # count_k - 1); j moved away from the stretch (outward -1: towards the start) until
+        # both pieces keep MIN_SAMPLES_PER_SEGMENT samples, dropped where that is impossible
+        j = j[(j > 0) & (j < s.size)]
+        k = np.searchsorted(first, j, side="right") - 1
+        j, k = j[k >= 0], k[k >= 0]
+        a, b = first[k], first[k] + count[k]
+        j = np.minimum(j, b - MIN_SAMPLES_PER_SEGMENT) if outward < 0 else np.maximum(j, a + MIN_SAMPLES_PER_SEGMENT)
+        return j[marked[k] & (j - a >= MIN_SAMPLES_PER_SEGMENT) & (b - j >= MIN_SAMPLES_PER_SEGMENT)]
+
+    before = np.searchsorted(s, np.asarray(start_m, dtype=float), side="left") - 1  # last s_j < start
+    after = np.searchsorted(s, np.asarray(end_m, dtype=float), side="right")  # first s_j > end
+    return np.unique(np.concatenate([within(before, -1), within(after, +1)]))
 
 
 def refine_segments(segments: Segments, positions_m: np.ndarray, vehicle: "Vehicle", marked: np.ndarray, *,
-                    tolerance: float = REFINE_RI_TOLERANCE) -> Segments:
-    """Cut the marked segments where the roughness of their windows changes.
+                    tolerance: float = REFINE_RI_TOLERANCE, cut_at: np.ndarray | None = None) -> Segments:
+    """Cut the marked segments where the roughness of their windows changes, and every
+    segment at the samples ``cut_at``.
 
     A segment's speeds are held to every window that shares a point with it, so a segment
     that reaches into a rough stretch is held to the rough stretch's speeds over its whole
@@ -310,6 +377,11 @@ def refine_segments(segments: Segments, positions_m: np.ndarray, vehicle: "Vehic
         The segments to cut (the planner marks those where its plan meets the speed cap).
     tolerance : float, default :data:`REFINE_RI_TOLERANCE`
         Relative change of the RI range that starts a new piece, > 0.
+    cut_at : numpy.ndarray of int, optional
+        Sample indices where a piece starts as well, in marked segments or not (the
+        planner's :func:`stretch_cuts`), where both pieces keep
+        :data:`MIN_SAMPLES_PER_SEGMENT` samples; a cut in a segment that is not marked does
+        not start the roughness walk there.
 
     Returns
     -------
@@ -328,8 +400,13 @@ def refine_segments(segments: Segments, positions_m: np.ndarray, vehicle: "Vehic
     least_all, largest_all = range_extremes(segments.windows.ri, first, stop)
     del first, stop
     low, high = 1.0 - tolerance, 1.0 + tolerance
+    forced = set() if cut_at is None else set(np.asarray(cut_at, dtype=np.intp).tolist())
+    walked = marked.copy()
+    if forced:
+        holder = np.searchsorted(segments.first_sample, sorted(forced), side="right") - 1
+        walked[holder[holder >= 0]] = True
     cuts: list[int] = []
-    for k in np.flatnonzero(marked):
+    for k in np.flatnonzero(walked):
         a = int(segments.first_sample[k])
         b = a + int(segments.samples[k])  # samples a .. b-1; a piece from sample j holds j .. next-1
         # one segment's values as Python floats (fast to index; the whole route's would take
@@ -337,11 +414,13 @@ def refine_segments(segments: Segments, positions_m: np.ndarray, vehicle: "Vehic
         least, largest = least_all[a:b].tolist(), largest_all[a:b].tolist()
         start = a
         base_lo, base_hi = least[0], largest[0]
+        by_roughness = bool(marked[k])
         for j in range(a + MIN_SAMPLES_PER_SEGMENT, b - MIN_SAMPLES_PER_SEGMENT + 1):
             if j - start < MIN_SAMPLES_PER_SEGMENT:
                 continue
             lo, hi = least[j - a], largest[j - a]
-            if hi > base_hi * high or hi < base_hi * low or lo > base_lo * high or lo < base_lo * low:
+            if j in forced or (by_roughness and (hi > base_hi * high or hi < base_hi * low or lo > base_lo * high
+                                                 or lo < base_lo * low)):
                 cuts.append(j)
                 start, base_lo, base_hi = j, lo, hi
     if not cuts:

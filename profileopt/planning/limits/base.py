@@ -14,7 +14,8 @@ returns ``None`` (or the neutral value) when the limit has nothing to say:
   rows of the NLP on each segment's two squared speeds (:meth:`Limit.nlp_rows`, a family
   of :data:`profileopt.planning.nlp.ROW_FAMILIES`) where the bounds above do not imply it;
 - the name of what holds the speed, for the profile's ``binding`` column
-  (:attr:`Limit.binding`, :meth:`Limit.cap_binding`);
+  (:attr:`Limit.binding`, :meth:`Limit.cap_binding`), and where along the route a cap is
+  set (:meth:`Limit.cap_stretches_m`, so that refining can keep it off the rest of a segment);
 - the independent checks: of the NLP solver's solution before it is used
   (:meth:`Limit.violation`) and of the finished profile (:meth:`Limit.check`), and its
   margins for the summary (:meth:`Limit.margins`).
@@ -144,6 +145,26 @@ class Limit:
         numpy.ndarray of str
         """
         return np.full(cap_mps.shape, self.binding, dtype=object)
+
+    def cap_stretches_m(self, context: PlanContext) -> tuple[np.ndarray, np.ndarray] | None:
+        """Where along the route this limit's cap is set, as stretches (m), or None.
+
+        A cap holds every segment that shares a point with a stretch; where the plan meets
+        it, the refine round (``plan(refine=True)``) cuts such a segment at the samples
+        just outside the stretch, so that only the piece meeting it keeps the cap. A limit
+        whose cap is a property of the whole segment (a turn's, the top speed) returns None.
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+
+        Returns
+        -------
+        (start_m, end_m) : tuple of numpy.ndarray, shape (R,), or None
+            Each stretch's ends along the route (m), start_m <= end_m.
+        """
+        return None
 
     def drive_power(self, context: PlanContext) -> "DrivePower | None":
         """The drive power limit of the forward pass, or None (at most one limit gives one).

@@ -6,7 +6,9 @@ landing after a drop, runs a steep ramp of its path that starts or ends in a kin
 bounded by :func:`profileopt.ramp_force.ramp_force_n`, which rises with speed. Every segment that
 shares a point with a ramp is capped at the speed where that bound meets the vehicle's
 ``max_transmitted_force_n`` (:func:`profileopt.ramp_force.step_caps`, which builds the
-wheel's path only where a cap can bind).
+wheel's path only where a cap can bind); where a plan meets that cap, refining cuts the
+segment just outside the ramp (:meth:`StepLimit.cap_stretches_m`), so the cap holds metres
+around a step, not the whole segment.
 """
 
 from __future__ import annotations
@@ -90,10 +92,29 @@ class StepLimit(Limit):
         -------
         numpy.ndarray
         """
+        return segment_step_caps_mps(self._caps(context), context.segments.boundaries_m)
+
+    def cap_stretches_m(self, context: PlanContext) -> tuple[np.ndarray, np.ndarray]:
+        """The ramps whose cap lies below the top speed: where each starts and ends (m).
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+
+        Returns
+        -------
+        (start_m, end_m) : tuple of numpy.ndarray, shape (R,)
+        """
+        caps = self._caps(context)
+        return caps.start_m, caps.end_m
+
+    def _caps(self, context: PlanContext) -> StepCaps:
+        """The route's :func:`step_caps`, found once per route and vehicle."""
         route, vehicle = context.route, context.vehicle
         if not (self._last and self._last[0]() is route and self._last[1] is vehicle):
             self._last[:] = [weakref.ref(route), vehicle, step_caps(route.s_m, route.z_m, vehicle)]
-        return segment_step_caps_mps(self._last[2], context.segments.boundaries_m)
+        return self._last[2]
 
     def check(self, profile: "Profile") -> float:
         """How far a speed in a segment this limit caps exceeds the cap (relative).
