@@ -47,6 +47,24 @@ def test_speed_limit_column_caps_the_profile(check_profile, atv):
     assert profile.speed_mps[profile.s_m > 255].max() <= 8.0 + 1e-9
 
 
+@pytest.mark.parametrize("refine", [True, False])
+def test_refining_keeps_a_speed_limit_to_the_samples_around_its_zone(check_profile, atv, refine):
+    # A zone of 8 m/s on the samples from 200.25 to 259.75 m (every 0.25 m), 15 m segments
+    # (boundaries at 195 and 270 m around it): a segment's cap is the least limit of its
+    # samples, so unrefined the plan is held from 195 to 270 m. Refining cuts the held
+    # segments at the last sample before the zone (200.0 m) and the first after it (260.0
+    # m): held from 200.0 to 260.0 m only, wherever the grid falls.
+    s = np.arange(0.0, 500.0 + 1e-9, 0.25)
+    route = flat_route(speed_limit=np.where((s > 200.1) & (s < 259.9), 8.0, 20.0))
+    profile = plan(route, atv, segment_length_m=15.0, refine=refine)
+    check_profile(profile, route, atv)
+    mine = [k for k, limit in enumerate(profile.limits) if limit.binding == "speed_limit"][0]
+    top = np.maximum(profile.speed_mps[:-1], profile.speed_mps[1:])
+    held = np.flatnonzero((profile.cap_source == mine) & (profile.speed_cap_mps < 20.0) & (top >= 0.98 * 8.0))
+    extent = (profile.s_m[held[0]], profile.s_m[held[-1] + 1])
+    assert extent == pytest.approx((200.0, 260.0) if refine else (195.0, 270.0), abs=1e-9)
+
+
 def test_greatest_profile_is_the_lp_optimum():
     # The greatest element of {b : b <= U, b_{j+1} - b_j <= 2 a ds, b_j - b_{j+1} <= 2 d ds}
     # maximises every positively weighted sum of b, so an LP (scipy's HiGHS) must agree.

@@ -212,30 +212,37 @@ def test_refining_keeps_a_steps_cap_to_the_samples_around_its_ramp(segment_lengt
 
 def test_stretch_cuts_by_hand():
     # Samples every 1 m from 0 to 30 m, segments [0, 10], [10, 20], [20, 30] m: segment 0
-    # holds samples 0-9, segment 1 samples 10-19, segment 2 samples 20-30.
+    # holds samples 0-9, segment 1 samples 10-19, segment 2 samples 20-30. Every segment is
+    # held at 2 m/s, and each stretch below has that cap unless said otherwise.
     from profileopt.planning.segments import segment_route, stretch_cuts
 
     s = np.arange(0.0, 30.5, 1.0)
     route = profileopt.Route(s_m=s, z_m=np.zeros_like(s), source="by hand")
     seg = segment_route(route, profileopt.load_vehicle("atv"), 10.0, roughness_window_m=8.0)
-    both = np.array([True, True, True])
+    held = np.full(3, 2.0)
+
+    def cuts(start_m, end_m, held_cap=held, cap_mps=2.0):
+        return stretch_cuts(seg, s, held_cap, np.array([start_m]), np.array([end_m]), np.array([cap_mps])).tolist()
+
     # a stretch [14.5, 15.2] inside segment 1: the last sample before it (14) and the first
     # after it (16)
-    assert stretch_cuts(seg, s, both, np.array([14.5]), np.array([15.2])).tolist() == [14, 16]
-    # only marked segments are cut
-    assert stretch_cuts(seg, s, np.array([True, False, True]), np.array([14.5]), np.array([15.2])).size == 0
+    assert cuts(14.5, 15.2) == [14, 16]
+    # only segments held at the stretch's own cap are cut: not one that is not held (NaN),
+    # nor one held at another cap (set by something else)
+    assert cuts(14.5, 15.2, held_cap=np.array([2.0, np.nan, 2.0])) == []
+    assert cuts(14.5, 15.2, cap_mps=3.0) == []
     # a stretch [11, 18.5]: the cuts at sample 10 (segment 1's first) and 19 (a piece [19,
     # 20] of one sample) cannot keep 2 samples a piece, and moving them away from the stretch
     # cannot help: none
-    assert stretch_cuts(seg, s, both, np.array([11.0]), np.array([18.5])).size == 0
+    assert cuts(11.0, 18.5) == []
     # a stretch [19.6, 20] that ends on the boundary: the cut before it at sample 19 would
     # leave [19, 20] one sample, so it moves out to 18; the cut after it at sample 21 would
     # leave [20, 21] one, so it moves out to 22
-    assert stretch_cuts(seg, s, both, np.array([19.6]), np.array([20.0])).tolist() == [18, 22]
+    assert cuts(19.6, 20.0) == [18, 22]
     # at the route's start there is no sample before; at its end, none after (the last
     # segment holds the end sample 30, so [29, 30] keeps 2)
-    assert stretch_cuts(seg, s, both, np.array([0.0]), np.array([0.5])).tolist() == [2]
-    assert stretch_cuts(seg, s, both, np.array([29.5]), np.array([30.0])).tolist() == [29]
+    assert cuts(0.0, 0.5) == [2]
+    assert cuts(29.5, 30.0) == [29]
 
 
 @pytest.mark.parametrize("segment_length_m", [5.0, 20.0])

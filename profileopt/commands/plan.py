@@ -37,8 +37,8 @@ def _arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"segment length in m, the planning resolution (default: {DEFAULT_SEGMENT_LENGTH_M:g})")
     parser.add_argument("--refine", action=argparse.BooleanOptionalAction, default=DEFAULT_REFINE,
                         help="cut the segments where the minimum-time plan meets the force's speed cap wherever "
-                             "the roughness changes, and those where it meets a step's cap just outside the "
-                             "step, then plan, so that the travel time hardly depends on "
+                             "the roughness changes, and those where it meets a step's or a speed limit's cap "
+                             "just outside the step or zone, then plan, so that the travel time hardly depends on "
                              "--segment-length (default; 1-11 times the segments, 1-6 times the plan time); "
                              "--no-refine plans on the uniform segments")
     parser.add_argument("--roughness-window", type=number_argument, default=DEFAULT_ROUGHNESS_WINDOW_M, metavar="M",

@@ -153,8 +153,8 @@ def plan(
         Choose the bands, then cut every segment where the minimum-time profile comes within
         :data:`REFINE_AT_CAP` of its band's top, set by the force, wherever its windows'
         roughness changes (:func:`profileopt.planning.segments.refine_segments`), and every
-        segment where it comes that close to a step's cap just outside the step's ramp
-        (:func:`profileopt.planning.segments.stretch_cuts`), choose the bands again on those
+        segment where it comes that close to a step's cap or a speed limit just outside the
+        step's ramp or the limit's zone (:func:`profileopt.planning.segments.stretch_cuts`), choose the bands again on those
         segments, and solve once.
         A segment is held to every window that shares a point with it, so without this the
         travel time converges only to first order in ``segment_length_m``; with it, it hardly
@@ -249,15 +249,15 @@ def plan(
         if not refine or refine_note:
             break
         # cut where the profile meets the force's cap and the roughness changes, or a step's
-        # cap (refine.py); then the bands are chosen again
+        # or a speed limit's cap (refine.py); then the bands are chosen again
         t = time.perf_counter()
         band_top = usable.upper_mps[np.arange(seg.count), chosen.band]
         finer = refined_segments(limits, context, chosen.greatest_b, band_top, cap, cap_source)
         timings["refine"] = time.perf_counter() - t
         if finer is seg:
             break
-        refine_note = (f"refined: {finer.count - seg.count} segments added where the plan meets its speed cap "
-                       f"and the roughness changes, or meets a step's cap ({seg.count} -> {finer.count})")
+        refine_note = (f"refined: {finer.count - seg.count} segments added where the plan meets the force's cap "
+                       f"and the roughness changes, or a step's or a speed limit's cap ({seg.count} -> {finer.count})")
         seg = finer
     if refine_note:
         notes.append(refine_note)

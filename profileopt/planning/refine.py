@@ -6,8 +6,8 @@ to its speeds over its whole length. After the bands are chosen once, the planne
 
 - the segments where the minimum-time profile meets its band's top, set by the force, where
   the roughness of their windows changes (:func:`.segments.refine_segments`);
-- the segments where it meets a cap set on stretches of the route (a step's,
-  :meth:`.limits.Limit.cap_stretches_m`) just outside each stretch
+- the segments where it meets a cap set on stretches of the route (a step's, a speed-limit
+  zone's; :meth:`.limits.Limit.cap_stretches_m`) just outside the stretch that sets it
   (:func:`.segments.stretch_cuts`), and where their roughness changes as well: the cap hid
   their band's top, which the pieces off the stretch meet once they are free of it;
 
@@ -52,12 +52,14 @@ def refined_segments(limits: Sequence[Limit], context: PlanContext, greatest_b: 
     """
     seg, s_m = context.segments, context.route.s_m
     at = at_cap(greatest_b, cap_mps)
-    held = np.zeros(seg.count, dtype=bool)
     cuts = []
     for k, limit in enumerate(limits):
         mine = at & (cap_source == k)
         if mine.any() and (stretches := limit.cap_stretches_m(context)) is not None:
-            cuts.append(stretch_cuts(seg, s_m, mine, *stretches))
-            held |= mine
-    marked = at_force_cap(greatest_b, band_top_mps, cap_mps) | held
-    return refine_segments(seg, s_m, context.vehicle, marked, cut_at=np.concatenate(cuts) if cuts else None)
+            cuts.append(stretch_cuts(seg, s_m, np.where(mine, cap_mps, np.nan), *stretches))
+    cut_at = np.concatenate(cuts) if cuts else np.zeros(0, dtype=np.intp)
+    # a segment cut at a stretch is walked for the roughness too (the cap hid its band top)
+    cut_segments = np.zeros(seg.count, dtype=bool)
+    cut_segments[np.searchsorted(seg.first_sample, cut_at, side="right") - 1] = True
+    marked = at_force_cap(greatest_b, band_top_mps, cap_mps) | cut_segments
+    return refine_segments(seg, s_m, context.vehicle, marked, cut_at=cut_at if cut_at.size else None)

@@ -302,15 +302,17 @@ def at_cap(greatest_b: np.ndarray, cap_mps: np.ndarray) -> np.ndarray:
     return top_b >= (1.0 - REFINE_AT_CAP) ** 2 * np.asarray(cap_mps, dtype=float) ** 2
 
 
-def stretch_cuts(segments: Segments, positions_m: np.ndarray, marked: np.ndarray, start_m: np.ndarray,
-                 end_m: np.ndarray) -> np.ndarray:
-    """The samples at which to cut the marked segments so that only one piece of each shares a
-    point with a stretch [start_m, end_m]: the last sample before each stretch and the first
-    after it, where that sample lies inside a marked segment, moved away from the stretch as
-    far as both pieces need to keep :data:`MIN_SAMPLES_PER_SEGMENT` samples.
+def stretch_cuts(segments: Segments, positions_m: np.ndarray, held_cap_mps: np.ndarray, start_m: np.ndarray,
+                 end_m: np.ndarray, cap_mps: np.ndarray) -> np.ndarray:
+    """The samples at which to cut the held segments so that only one piece of each shares a
+    point with the stretch [start_m, end_m] that sets its cap: the last sample before each
+    stretch and the first after it, where that sample lies inside a segment held at that
+    stretch's cap, moved away from the stretch as far as both pieces need to keep
+    :data:`MIN_SAMPLES_PER_SEGMENT` samples.
 
     A cap that holds every segment sharing a point with a stretch (the step limit's, around a
-    ramp of the wheel's path) then holds that piece only, not the whole segment.
+    ramp of the wheel's path; a speed-limit zone's) then holds that piece only, not the whole
+    segment.
 
     Parameters
     ----------
@@ -318,10 +320,13 @@ def stretch_cuts(segments: Segments, positions_m: np.ndarray, marked: np.ndarray
         The route's segments.
     positions_m : numpy.ndarray, shape (M,)
         The route's sample positions s (m), those ``segments`` was cut from.
-    marked : numpy.ndarray of bool, shape (N,)
-        The segments that may be cut (the planner's: where the plan meets such a cap).
+    held_cap_mps : numpy.ndarray, shape (N,)
+        The cap each segment is held at (m/s), NaN where it may not be cut (the planner's:
+        where the plan meets a cap of the limit giving the stretches).
     start_m, end_m : numpy.ndarray, shape (R,)
         The stretches' ends (m), start_m <= end_m.
+    cap_mps : numpy.ndarray, shape (R,)
+        Each stretch's cap (m/s): it cuts only segments held at that cap.
 
     Returns
     -------
@@ -329,21 +334,25 @@ def stretch_cuts(segments: Segments, positions_m: np.ndarray, marked: np.ndarray
         Sample indices, increasing, for :func:`refine_segments`' ``cut_at``.
     """
     s = np.asarray(positions_m, dtype=float)
-    marked = np.asarray(marked, dtype=bool)
-    if marked.shape != (segments.count,):
-        raise ValueError(f"marked has shape {marked.shape}; expected ({segments.count},)")
+    held_cap = np.asarray(held_cap_mps, dtype=float)
+    if held_cap.shape != (segments.count,):
+        raise ValueError(f"held_cap_mps has shape {held_cap.shape}; expected ({segments.count},)")
+    cap = np.asarray(cap_mps, dtype=float)
     first, count = segments.first_sample, segments.samples
 
     def within(j: np.ndarray, outward: int) -> np.ndarray:
-        # the marked segment holding sample j (segment k holds samples first_k .. first_k +
-        # count_k - 1); j moved away from the stretch (outward -1: towards the start) until
-        # both pieces keep MIN_SAMPLES_PER_SEGMENT samples, dropped where that is impossible
-        j = j[(j > 0) & (j < s.size)]
+        # the segment holding sample j (segment k holds samples first_k .. first_k + count_k
+        # - 1), held at the stretch's cap; j moved away from the stretch (outward -1: towards
+        # the start) until both pieces keep MIN_SAMPLES_PER_SEGMENT samples, dropped where
+        # that is impossible
+        ok = (j > 0) & (j < s.size)
+        j, c = j[ok], cap[ok]
         k = np.searchsorted(first, j, side="right") - 1
-        j, k = j[k >= 0], k[k >= 0]
+        j, c, k = j[k >= 0], c[k >= 0], k[k >= 0]
         a, b = first[k], first[k] + count[k]
         j = np.minimum(j, b - MIN_SAMPLES_PER_SEGMENT) if outward < 0 else np.maximum(j, a + MIN_SAMPLES_PER_SEGMENT)
-        return j[marked[k] & (j - a >= MIN_SAMPLES_PER_SEGMENT) & (b - j >= MIN_SAMPLES_PER_SEGMENT)]
+        sets = np.abs(held_cap[k] - c) <= 1e-12 * c  # NaN (not held) compares false
+        return j[sets & (j - a >= MIN_SAMPLES_PER_SEGMENT) & (b - j >= MIN_SAMPLES_PER_SEGMENT)]
 
     before = np.searchsorted(s, np.asarray(start_m, dtype=float), side="left") - 1  # last s_j < start
     after = np.searchsorted(s, np.asarray(end_m, dtype=float), side="right")  # first s_j > end

@@ -146,13 +146,14 @@ class Limit:
         """
         return np.full(cap_mps.shape, self.binding, dtype=object)
 
-    def cap_stretches_m(self, context: PlanContext) -> tuple[np.ndarray, np.ndarray] | None:
-        """Where along the route this limit's cap is set, as stretches (m), or None.
+    def cap_stretches_m(self, context: PlanContext) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """Where along the route this limit's cap is set, as stretches with their caps, or None.
 
         A cap holds every segment that shares a point with a stretch; where the plan meets
         it, the refine round (``plan(refine=True)``) cuts such a segment at the samples
-        just outside the stretch, so that only the piece meeting it keeps the cap. A limit
-        whose cap is a property of the whole segment (a turn's, the top speed) returns None.
+        just outside the stretch that sets its cap, so that only the piece meeting it keeps
+        the cap. A limit whose cap is a property of the whole segment (a turn's, the top
+        speed) returns None.
 
         Parameters
         ----------
@@ -161,8 +162,8 @@ class Limit:
 
         Returns
         -------
-        (start_m, end_m) : tuple of numpy.ndarray, shape (R,), or None
-            Each stretch's ends along the route (m), start_m <= end_m.
+        (start_m, end_m, cap_mps) : tuple of numpy.ndarray, shape (R,), or None
+            Each stretch's ends along the route (m), start_m <= end_m, and its cap (m/s).
         """
         return None
 

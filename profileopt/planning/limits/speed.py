@@ -1,7 +1,9 @@
 """Speed caps: the vehicle's top speed and the route's own ``speed_limit`` column.
 
 A segment's cap is the smallest of the vehicle's ``max_speed_mps`` and the route's speed
-limit at any of the segment's samples, so it holds for every speed driven inside it.
+limit at any of the segment's samples, so it holds for every speed driven inside it; where
+a plan meets a speed limit, refining cuts the segment just outside the run of samples that
+sets it (:meth:`SpeedLimit.cap_stretches_m`).
 """
 
 from __future__ import annotations
@@ -67,6 +69,28 @@ class SpeedLimit(Limit):
         if limit is not None:
             cap = np.minimum(cap, np.minimum.reduceat(limit, context.segments.first_sample))
         return cap
+
+    def cap_stretches_m(self, context: PlanContext) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """Each run of samples with one speed limit below the top speed: its first and last
+        sample (m) and that limit (m/s); None without a ``speed_limit`` column.
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+
+        Returns
+        -------
+        (start_m, end_m, cap_mps) : tuple of numpy.ndarray, shape (R,), or None
+        """
+        limit = context.route.speed_limit_mps
+        if limit is None:
+            return None
+        s = context.route.s_m
+        starts = np.concatenate([[0], np.flatnonzero(np.diff(limit) != 0) + 1])
+        stops = np.append(starts[1:], limit.size) - 1
+        low = limit[starts] < self.max_speed_mps
+        return s[starts[low]], s[stops[low]], limit[starts[low]]
 
     def check(self, profile: "Profile") -> float:
         """How far the fastest speed of any segment exceeds its cap (relative).

@@ -94,8 +94,9 @@ class StepLimit(Limit):
         """
         return segment_step_caps_mps(self._caps(context), context.segments.boundaries_m)
 
-    def cap_stretches_m(self, context: PlanContext) -> tuple[np.ndarray, np.ndarray]:
-        """The ramps whose cap lies below the top speed: where each starts and ends (m).
+    def cap_stretches_m(self, context: PlanContext) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The ramps whose cap lies below the top speed: where each starts and ends (m), and
+        its cap (m/s).
 
         Parameters
         ----------
@@ -104,10 +105,10 @@ class StepLimit(Limit):
 
         Returns
         -------
-        (start_m, end_m) : tuple of numpy.ndarray, shape (R,)
+        (start_m, end_m, cap_mps) : tuple of numpy.ndarray, shape (R,)
         """
         caps = self._caps(context)
-        return caps.start_m, caps.end_m
+        return caps.start_m, caps.end_m, caps.cap_mps
 
     def _caps(self, context: PlanContext) -> StepCaps:
         """The route's :func:`step_caps`, found once per route and vehicle."""
