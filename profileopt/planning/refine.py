@@ -57,9 +57,7 @@ def refined_segments(limits: Sequence[Limit], context: PlanContext, greatest_b: 
         mine = at & (cap_source == k)
         if mine.any() and (stretches := limit.cap_stretches_m(context)) is not None:
             cuts.append(stretch_cuts(seg, s_m, np.where(mine, cap_mps, np.nan), *stretches))
-    cut_at = np.concatenate(cuts) if cuts else np.zeros(0, dtype=np.intp)
-    # a segment cut at a stretch is walked for the roughness too (the cap hid its band top)
-    cut_segments = np.zeros(seg.count, dtype=bool)
-    cut_segments[np.searchsorted(seg.first_sample, cut_at, side="right") - 1] = True
-    marked = at_force_cap(greatest_b, band_top_mps, cap_mps) | cut_segments
-    return refine_segments(seg, s_m, context.vehicle, marked, cut_at=cut_at if cut_at.size else None)
+    # refine_segments walks a segment cut at a stretch for roughness changes too (the cap
+    # hid its band top)
+    return refine_segments(seg, s_m, context.vehicle, at_force_cap(greatest_b, band_top_mps, cap_mps),
+                           cut_at=np.concatenate(cuts) if cuts else None)

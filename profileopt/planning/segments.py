@@ -387,10 +387,9 @@ def refine_segments(segments: Segments, positions_m: np.ndarray, vehicle: "Vehic
     tolerance : float, default :data:`REFINE_RI_TOLERANCE`
         Relative change of the RI range that starts a new piece, > 0.
     cut_at : numpy.ndarray of int, optional
-        Sample indices where a piece starts as well, in marked segments or not (the
-        planner's :func:`stretch_cuts`), where both pieces keep
-        :data:`MIN_SAMPLES_PER_SEGMENT` samples; a cut in a segment that is not marked does
-        not start the roughness walk there.
+        Sample indices where a piece starts as well (the planner's :func:`stretch_cuts`),
+        where both pieces keep :data:`MIN_SAMPLES_PER_SEGMENT` samples; a segment holding one
+        is walked for roughness changes too, marked or not.
 
     Returns
     -------
@@ -410,12 +409,12 @@ def refine_segments(segments: Segments, positions_m: np.ndarray, vehicle: "Vehic
     del first, stop
     low, high = 1.0 - tolerance, 1.0 + tolerance
     forced = set() if cut_at is None else set(np.asarray(cut_at, dtype=np.intp).tolist())
-    walked = marked.copy()
-    if forced:
+    marked = marked.copy()
+    if forced:  # the segments holding a forced cut
         holder = np.searchsorted(segments.first_sample, sorted(forced), side="right") - 1
-        walked[holder[holder >= 0]] = True
+        marked[holder[holder >= 0]] = True
     cuts: list[int] = []
-    for k in np.flatnonzero(walked):
+    for k in np.flatnonzero(marked):
         a = int(segments.first_sample[k])
         b = a + int(segments.samples[k])  # samples a .. b-1; a piece from sample j holds j .. next-1
         # one segment's values as Python floats (fast to index; the whole route's would take
@@ -423,13 +422,11 @@ def refine_segments(segments: Segments, positions_m: np.ndarray, vehicle: "Vehic
         least, largest = least_all[a:b].tolist(), largest_all[a:b].tolist()
         start = a
         base_lo, base_hi = least[0], largest[0]
-        by_roughness = bool(marked[k])
         for j in range(a + MIN_SAMPLES_PER_SEGMENT, b - MIN_SAMPLES_PER_SEGMENT + 1):
             if j - start < MIN_SAMPLES_PER_SEGMENT:
                 continue
             lo, hi = least[j - a], largest[j - a]
-            if j in forced or (by_roughness and (hi > base_hi * high or hi < base_hi * low or lo > base_lo * high
-                                                 or lo < base_lo * low)):
+            if j in forced or hi > base_hi * high or hi < base_hi * low or lo > base_lo * high or lo < base_lo * low:
                 cuts.append(j)
                 start, base_lo, base_hi = j, lo, hi
     if not cuts:
