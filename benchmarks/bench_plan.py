@@ -93,21 +93,24 @@ from typing import Callable
 import numpy as np
 
 import profileopt
+from profileopt.io.profiles import write_profile
 from profileopt import load_vehicle
 from profileopt.defaults import DEFAULT_REFINE
-from profileopt.vehicle import OPTIONAL_KEYS
-from profileopt.forces import get_model
+from profileopt.core.vehicle import OPTIONAL_KEYS
+from profileopt.physics.forces import get_model
 from profileopt.io import read_profile, read_route
-from profileopt.kinematics import boundary_jerk_mps3
-from profileopt.planning import DEFAULT_SMOOTHING, Profile, SolverOptions, greatest_profile, plan, segment_route
-from profileopt.planning.limits.step import step_speed_cap_mps
-from profileopt.planning.segments import at_force_cap, refine_segments
-from profileopt.speeds import speed_bands
-from profileopt.synthetic import iso8608_sections
+from profileopt.core.kinematics import boundary_jerk_mps3
+from profileopt import Profile
+from profileopt.core.segments import segment_route
+from profileopt.planning import DEFAULT_SMOOTHING, SolverOptions, greatest_profile, plan
+from profileopt.physics.ramp_force import step_speed_cap_mps
+from profileopt.planning.refine import at_force_cap, refine_segments
+from profileopt.physics.speeds import speed_bands
+from profileopt.terrain.synthetic import iso8608_sections
 
 REPO = Path(__file__).resolve().parent.parent
 
-# As `profileopt plan` does (profileopt.cli.main): CasADi's OpenBLAS, loaded with the first
+# As `profileopt plan` does (profileopt.cli.app): CasADi's OpenBLAS, loaded with the first
 # IPOPT solver, on one thread, so the in-process rows time what the command runs.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
@@ -240,8 +243,8 @@ def _exact_b(seg, upper_b: np.ndarray, vehicle) -> np.ndarray:
 def planner_segments(route, vehicle):
     """The segments ``plan`` solves on with its default ``refine``: the route cut every
     SEGMENT_LENGTH_M, then, as the planner does, the segments where the minimum-time profile
-    meets the force's cap (:func:`profileopt.planning.segments.at_force_cap`) cut again where
-    the roughness changes (:func:`profileopt.planning.segments.refine_segments`). The peers
+    meets the force's cap (:func:`profileopt.planning.refine.at_force_cap`) cut again where
+    the roughness changes (:func:`profileopt.planning.refine.refine_segments`). The peers
     run this too, so that every solver gets the same boundaries and caps (issue 14: "the
     identical problem")."""
     seg = segment_route(route, vehicle, SEGMENT_LENGTH_M)
@@ -272,7 +275,7 @@ def violation(speed_mps: np.ndarray, accel_mps2: np.ndarray, problem: ConvexProb
     the per-boundary cap^2 (relative to v_max^2), the constant acceleration of each segment
     from the speeds at its ends against [-decel, accel], the jerk of profileopt's model
     v_j (a_j - a_{j-1}) / mean(ds) at interior boundaries
-    (:func:`profileopt.kinematics.boundary_jerk_mps3`) against the bound, force_n /
+    (:func:`profileopt.core.kinematics.boundary_jerk_mps3`) against the bound, force_n /
     force_limit_n against 1.
     """
     b = speed_mps**2
@@ -323,7 +326,7 @@ def run_plan(route_path: Path, out_path: Path, vehicle, **options) -> Run:
     """read_route -> plan -> to_csv, as ``profileopt plan route.csv -o out.csv`` does."""
     start = time.perf_counter()
     profile = plan(read_route(route_path), vehicle, segment_length_m=SEGMENT_LENGTH_M, model=MODEL, **options)
-    profile.to_csv(out_path)
+    write_profile(profile, out_path)
     wall = time.perf_counter() - start
     t = profile.timings_s
     optimiser = sum(t.get(k, 0.0) for k in ("choose", "build", "solve"))
@@ -502,7 +505,7 @@ def run_peer(route_path: Path, out_path: Path, vehicle,
                       ri=per_row(seg.ri), e_max_m=per_row(seg.e_max_m), force_n=per_row(force),
                       force_limit_n=np.full(speed.size, limit), model=MODEL,
                       status=f"{label} {code}", settings={"solver": label, "model": MODEL})
-    profile.to_csv(out_path)
+    write_profile(profile, out_path)
     wall = time.perf_counter() - start
     return Run(wall, optimiser, iterations=iterations, travel_time_s=float(time_s[-1]), status=code,
                output=out_path, speed_mps=speed, force_ratio=force / limit)

@@ -24,7 +24,7 @@ from pathlib import Path
 
 from profileopt.io.routes import read_route
 from profileopt.planning import plan
-from profileopt.vehicle import load_vehicle
+from profileopt.core.vehicle import load_vehicle
 
 ROUTES = Path(__file__).resolve().parent.parent / "examples" / "routes"
 CASES = [("trail.csv", "atv"), ("krc_rms_1in.csv", "atv"), ("krc_rms_2in.csv", "atv"), ("krc_rms_4in.csv", "atv"),

@@ -27,10 +27,10 @@ import sys
 from pathlib import Path
 
 from profileopt import InputError, load_vehicle, plan, verify
-from profileopt.assumed_roughness import AssumedRoughness
-from profileopt.ground_track import route_from_track
+from profileopt.terrain.assumed import AssumedRoughness
+from profileopt.terrain.ground_track import route_from_track
 from profileopt.io import read_terrain, read_track
-from profileopt.maps import plot_plan_map
+from profileopt.viz.maps import plot_plan_map
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_TRACK = REPO / "examples" / "geo" / "hexbin-track.gpx"

@@ -10,7 +10,7 @@ each interval of dt seconds, so the discrete model below is exact) starts from r
 tracks a cruise speed along a stretch of a bundled route. do-mpc solves a horizon of N
 intervals each step and the plant (do-mpc's simulator of the same model) applies the first
 acceleration. The force limit enters through ``set_nl_cons`` with the two helpers of
-``profileopt.constraints``:
+``profileopt.mpc.constraints``:
 
 * ``env = terrain_envelope(s, z, vehicle, reach_m=v_max * dt)``: a smooth function of the
   predicted position, never below the e_max of any roughness window an interval starting
@@ -44,7 +44,7 @@ except ImportError:
     sys.exit("mpc_dompc.py needs do-mpc, in the 'mpc' extra: pip install 'profileopt[mpc]'")
 
 from profileopt import get_model, load_vehicle  # noqa: E402
-from profileopt.constraints import (  # noqa: E402
+from profileopt.mpc.constraints import (  # noqa: E402
     force_constraints, force_limit_n, interval_force_constraints, terrain_envelope)
 from profileopt.io import read_route  # noqa: E402
 

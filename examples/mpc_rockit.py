@@ -8,7 +8,7 @@ Needs the ``mpc`` extra (``pip install 'profileopt[mpc]'``: do-mpc and rockit-me
 The fastest way from rest over a stretch of a bundled route: rockit's free-time optimal
 control problem with states position s and speed v, the acceleration a as a piecewise
 constant control, multiple shooting on N intervals (RK4 is exact for s'' = a). The force
-limit holds between the grid points through the two helpers of ``profileopt.constraints``:
+limit holds between the grid points through the two helpers of ``profileopt.mpc.constraints``:
 
 * ``env = terrain_envelope(s, z, vehicle, reach_m=REACH)``: a smooth function of the
   position, never below the e_max of any roughness window within REACH ahead; each interval
@@ -39,7 +39,7 @@ except ImportError:
     sys.exit("mpc_rockit.py needs rockit-meco, in the 'mpc' extra: pip install 'profileopt[mpc]'")
 
 from profileopt import get_model, load_vehicle  # noqa: E402
-from profileopt.constraints import (  # noqa: E402
+from profileopt.mpc.constraints import (  # noqa: E402
     force_constraints, force_limit_n, interval_force_constraints, terrain_envelope)
 from profileopt.io import read_route  # noqa: E402
 

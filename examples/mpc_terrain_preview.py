@@ -10,7 +10,7 @@ bundled route in closed loop. Every 0.25 s it solves a 4 s horizon with IPOPT th
 ``casadi.Opti`` built once (the current state is a parameter; each solve is warm-started
 from the previous one shifted by a step): track a cruise speed, respect the acceleration
 bounds, and keep the model's force within its limit against the terrain the vehicle will
-reach. Two helpers of ``profileopt.constraints`` make the limit hold between the grid
+reach. Two helpers of ``profileopt.mpc.constraints`` make the limit hold between the grid
 points: ``terrain_envelope`` (the largest e_max of every roughness window an interval
 starting at the predicted position s can reach, as a smooth function of s) and
 ``interval_force_constraints`` (every speed between an interval's two speeds admissible at
@@ -35,7 +35,7 @@ import numpy as np  # noqa: E402
 
 from profileopt import get_model, load_vehicle  # noqa: E402
 from profileopt.io import atomic_path, read_route  # noqa: E402
-from profileopt.constraints import (  # noqa: E402
+from profileopt.mpc.constraints import (  # noqa: E402
     force_limit_n, interval_force_constraints, terrain_envelope)
 from profileopt.planning import plan  # noqa: E402
 

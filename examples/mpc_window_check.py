@@ -15,7 +15,7 @@ position s(t) and speed v(t) are known exactly between the grid points. For each
 time the vehicle is inside it is found by solving s(t) = a and s(t) = a + W, the speeds
 driven then form one interval [lowest, highest] (the speeds at entry and exit and at the
 grid points in between), and the largest force over that interval is at one of its ends or
-at an interior force peak of the window's RI (``profileopt.speeds.speed_bands``, found by
+at an interior force peak of the window's RI (``profileopt.physics.speeds.speed_bands``, found by
 Newton's method on the model's own expression, independently of the controllers' helpers).
 """
 
@@ -28,10 +28,10 @@ import sys
 import numpy as np
 
 from profileopt import load_vehicle
-from profileopt.constraints import force_limit_n, force_n
+from profileopt.mpc.constraints import force_limit_n, force_n
 from profileopt.io import read_route
-from profileopt.speeds import speed_bands
-from profileopt.terrain import range_extremes, roughness_windows
+from profileopt.physics.speeds import speed_bands
+from profileopt.terrain.roughness import range_extremes, roughness_windows
 
 
 @dataclasses.dataclass(frozen=True)

@@ -11,7 +11,7 @@ import argparse
 from pathlib import Path
 
 from profileopt import load_vehicle
-from profileopt.figures import figure_1, figure_5, figure_6, write_figure
+from profileopt.viz.figures import figure_1, figure_5, figure_6, write_figure
 
 parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
 parser.add_argument("out", nargs="?", type=Path, default=Path("figures"), metavar="OUT_DIR",

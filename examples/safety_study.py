@@ -25,9 +25,9 @@ import numpy as np
 from profileopt import get_model, load_vehicle
 from profileopt.defaults import DEFAULT_REFINE
 from profileopt.io import atomic_write, read_route
-from profileopt.route import Route
-from profileopt.safety import SafetyStudy, safety_study
-from profileopt.synthetic import iso8608_profile, step
+from profileopt.core.route import Route
+from profileopt.studies.safety import SafetyStudy, safety_study
+from profileopt.terrain.synthetic import iso8608_profile, step
 
 ROUTES = Path(__file__).resolve().parent / "routes"
 COMMAND = "python examples/safety_study.py"

@@ -17,18 +17,20 @@ from .errors import InfeasibleError, InputError, PlanningError
 # Everything else is imported when first used (PEP 562), so that ``profileopt --help`` and
 # commands that need neither CasADi nor SciPy start in a fraction of a second: name -> module.
 _LAZY = {
-    "MODELS": "forces", "force_n": "forces", "get_model": "forces",
-    "SpeedBands": "speeds", "allowable_speed": "speeds", "speed_bands": "speeds",
-    "roughness_index": "terrain", "step_width": "terrain", "worst_case_elevation": "terrain",
-    "Vehicle": "vehicle", "bundled_vehicles": "vehicle", "load_vehicle": "vehicle",
-    "Route": "route",
-    "read_profile": "io", "read_route": "io",
-    "Profile": "planning", "SolverOptions": "planning", "plan": "planning", "summarize": "planning",
-    "QuarterCarRun": "simulate", "simulate_quarter_car": "simulate",
-    "wheel_envelope_m": "wheel",
-    "Verification": "verification", "verify": "verification",
-    "plot_verification": "plots",
-    "ModelRun": "study", "SafetyStudy": "safety", "compare_models": "study", "safety_study": "safety",
+    "MODELS": "physics.forces", "force_n": "physics.forces", "get_model": "physics.forces",
+    "SpeedBands": "physics.speeds", "allowable_speed": "physics.speeds", "speed_bands": "physics.speeds",
+    "wheel_envelope_m": "physics.wheel",
+    "roughness_index": "terrain.roughness", "step_width": "terrain.roughness",
+    "worst_case_elevation": "terrain.roughness",
+    "Vehicle": "core.vehicle", "bundled_vehicles": "core.vehicle", "load_vehicle": "core.vehicle",
+    "Route": "core.route", "Profile": "core.profile",
+    "read_profile": "io.profiles", "write_profile": "io.profiles", "read_route": "io.routes",
+    "SolverOptions": "planning.options", "plan": "planning.planner",
+    "QuarterCarRun": "verification.simulate", "simulate_quarter_car": "verification.simulate",
+    "Verification": "verification.verify", "verify": "verification.verify",
+    "plot_verification": "viz.plots",
+    "ModelRun": "studies.compare", "compare_models": "studies.compare",
+    "SafetyStudy": "studies.safety", "safety_study": "studies.safety",
 }
 
 
@@ -66,7 +68,7 @@ __all__ = [
     "SolverOptions",
     "plan",
     "read_profile",
-    "summarize",
+    "write_profile",
     "QuarterCarRun",
     "simulate_quarter_car",
     "wheel_envelope_m",

@@ -1,17 +1,17 @@
 """The defaults and choices the command line shows, importable without CasADi or SciPy.
 
-They are defined here once; :mod:`profileopt.forces` and :mod:`profileopt.planning` take
+They are defined here once; :mod:`profileopt.physics.forces` and :mod:`profileopt.planning` take
 them from here, so ``profileopt --help`` needs none of the numerical packages.
 """
 
 from __future__ import annotations
 
 __all__ = ["MODEL_KEYS", "DEFAULT_MODEL", "DEFAULT_SMOOTHING", "DEFAULT_SEGMENT_LENGTH_M", "DEFAULT_REFINE", "DEFAULT_ROUGHNESS_WINDOW_M",
-           "DEFAULT_PATH_TOLERANCE_M", "PLAN_BANDS", "PLAN_METHODS", "OLD_NLP_METHOD", "MAX_C_BYTES", "DEFAULT_TRACK_SPACING_M",
+           "DEFAULT_PATH_TOLERANCE_M", "PLAN_BANDS", "PLAN_METHODS", "MAX_C_BYTES", "DEFAULT_TRACK_SPACING_M",
            "DEFAULT_CORRIDOR_M", "DEFAULT_MAX_GAP_M", "MIN_POINTS_PER_BIN", "MAX_ROUGHNESS_SPACING_M",
-           "MAX_ROUGHNESS_CORRIDOR_M"]
+           "MAX_ROUGHNESS_CORRIDOR_M", "LIMIT_RTOL"]
 
-#: The four force models, in the paper's order (keys of :data:`profileopt.forces.MODELS`).
+#: The four force models, in the paper's order (keys of :data:`profileopt.physics.forces.MODELS`).
 MODEL_KEYS = ("prev_bem", "iecm", "sbem_ef", "sbem_tf")
 #: The model used when none is named: SBEM:TF, the paper's transmitted-force model.
 DEFAULT_MODEL = "sbem_tf"
@@ -30,14 +30,14 @@ DEFAULT_REFINE = True
 #: length that the RI was measured over before windows.
 DEFAULT_ROUGHNESS_WINDOW_M = 5.0
 #: How far (m) the smoothed path whose curvature limits the speed in turns may stray from a
-#: route's x, y samples (:func:`profileopt.geometry.smooth_path`): wider than the noise of a
+#: route's x, y samples (:func:`profileopt.terrain.geometry.smooth_path`): wider than the noise of a
 #: path surveyed by RTK-GNSS or LiDAR (1 cm standard deviation, about 4 cm at most over
 #: thousands of samples), well inside the path-tracking error of an off-road vehicle
 #: (decimetres), so the smoothed path is one the vehicle can follow. A consumer GPS track
 #: (metres of noise) needs a tolerance of its own noise (README, "Turns and hills").
 DEFAULT_PATH_TOLERANCE_M = 0.1
 #: Spacing (m) of the route samples taken along a track over a terrain map
-#: (:func:`profileopt.ground_track.route_from_track`): half the 0.1 m wheel radius of the
+#: (:func:`profileopt.terrain.ground_track.route_from_track`): half the 0.1 m wheel radius of the
 #: bundled vehicles. Eq. (2) saturates a step's width at the wheel radius r, so the force
 #: models see no detail narrower than r; two samples per r resolve every feature they do
 #: see (the KRC ride courses are measured at this spacing too). A vehicle with larger
@@ -70,12 +70,13 @@ PLAN_BANDS = ("all", "first", "largest")
 #: Methods of ``plan`` (``--method``): "auto" (the exact forward-backward profile where it is
 #: optimal, else the NLP) and "nlp" (always the NLP, whichever solver solves it).
 PLAN_METHODS = ("auto", "nlp")
-#: The old name of method "nlp", from when IPOPT was the NLP's only solver; accepted for one
-#: release with a deprecation warning (``plan``) or note (``--method``).
-OLD_NLP_METHOD = "ipopt"
 #: Largest C export written (bytes, estimated from
-#: :data:`profileopt.codegen.C_BYTES_PER_STAGE` before any work): 64 MB is about 2700 stages
+#: :data:`profileopt.mpc.codegen.C_BYTES_PER_STAGE` before any work): 64 MB is about 2700 stages
 #: of all four models (11 s to generate), far beyond an MPC horizon; 100,000 stages would be
 #: 2.4 GB written in minutes. Evaluate a longer horizon in pieces, or the vectorised Python
-#: Functions of :mod:`profileopt.constraints`.
+#: Functions of :mod:`profileopt.mpc.constraints`.
 MAX_C_BYTES = 64_000_000
+#: A profile keeps a limit when it exceeds it by at most this share of it: the tolerance of
+#: the planner's own check of a solution (``SolverOptions.check_rtol``) and of ``verify``'s
+#: check on paper, so a planned profile passes.
+LIMIT_RTOL = 1e-6

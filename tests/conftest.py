@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from profileopt import force_n, load_vehicle
-from profileopt.vehicle import OPTIONAL_KEYS
+from profileopt.core.vehicle import OPTIONAL_KEYS
 
 #: the repository (this file is tests/conftest.py)
 ROOT = Path(__file__).resolve().parents[1]

@@ -3,8 +3,8 @@ assumed roughness, plans made with it and verify's synthetic roughness on such r
 
 References are independent of the code under test: K against ``numpy.polyfit`` residuals of
 sampled sinusoids, E[sigma^2] against seeded realisations of
-:func:`profileopt.synthetic.iso8608_profile` measured by
-:func:`profileopt.terrain.roughness_windows` (docs/paper-notes.md, "Assumed roughness: ISO
+:func:`profileopt.terrain.synthetic.iso8608_profile` measured by
+:func:`profileopt.terrain.roughness.roughness_windows` (docs/paper-notes.md, "Assumed roughness: ISO
 8608 classes").
 """
 
@@ -16,19 +16,21 @@ import subprocess
 import numpy as np
 import pytest
 
-from profileopt.assumed_roughness import AssumedRoughness
+from profileopt.io.profiles import write_profile
+from profileopt.terrain.assumed import AssumedRoughness
 from profileopt.errors import InputError
 from profileopt.io import read_route
 from profileopt.io.routes import route_metadata_lines
-from profileopt.roughness_classes import (detrending_gain, iso8608_expected_rms_m, iso8608_expected_variance_m2,
+from profileopt.terrain.classes import (detrending_gain, iso8608_expected_rms_m, iso8608_expected_variance_m2,
                                           iso8608_ri)
-from profileopt.synthetic import ISO8608_GD0_M3, iso8608_profile, iso8608_variance_m2
-from profileopt.terrain import roughness_windows
+from profileopt.terrain.synthetic import ISO8608_GD0_M3, iso8608_profile, iso8608_variance_m2
+from profileopt.terrain.roughness import roughness_windows
 from profileopt.io import read_profile
-from profileopt.planning import plan, segment_route
-from profileopt.route import Route
-from profileopt.simulate import simulate_quarter_car
-from profileopt.verification import verify
+from profileopt.core.segments import segment_route
+from profileopt.planning import plan
+from profileopt.core.route import Route
+from profileopt.verification.simulate import simulate_quarter_car
+from profileopt.verification.verify import verify
 
 from conftest import PROFILEOPT
 
@@ -224,7 +226,7 @@ def test_plan_says_the_roughness_was_assumed(atv) -> None:
 def test_a_measured_route_says_so_and_a_read_profile_keeps_the_label(atv, tmp_path) -> None:
     assert plan(smooth_route(None), atv).summary()["roughness"] == {"source": "measured"}
     path = tmp_path / "profile.csv"
-    plan(smooth_route(AssumedRoughness(ri=0.05)), atv).to_csv(path)
+    write_profile(plan(smooth_route(AssumedRoughness(ri=0.05)), atv), path)
     assert read_profile(path).summary()["roughness"] == {"source": "assumed", "label": "RI 0.05 given"}
 
 

@@ -27,12 +27,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from profileopt.io.profiles import write_profile
 from profileopt import cli
+from profileopt.cli.messages import flags_for_parameters
 from profileopt.io import atomic_path, atomic_write
 from profileopt.errors import InfeasibleError, InputError
 from profileopt import plan, read_profile
 from profileopt.io import read_route
-from profileopt.vehicle import load_vehicle
+from profileopt.core.vehicle import load_vehicle
 
 from conftest import PROFILEOPT, ROOT
 
@@ -432,7 +434,7 @@ def test_python_api_raises_input_error_with_the_same_message(case_id: str, tmp_p
     message = str(raised.value)
     assert "\n" not in message
     # the library names its parameters (segment_length_m), the command its flags (--segment-length)
-    expected = cli.flags_for_parameters(message)
+    expected = flags_for_parameters(message)
     assert assert_one_clean_line(outcomes[case_id].done, case.argv[0], case.fragments) == expected
 
 
@@ -468,16 +470,16 @@ WRITERS = ["plan -o", "plan --plot", "verify -o", "verify --plot", "figures", "e
 
 def _write(writer: str, folder: Path) -> None:
     """What each command does to write its outputs into ``folder``."""
-    from profileopt.codegen import export_c
-    from profileopt.figures import figure_1, write_figure
-    from profileopt.plots import plot_profile
+    from profileopt.mpc.codegen import export_c
+    from profileopt.viz.figures import figure_1, write_figure
+    from profileopt.viz.plots import plot_profile
     from profileopt import plot_verification, verify
 
     vehicle = load_vehicle("atv")
     route = read_route_text(folder, SHORT_ROUTE)
     profile = plan(route, vehicle)
     if writer == "plan -o":
-        profile.to_csv(folder / "out.csv")
+        write_profile(profile, folder / "out.csv")
     elif writer == "plan --plot":
         plot_profile(profile, folder / "out.png")
     elif writer == "verify -o":
@@ -559,7 +561,7 @@ def test_profile_to_csv_failing_mid_write_leaves_no_file(tmp_path: Path, monkeyp
 
     monkeypatch.setattr(profiles, "atomic_write", filling_atomic_write)
     with pytest.raises(OSError):
-        profile.to_csv(tmp_path / "out.csv")
+        write_profile(profile, tmp_path / "out.csv")
     assert len(calls) == 3 and sorted(p.name for p in tmp_path.iterdir()) == ["route.csv"]
 
 

@@ -16,10 +16,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from profileopt.io.profiles import write_profile
 from profileopt import InputError, Route, load_vehicle, plan, read_route
-from profileopt.planning import segment_route
-from profileopt.speeds import speed_bands
-from profileopt.vehicle import PLAUSIBLE_RANGES
+from profileopt.core.segments import segment_route
+from profileopt.physics.speeds import speed_bands
+from profileopt.core.vehicle import PLAUSIBLE_RANGES
 
 from conftest import ROOT, ROUTES
 
@@ -170,7 +171,7 @@ def test_a_line_separator_inside_a_comment_stays_in_the_comment(tmp_path, separa
 def test_a_byte_order_mark_is_accepted_in_route_and_profile_files(tmp_path, atv):
     route = read_route(ROUTES / "curb.csv")
     profile = plan(route, atv)
-    profile.to_csv(tmp_path / "profile.csv")
+    write_profile(profile, tmp_path / "profile.csv")
     (tmp_path / "bom.csv").write_bytes(b"\xef\xbb\xbf" + (tmp_path / "profile.csv").read_bytes())
     from profileopt import read_profile
 

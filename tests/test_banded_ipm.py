@@ -1,4 +1,4 @@
-"""The banded interior-point solver (profileopt.planning.banded_ipm) and its use by plan().
+"""The banded interior-point solver (profileopt.planning.nlp.banded_ipm) and its use by plan().
 
 References, each independent of the solver:
 
@@ -22,10 +22,10 @@ import profileopt
 from profileopt import Route, load_vehicle, read_route
 from profileopt.errors import InputError
 from profileopt.planning import SolverOptions
-from profileopt.planning import banded_ipm
-from profileopt.planning.nlp import NlpResult
+from profileopt.planning.nlp import banded_ipm
+from profileopt.planning.nlp.problem import NlpResult
 from profileopt.planning.options import DEFAULT_IPOPT_OPTIONS
-from profileopt.synthetic import iso8608_sections
+from profileopt.terrain.synthetic import iso8608_sections
 
 from conftest import ROUTES
 from test_nlp_build import dense, random_point, random_problem, reference_functions, reference_nlp
@@ -284,7 +284,7 @@ def test_a_short_route_or_a_crawl_keeps_the_lower_of_the_two_solvers_optima(monk
     and the lower optimum is kept with a note that says by how much, on a route of up to
     CROSS_CHECK_MAX_SEGMENTS, or on a longer one whose optimum crawls (somewhere under
     CRAWL_RATIO of its start's speed); otherwise IPOPT is not run."""
-    from profileopt.planning import solve
+    from profileopt.planning.nlp import solve
 
     route, vehicle = read_route(ROUTES / "krc_rms_1in.csv"), load_vehicle("atv")
     options = dict(segment_length_m=0.5, smoothing=0.0)

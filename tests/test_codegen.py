@@ -19,8 +19,8 @@ import pytest
 
 from profileopt import load_vehicle
 from profileopt.cli import main
-from profileopt.codegen import c_functions, export_c
-from profileopt.constraints import constraint_function, force_function
+from profileopt.mpc.codegen import c_functions, export_c
+from profileopt.mpc.constraints import constraint_function, force_function
 
 CC = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
 needs_cc = pytest.mark.skipif(CC is None, reason="no C compiler (cc, gcc or clang) on PATH")
@@ -138,24 +138,6 @@ def test_output_that_is_a_file_is_refused(tmp_path: Path, capsys) -> None:
 
 
 # ------------------------------------------------------------------ one vocabulary (issue 9)
-
-def test_c_functions_positional_models_still_work_with_a_warning() -> None:
-    vehicle = load_vehicle("atv")
-    with pytest.warns(DeprecationWarning, match="pass models= by keyword"):
-        old = c_functions(vehicle, ["iecm"])
-    new = c_functions(vehicle, models=["iecm"])
-    assert [t[0] for t in old] == [t[0] for t in new]
-    assert [str(t[1]) for t in old] == [str(t[1]) for t in new]
-
-
-def test_export_c_positional_models_still_work_with_a_warning(tmp_path: Path) -> None:
-    vehicle = load_vehicle("atv")
-    with pytest.warns(DeprecationWarning, match="pass models= by keyword"):
-        old = export_c(vehicle, tmp_path / "old", ["iecm"])
-    new = export_c(vehicle, tmp_path / "new", models=["iecm"])
-    assert old.functions == new.functions
-    for name in ("source", "header", "example", "readme"):
-        assert getattr(old, name).read_bytes() == getattr(new, name).read_bytes()
 
 
 # ------------------------------------------------------------ not terrain: never admissible (issue 10)

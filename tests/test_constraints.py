@@ -1,9 +1,9 @@
-"""profileopt.constraints: forces on every kind of argument, Jacobians, and the constraints
+"""profileopt.mpc.constraints: forces on every kind of argument, Jacobians, and the constraints
 solving real horizon problems with IPOPT.
 
 References: hand calculations of the paper's equations (Wilson et al., with the errata of
 NOTES.md) for anchor values; central finite differences for derivatives; the bracketing
-Newton root finder of profileopt.speeds (an algorithm independent of IPOPT) for the optimal
+Newton root finder of profileopt.physics.speeds (an algorithm independent of IPOPT) for the optimal
 speeds of the horizon problems, which are then checked by evaluating the forces again.
 """
 
@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from profileopt import InputError, allowable_speed, load_vehicle
-from profileopt.constraints import (
+from profileopt.mpc.constraints import (
     ForceConstraints,
     add_force_constraints,
     band_edges,
@@ -337,70 +337,3 @@ def _same_constraints(old: ForceConstraints, new: ForceConstraints) -> None:
     assert (old.model, old.n_force, old.limit_n) == (new.model, new.n_force, new.limit_n)
 
 
-def test_force_constraints_old_positional_form_still_works_with_a_warning() -> None:
-    v = ca.SX.sym("v", 4)
-    ri = np.array([0.1, 0.2, 0.3])
-    with pytest.warns(DeprecationWarning, match=r"use force_constraints\(speed_mps, vehicle, ri=ri, model=model\)"):
-        old = force_constraints(v, ri, ATV, "iecm", normalised=False)
-    _same_constraints(old, force_constraints(v, ATV, ri=ri, model="iecm", normalised=False))
-
-
-def test_add_force_constraints_old_positional_form_still_works_with_a_warning() -> None:
-    opti = ca.Opti()
-    v = opti.variable(4)
-    with pytest.warns(DeprecationWarning, match=r"use add_force_constraints\(problem, speed_mps, vehicle, ri=ri"):
-        old = add_force_constraints(opti, v, None, ATV, "sbem_ef", e_max_m=0.02)
-    new = add_force_constraints(opti, v, ATV, e_max_m=0.02, model="sbem_ef")
-    _same_constraints(old, new)
-    assert opti.ng == 2 * 4
-    with pytest.warns(DeprecationWarning, match="opti= is deprecated, use problem="):
-        add_force_constraints(opti=opti, speed_mps=v, vehicle=ATV, ri=0.1)
-    assert opti.ng == 3 * 4
-
-
-def test_force_function_old_positional_form_still_works_with_a_warning() -> None:
-    with pytest.warns(DeprecationWarning, match=r"use force_function\(vehicle, model=model, terrain=terrain\)"):
-        old = force_function("sbem_ef", ATV, "e_max", n_stages=2)
-    new = force_function(ATV, model="sbem_ef", terrain="e_max", n_stages=2)
-    assert old.name() == new.name() and old.name_in() == new.name_in()
-    np.testing.assert_array_equal(np.asarray(old([3.0, 9.0], [0.02, 0.1])), np.asarray(new([3.0, 9.0], [0.02, 0.1])))
-
-
-def test_constraint_function_old_positional_form_still_works_with_a_warning() -> None:
-    with pytest.warns(DeprecationWarning, match=r"use constraint_function\(vehicle, model=model, terrain=terrain\)"):
-        old = constraint_function("iecm", ATV, normalised=False)
-    new = constraint_function(ATV, model="iecm", normalised=False)
-    assert old.name() == new.name()
-    assert float(old(5.0, 0.3)) == float(new(5.0, 0.3))
-
-
-def test_force_limit_n_old_positional_form_still_works_with_a_warning() -> None:
-    with pytest.warns(DeprecationWarning, match=r"use force_limit_n\(vehicle, model=model\)"):
-        old = force_limit_n("iecm", ATV)
-    assert old == force_limit_n(ATV, model="iecm") == 4000.0
-    assert force_limit_n(ATV) == 5000.0  # DEFAULT_MODEL: SBEM:TF, the transmitted force
-
-
-def test_band_edges_old_positional_form_still_works_with_a_warning() -> None:
-    ri = np.array([0.1, 0.3])
-    with pytest.warns(DeprecationWarning, match="pass model=, band= by keyword"):
-        old = band_edges(ri, RESONANT, "sbem_tf", "largest")
-    new = band_edges(ri, RESONANT, band="largest")
-    np.testing.assert_array_equal(old.lower_mps, new.lower_mps)
-    np.testing.assert_array_equal(old.upper_mps, new.upper_mps)
-
-
-def test_force_of_ri_is_a_deprecated_alias_of_force_n() -> None:
-    from profileopt.constraints import force_of_ri
-
-    with pytest.warns(DeprecationWarning, match=r"use force_n\(speed_mps, vehicle, ri=ri, model=model\)"):
-        old = force_of_ri("sbem_ef", 4.0, 0.3, ATV)
-    assert old == force_n(4.0, ATV, ri=0.3, model="sbem_ef")
-
-
-def test_force_of_e_max_is_a_deprecated_alias_of_force_n() -> None:
-    from profileopt.constraints import force_of_e_max
-
-    with pytest.warns(DeprecationWarning, match=r"use force_n\(speed_mps, vehicle, e_max_m=e_max_m, model=model\)"):
-        old = force_of_e_max("iecm", 4.0, 0.03, ATV)
-    assert old == force_n(4.0, ATV, e_max_m=0.03, model="iecm")

@@ -34,7 +34,7 @@ import profileopt
 #: Functions allowed to take ``**kwargs``, each with the reason.
 KWARGS_ALLOWED: dict[str, str] = {
     # dataclasses.replace underneath: a misspelt field name raises TypeError all the same.
-    "profileopt.vehicle.Vehicle.replace": "the keywords are the Vehicle's fields (dataclasses.replace)",
+    "profileopt.core.vehicle.Vehicle.replace": "the keywords are the Vehicle's fields (dataclasses.replace)",
 }
 
 #: Public functions whose docstrings do not document exactly their parameters yet; strict
@@ -126,9 +126,9 @@ def documented_parameters(doc: str | None) -> list[str] | None:
 
 
 def test_the_walk_finds_the_public_api() -> None:
-    for name in ("profileopt.forces.force_n", "profileopt.constraints.force_constraints",
-                 "profileopt.speeds.SpeedBands.largest_band_only", "profileopt.planning.planner.plan",
-                 "profileopt.terrain.roughness_index", "profileopt.codegen.export_c"):
+    for name in ("profileopt.physics.forces.force_n", "profileopt.mpc.constraints.force_constraints",
+                 "profileopt.physics.speeds.SpeedBands.largest_band_only", "profileopt.planning.planner.plan",
+                 "profileopt.terrain.roughness.roughness_index", "profileopt.mpc.codegen.export_c"):
         assert name in PUBLIC
     assert not any(name.startswith("profileopt._") for name in PUBLIC)
 

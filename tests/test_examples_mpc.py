@@ -3,9 +3,9 @@ between their grid points.
 
 The check here is independent of the examples' own (examples/mpc_window_check.py, which
 solves for the times the vehicle enters and leaves each window and takes the force's
-peaks from profileopt.speeds): it replays each logged interval at 400 instants with its
+peaks from profileopt.physics.speeds): it replays each logged interval at 400 instants with its
 constant acceleration, finds by comparison every roughness window that contains the
-position at each instant, and evaluates the model's force (profileopt.forces.force_n) at
+position at each instant, and evaluates the model's force (profileopt.physics.forces.force_n) at
 that instant's speed for each of those windows' RI. The largest ratio must be within the
 limit and must agree with the example's report (the report is exact, so it may only be
 slightly higher than this sampled one).
@@ -24,9 +24,9 @@ import numpy as np
 import pytest
 
 from profileopt import load_vehicle
-from profileopt.constraints import add_force_constraints, force_limit_n, force_n
+from profileopt.mpc.constraints import add_force_constraints, force_limit_n, force_n
 from profileopt.io import read_route
-from profileopt.terrain import roughness_windows
+from profileopt.terrain.roughness import roughness_windows
 
 from conftest import ROOT
 
@@ -179,7 +179,7 @@ def test_readme_between_the_grid_points_snippet_runs_and_prints_its_answer() -> 
 @needs_mpc_extra
 def test_add_force_constraints_works_on_a_rockit_ocp() -> None:
     """add_force_constraints takes any problem with subject_to: a rockit Ocp, minimum time
-    over 50 m from rest. The fastest speed is the allowable speed of the RI (profileopt.speeds,
+    over 50 m from rest. The fastest speed is the allowable speed of the RI (profileopt.physics.speeds,
     bracketing Newton) where that is below sqrt(2 a_max 50 m), the acceleration-limited one."""
     from rockit import FreeTime, MultipleShooting, Ocp
 

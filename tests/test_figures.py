@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from profileopt import allowable_speed, load_vehicle
-from profileopt.figures import figure_1, figure_5, figure_6, write_figure
+from profileopt.viz.figures import figure_1, figure_5, figure_6, write_figure
 
 from conftest import ROOT
 

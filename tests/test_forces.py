@@ -19,7 +19,7 @@ import scipy.signal
 import scipy.special
 
 from profileopt import MODELS, InputError, force_n, get_model, load_vehicle
-from profileopt.forces import (
+from profileopt.physics.forces import (
     base_frequency_radps,
     iecm_force_n,
     prev_bem_force_n,
@@ -248,7 +248,7 @@ def test_casadi_jacobians_match_central_differences(key, sym):
 # ------------------------------------------------------------------ one vocabulary (issue 9)
 
 def test_force_n_of_e_max_is_the_models_own_expression():
-    from profileopt.forces import DEFAULT_MODEL, FORCE_OF_E_MAX
+    from profileopt.physics.forces import DEFAULT_MODEL, FORCE_OF_E_MAX
 
     assert DEFAULT_MODEL == "sbem_tf" and set(FORCE_OF_E_MAX) == {"iecm", "sbem_ef", "sbem_tf"}
     assert force_n(V6, ATV, e_max_m=0.02) == sbem_tf_force_n(V6, 0.02, ATV)
@@ -278,8 +278,3 @@ def test_get_model_raises_input_error():
         get_model("sbem")
 
 
-def test_force_n_old_positional_form_still_works_with_a_warning():
-    ri = np.array([0.05, 0.2, 0.6])
-    with pytest.warns(DeprecationWarning, match=r"use force_n\(speed_mps, vehicle, ri=ri, model=model\)"):
-        old = force_n("iecm", 3.0, ri, RES)
-    np.testing.assert_array_equal(old, force_n(3.0, RES, ri=ri, model="iecm"))

@@ -1,4 +1,4 @@
-"""The route's turns and slopes (profileopt.geometry).
+"""The route's turns and slopes (profileopt.terrain.geometry).
 
 References, each derived here by hand, not from the module:
 
@@ -24,9 +24,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from profileopt.errors import InputError
-from profileopt.geometry import (DEFAULT_PATH_TOLERANCE_M, RouteGeometry, SmoothPath, path_grade_rad,
+from profileopt.terrain.geometry import (DEFAULT_PATH_TOLERANCE_M, RouteGeometry, SmoothPath, path_grade_rad,
                                  route_geometry, smooth_path)
-from profileopt.route import Route
+from profileopt.core.route import Route
 
 SPACING_M = 0.05
 #: |kappa| above which the bundled ATV's lateral limit (4 m/s^2) binds at 20 m/s: 4 / 20^2.

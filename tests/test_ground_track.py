@@ -1,4 +1,4 @@
-"""Routes sampled along a track over a terrain map (profileopt.ground_track, issue 12).
+"""Routes sampled along a track over a terrain map (profileopt.terrain.ground_track, issue 12).
 
 Reference values: the synthetic ground of tests/geo_data.py is a closed-form surface, so the
 ground under any sample is known exactly; the RI per roughness window comes from
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from profileopt.errors import InputError
-from profileopt.ground_track import corridor_bins, resample_polyline, route_from_track
+from profileopt.terrain.ground_track import corridor_bins, resample_polyline, route_from_track
 
 from conftest import window_ri
 from geo_data import (ARC_ANGLE_RAD, ARC_RADIUS_M, cloud_points, surface_m, track_utm_m, write_geotiff,
@@ -120,7 +120,7 @@ def test_an_unclassified_cloud_takes_a_low_quantile_and_says_so(ground: dict) ->
 
 
 def test_a_coarse_dem_is_refused_for_roughness_and_planned_with_a_class(ground: dict, tmp_path: Path) -> None:
-    from profileopt.assumed_roughness import AssumedRoughness
+    from profileopt.terrain.assumed import AssumedRoughness
 
     coarse = write_geotiff(tmp_path / "coarse.tif", cell_m=1.0)
     with pytest.raises(InputError, match=r"cells are 1 m x 1 m.*at most 0.05 m.*roughness_class"):
@@ -178,7 +178,7 @@ def test_options_are_checked() -> None:
 
 def test_a_track_alone_gives_geometry_and_grade_with_an_assumed_class() -> None:
     from profileopt.io.tracks import Track
-    from profileopt.assumed_roughness import AssumedRoughness
+    from profileopt.terrain.assumed import AssumedRoughness
 
     track = Track(x=np.array([0.0, 10.0, 20.0]), y=np.zeros(3), z_m=np.array([0.0, 1.0, 1.5]), crs=None,
                   source="t.csv", notes=())
@@ -192,7 +192,7 @@ def test_a_track_alone_gives_geometry_and_grade_with_an_assumed_class() -> None:
 def test_a_csv_tracks_speed_limit_holds_from_its_point_to_the_next(tmp_path: Path) -> None:
     from profileopt.io import read_route, read_track
     from profileopt.io.routes import write_route
-    from profileopt.assumed_roughness import AssumedRoughness
+    from profileopt.terrain.assumed import AssumedRoughness
 
     path = tmp_path / "track.csv"
     path.write_text("x_m,y_m,z_m,speed_limit_mps\n0,0,0,5\n10,0,0,3\n20,0,0,4\n")
@@ -222,7 +222,7 @@ def test_a_sliver_at_the_end_moves_the_last_sample_and_huge_counts_are_refused()
 
 
 def test_roughness_is_measured_only_at_wheel_scale(ground: dict) -> None:
-    from profileopt.assumed_roughness import AssumedRoughness
+    from profileopt.terrain.assumed import AssumedRoughness
 
     # the dense cloud measures roughness at 0.05 m in a 0.15 m corridor (above); not so at 0.5 m
     # spacing or in a 1 m corridor, whatever its density (defaults.MAX_ROUGHNESS_*)
@@ -239,7 +239,7 @@ def test_roughness_is_measured_only_at_wheel_scale(ground: dict) -> None:
 
 
 def test_a_sparse_unclassified_cloud_is_refused_even_with_a_class(tmp_path: Path) -> None:
-    from profileopt.assumed_roughness import AssumedRoughness
+    from profileopt.terrain.assumed import AssumedRoughness
     from profileopt.io import read_terrain, read_track
 
     x, y, z, classes = cloud_points(seed=4, density_per_m2=20.0)
@@ -267,7 +267,7 @@ def test_a_gap_at_an_end_is_held_flat_up_to_max_gap(tmp_path: Path) -> None:
 
 
 def test_a_label_reads_back_as_the_assumed_roughness() -> None:
-    from profileopt.assumed_roughness import AssumedRoughness
+    from profileopt.terrain.assumed import AssumedRoughness
 
     for assumed in (AssumedRoughness(road_class="E"), AssumedRoughness(ri=0.012345678901234)):
         assert AssumedRoughness.from_label(assumed.label.replace(" ", "_")) == assumed

@@ -1,4 +1,4 @@
-"""profileopt.horizon: the terrain envelope and the interval force constraints, against
+"""profileopt.mpc.horizon: the terrain envelope and the interval force constraints, against
 brute force.
 
 References, each computed here independently of the helper under test:
@@ -7,7 +7,7 @@ References, each computed here independently of the helper under test:
   roughness window whose stretch [a, a + W] shares a point with [x, x + reach], found by
   comparing every window with every position (no search, no sparse table);
 * the largest force over an interval of speeds and a range of elevations: the model's
-  force (profileopt.forces.force_n, checked against hand calculations in
+  force (profileopt.physics.forces.force_n, checked against hand calculations in
   test_constraints.py) on a dense grid of speeds x elevations;
 * the peak of phi(r) = r^2 T(r) (T the force transmissibility of Eq. 13, Inman section
   2.4, written out by hand below): a dense numerical maximisation, against the root of the
@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 from profileopt import InputError, load_vehicle
-from profileopt.constraints import (
+from profileopt.mpc.constraints import (
     ForceConstraints,
     add_force_constraints,
     force_n,
@@ -32,7 +32,7 @@ from profileopt.constraints import (
     terrain_envelope,
 )
 from profileopt.io import read_route
-from profileopt.terrain import roughness_windows
+from profileopt.terrain.roughness import roughness_windows
 
 from conftest import ROUTES
 

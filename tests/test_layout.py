@@ -54,8 +54,8 @@ def test_examples_use_only_public_names(path: Path) -> None:
 
 def test_the_check_finds_a_private_import(tmp_path: Path) -> None:
     bad = tmp_path / "bad.py"
-    bad.write_text("from .terrain import _check_ri\nfrom profileopt.forces import _of_e_max\n", encoding="utf-8")
-    assert _private_imports(bad) == ["terrain._check_ri", "profileopt.forces._of_e_max"]
+    bad.write_text("from .terrain import _check_ri\nfrom profileopt.physics.forces import _of_e_max\n", encoding="utf-8")
+    assert _private_imports(bad) == ["terrain._check_ri", "profileopt.physics.forces._of_e_max"]
 
 
 def test_help_and_version_import_no_numerical_package() -> None:
@@ -69,7 +69,7 @@ def test_help_and_version_import_no_numerical_package() -> None:
     probe = ("import sys\nfrom profileopt.cli import main\n"
              "for argv in (['--help'], ['--version'], ['plan', '--help'], ['verify', '--help'], ['export-c', '--help']):\n"
              "    try:\n        main(argv)\n    except SystemExit:\n        pass\n"
-             "print(sorted(m for m in ('casadi', 'scipy', 'matplotlib', 'numpy', 'profileopt.vehicle', 'profileopt.io.atomic')\n"
+             "print(sorted(m for m in ('casadi', 'scipy', 'matplotlib', 'numpy', 'profileopt.core.vehicle', 'profileopt.io.atomic')\n"
              "             if m in sys.modules), file=sys.stderr)\n")
     done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr

@@ -1,4 +1,4 @@
-"""profileopt.motion_constraints: the lateral, friction and power rows against closed forms,
+"""profileopt.mpc.motion_constraints: the lateral, friction and power rows against closed forms,
 solved by IPOPT, on every kind of argument, with exact derivatives and clear input errors.
 
 References (closed forms, each cited next to its use): the lateral speed limit on an arc,
@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from profileopt import InputError, load_vehicle
-from profileopt.constraints import force_constraints
-from profileopt.motion_constraints import (
+from profileopt.mpc.constraints import force_constraints
+from profileopt.mpc.motion_constraints import (
     MotionConstraints,
     friction_constraints,
     lateral_constraints,
@@ -297,7 +297,7 @@ def test_all_limits_together_with_force_constraints_in_opti() -> None:
 
 
 def test_constraints_module_re_exports_the_three() -> None:
-    import profileopt.constraints as constraints
+    import profileopt.mpc.constraints as constraints
 
     assert constraints.lateral_constraints is lateral_constraints
     assert constraints.friction_constraints is friction_constraints

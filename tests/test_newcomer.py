@@ -88,7 +88,7 @@ def test_example_refuses_an_unknown_option_and_writes_nothing(tmp_path: Path, sc
 @needs_cc
 @pytest.mark.parametrize("vehicle, n_stages", [("atv", 1), ("atv-resonant", 3)])
 def test_generated_c_compiles_without_warnings(tmp_path: Path, vehicle: str, n_stages: int) -> None:
-    from profileopt.codegen import export_c
+    from profileopt.mpc.codegen import export_c
 
     out = export_c(load_vehicle(vehicle), tmp_path / "c", n_stages=n_stages)
     for source in (out.source, out.example):
@@ -124,7 +124,7 @@ def test_readme_cc_line_works_from_the_repository_folder(tmp_path: Path) -> None
 def test_force_constraints_with_e_max_and_vehicle_by_keyword(atv) -> None:
     import casadi as ca
 
-    from profileopt.constraints import force_constraints
+    from profileopt.mpc.constraints import force_constraints
 
     v = ca.SX.sym("v", 4)
     g, lbg, ubg = force_constraints(v, e_max_m=0.05, vehicle=atv)
@@ -134,7 +134,7 @@ def test_force_constraints_with_e_max_and_vehicle_by_keyword(atv) -> None:
 def test_force_constraints_converts_to_a_dict(atv) -> None:
     import casadi as ca
 
-    from profileopt.constraints import force_constraints
+    from profileopt.mpc.constraints import force_constraints
 
     v = ca.SX.sym("v", 3)
     cons = force_constraints(v, atv, ri=0.2)
@@ -149,7 +149,7 @@ def test_force_constraints_converts_to_a_dict(atv) -> None:
 
 
 def test_plain_jacobian_is_public_and_takes_the_inputs_of_the_function(atv) -> None:
-    from profileopt.constraints import force_function, jacobian_function
+    from profileopt.mpc.constraints import force_function, jacobian_function
 
     fn = force_function(atv, n_stages=2)
     jac = jacobian_function(fn)
@@ -160,7 +160,7 @@ def test_plain_jacobian_is_public_and_takes_the_inputs_of_the_function(atv) -> N
 
 
 def test_function_docs_hold_no_absolute_path(atv, tmp_path: Path) -> None:
-    from profileopt.constraints import constraint_function, force_function
+    from profileopt.mpc.constraints import constraint_function, force_function
 
     own = tmp_path / "my_quad.toml"
     shutil.copyfile(ROOT / "models" / "atv.toml", own)
@@ -248,7 +248,7 @@ def _lines(ax) -> dict[str, object]:
 
 
 def test_plan_plot_names_route_and_vehicle_and_shows_the_speed_cap(curb_profile) -> None:
-    from profileopt.plots import profile_figure
+    from profileopt.viz.plots import profile_figure
 
     fig = profile_figure(curb_profile, route="curb.csv", vehicle="atv")
     ax = fig.axes[0]
@@ -271,7 +271,7 @@ def test_plan_plot_names_route_and_vehicle_and_shows_the_speed_cap(curb_profile)
 def test_plan_plot_draws_no_line_under_another(curb_profile) -> None:
     """Lines that can coincide (largest under first, either under the planned speed) are
     drawn wider underneath, so each stays visible around the one on top."""
-    from profileopt.plots import profile_figure
+    from profileopt.viz.plots import profile_figure
 
     fig = profile_figure(curb_profile)
     lines = _lines(fig.axes[0])
@@ -287,7 +287,7 @@ def test_plan_plot_draws_no_line_under_another(curb_profile) -> None:
 
 def test_verification_plot_legends_sit_outside_the_data(tmp_path: Path) -> None:
     from profileopt import verify
-    from profileopt.plots import verification_figure
+    from profileopt.viz.plots import verification_figure
 
     route = read_route(ROUTES / "curb.csv")
     vehicle = load_vehicle("atv")
@@ -305,7 +305,7 @@ def test_verification_plot_legends_sit_outside_the_data(tmp_path: Path) -> None:
 
 
 def test_figure_5_legend_cites_no_repository_file() -> None:
-    from profileopt.figures import figure_5
+    from profileopt.viz.figures import figure_5
 
     data = figure_5(load_vehicle("atv"))
     for curve in data.curves:

@@ -1,7 +1,7 @@
-"""The fast NLP builder (profileopt.planning.nlp) against an independently written reference.
+"""The fast NLP builder (profileopt.planning.nlp.problem) against an independently written reference.
 
 The reference below is the planner's NLP written straight from its definition (issue 3 and
-the docstring of ``profileopt.planning.nlp.build_nlp``) as one SX expression over all segments, the
+the docstring of ``profileopt.planning.nlp.problem.build_nlp``) as one SX expression over all segments, the
 way it was built before: y = b / b_ref at the N+1 boundaries, v = sqrt(b + eps^2),
 a_i = (b_{i+1} - b_i) / (2 ds_i), travel time sum 2 ds_i / (v_i + v_{i+1}), smoothing
 sum v_j (a_j - a_{j-1})^2 / dsm_j, jerk v_j (a_j - a_{j-1}) / dsm_j. Its derivatives come
@@ -17,7 +17,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from profileopt.planning import nlp as _nlp
+from profileopt.planning.nlp import problem as _nlp
 from profileopt.planning.options import DEFAULT_IPOPT_OPTIONS
 
 EPS_MPS = 1e-3  # the speed that keeps sqrt(b) smooth at rest (NOTES: planner NLP)

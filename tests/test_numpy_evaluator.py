@@ -16,9 +16,11 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from profileopt import forces, speeds, symbolic as _casadi, terrain
-from profileopt.forces import MODELS
-from profileopt.vehicle import load_vehicle
+from profileopt.core import symbolic as _casadi
+from profileopt.physics import forces, speeds
+from profileopt.terrain import roughness as terrain
+from profileopt.physics.forces import MODELS
+from profileopt.core.vehicle import load_vehicle
 
 VEHICLES = ("atv", "atv-resonant")
 SPECIAL = np.array([0.0, -0.0, 1.0, -1.0, 0.5, 2.0, 1e-300, -1e300, np.inf, -np.inf, np.nan])

@@ -143,7 +143,8 @@ def test_a_failing_second_output_leaves_the_first_untouched(folder: Path, monkey
                                                            capsys: pytest.CaptureFixture) -> None:
     """The disk fills up while the plot is written: the profile written just before it must
     not have replaced the earlier one (the pair would no longer match)."""
-    from profileopt import cli, plots
+    from profileopt import cli
+    from profileopt.viz import plots
 
     def disk_full(profile, path, **labels):  # noqa: ANN001, ANN202  (route=, vehicle= for the title)
         with plots.atomic_path(path) as tmp:
@@ -262,9 +263,13 @@ def test_a_name_too_long_is_one_line(folder: Path) -> None:
 SLOW_WRITER = textwrap.dedent("""
     import sys, time
     from profileopt import cli
+    from profileopt.cli.registry import COMMANDS
     from profileopt.io import atomic_write
 
-    def slow(args):
+    def arguments(parser):
+        parser.add_argument("path")
+
+    def run(args):
         with atomic_write(args.path) as handle:
             handle.write("half a file\\n")
             handle.flush()
@@ -272,7 +277,7 @@ SLOW_WRITER = textwrap.dedent("""
             time.sleep(60)
         return 0
 
-    cli.command("slow-write", "test", lambda p: p.add_argument("path"))(slow)
+    COMMANDS["slow-write"] = ("__main__", "test")
     sys.exit(cli.main(["slow-write", sys.argv[1]]))
 """)
 

@@ -1,4 +1,4 @@
-"""Solving a long route's NLP in pieces (profileopt.planning.pieces).
+"""Solving a long route's NLP in pieces (profileopt.planning.nlp.pieces).
 
 The reference for every piecewise profile is the same NLP solved whole by IPOPT (an
 independent computation: one KKT system over all segments, no cuts, no padding), and every
@@ -15,9 +15,10 @@ import pytest
 
 import profileopt
 from profileopt import Route, load_vehicle, read_route
-from profileopt.planning import SolverOptions, nlp, planner
-from profileopt.planning import pieces as _pieces
-from profileopt.synthetic import iso8608_sections
+from profileopt.planning import SolverOptions, planner
+from profileopt.planning.nlp import pieces as _pieces
+from profileopt.planning.nlp import problem as nlp
+from profileopt.terrain.synthetic import iso8608_sections
 
 from conftest import ROUTES
 

@@ -16,8 +16,11 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
+from profileopt.io.profiles import write_profile
 from profileopt import InfeasibleError, InputError, Route, load_vehicle, read_profile, read_route
-from profileopt.planning import PROFILE_COLUMNS, greatest_profile, plan, planner, segment_route
+from profileopt.core.profile import PROFILE_COLUMNS
+from profileopt.core.segments import segment_route
+from profileopt.planning import greatest_profile, plan, planner
 
 from conftest import PROFILEOPT, ROUTES
 
@@ -99,26 +102,6 @@ def test_pure_minimum_time_nlp_matches_the_exact_optimum(check_profile, name, ve
     assert nlp.travel_time_s >= exact.travel_time_s * (1 - 1e-9)  # nothing beats the optimum
     for profile in (exact, nlp):
         check_profile(profile, route, vehicle, jerk=math.inf)
-
-
-def test_method_ipopt_is_the_old_name_of_nlp(tmp_path) -> None:
-    """method="ipopt" (from when IPOPT was the NLP's only solver) still works for one release:
-    the same plan as method="nlp", with a DeprecationWarning from plan() and a note from the
-    command line, and the profile records method=nlp."""
-    route, vehicle = read_route(ROUTES / "curb.csv"), load_vehicle("atv")
-    options = dict(smoothing=0.0, max_jerk_mps3=math.inf)
-    nlp = plan(route, vehicle, method="nlp", **options)
-    with pytest.warns(DeprecationWarning, match=r"method='ipopt'\) is deprecated; use plan\(method='nlp'\)"):
-        old = plan(route, vehicle, method="ipopt", **options)
-    assert nlp.status == old.status == "optimal" and old.settings["method"] == "nlp"
-    np.testing.assert_array_equal(old.speed_mps, nlp.speed_mps)
-    with pytest.raises(InputError, match=r"method = 'IPOPT': choose 'auto' or 'nlp'"):
-        plan(route, vehicle, method="IPOPT")
-    run = subprocess.run([*PROFILEOPT, "plan", str(ROUTES / "curb.csv"), "--method", "ipopt", "--smoothing", "0",
-                          "--max-jerk", "inf", "-o", str(tmp_path / "old.csv")], capture_output=True, text=True)
-    assert run.returncode == 0, run.stderr
-    assert "profileopt plan: note: --method ipopt is deprecated; use --method nlp" in run.stderr
-    np.testing.assert_array_equal(read_profile(tmp_path / "old.csv").speed_mps, nlp.speed_mps)
 
 
 @pytest.mark.parametrize("name,vehicle_name", [("trail.csv", "atv"), ("curb.csv", "atv"),
@@ -217,7 +200,7 @@ def test_profile_csv_round_trip(tmp_path, atv_resonant):
     route = read_route(ROUTES / "washboard.csv")
     profile = plan(route, atv_resonant, model="sbem_ef")
     path = tmp_path / "p.csv"
-    profile.to_csv(path)
+    write_profile(profile, path)
     lines = path.read_text().splitlines()
     assert lines[0].startswith("# profileopt profile:") and "model=sbem_ef" in lines[0]
     assert lines[1] == ",".join(PROFILE_COLUMNS)

@@ -5,13 +5,13 @@ and random valid vehicles, every plan satisfies every constraint under a check w
 independently of the planner:
 
 - the segment boundaries cover the route, and each segment's RI, recomputed from the route
-  samples s_i <= s < s_{i+1} with :func:`profileopt.terrain.roughness_index`, is the one the
+  samples s_i <= s < s_{i+1} with :func:`profileopt.terrain.roughness.roughness_index`, is the one the
   profile reports;
 - speeds lie in [0, v_max], and at every route sample the speed, from v(s)^2 linear in s
   between boundaries (constant acceleration), is within that sample's speed_limit;
 - accelerations (v_{i+1}^2 - v_i^2) / (2 ds_i) lie in [-max_decel, max_accel];
 - the jerk v da/ds = v_j (a_j - a_{j-1}) / ((ds_{j-1} + ds_j) / 2) is within the bound;
-- the model's force (:mod:`profileopt.forces`), evaluated over the speeds each segment passes
+- the model's force (:mod:`profileopt.physics.forces`), evaluated over the speeds each segment passes
   through (a fine grid between its two boundary speeds, refined twice around the largest
   value, plus both ends), is within the limit (relative tolerance 1e-6), and the profile's
   reported force_n is not below it;
@@ -37,16 +37,17 @@ import pytest
 from hypothesis import HealthCheck, assume, event, given, settings
 from hypothesis import strategies as st
 
-from profileopt import synthetic
+from profileopt.terrain import synthetic
 from profileopt.errors import InfeasibleError
-from profileopt.speeds import allowable_speed
-from profileopt.forces import MODELS, get_model
-from profileopt.planning import MIN_SAMPLES_PER_SEGMENT, plan, segment_route
-from profileopt.route import Route
-from profileopt.terrain import MIN_SAMPLES_PER_WINDOW, segment_roughness_index
-from profileopt.vehicle import OPTIONAL_KEYS
+from profileopt.physics.speeds import allowable_speed
+from profileopt.physics.forces import MODELS, get_model
+from profileopt.core.segments import MIN_SAMPLES_PER_SEGMENT, segment_route
+from profileopt.planning import plan
+from profileopt.core.route import Route
+from profileopt.terrain.roughness import MIN_SAMPLES_PER_WINDOW, segment_roughness_index
+from profileopt.core.vehicle import OPTIONAL_KEYS
 from conftest import G, check_turns_and_hills, grade_direct, window_ri, window_speeds
-from profileopt.vehicle import Vehicle, load_vehicle
+from profileopt.core.vehicle import Vehicle, load_vehicle
 
 RTOL = 1e-6
 # PROFILEOPT_EXAMPLES=2000 for a long hunt; the suite runs 30 per property (a few seconds)

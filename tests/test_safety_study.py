@@ -1,4 +1,4 @@
-"""The safety study (profileopt.safety, examples/safety_study.py) on its fixed, seeded route set.
+"""The safety study (profileopt.studies.safety, examples/safety_study.py) on its fixed, seeded route set.
 
 The study is run once for the module (about 2 minutes on 2 cores: 14 routes, each also
 shifted by 1/4, 1/2 and 3/4 of a segment, so 112 route-vehicle pairs, four models each).
@@ -23,9 +23,9 @@ import numpy as np
 import pytest
 
 from profileopt import force_n, get_model, load_vehicle
-from profileopt.safety import SafetyStudy
-from profileopt.study import INFEASIBLE
-from profileopt.terrain import roughness_windows
+from profileopt.studies.safety import SafetyStudy
+from profileopt.studies.compare import INFEASIBLE
+from profileopt.terrain.roughness import roughness_windows
 
 from conftest import ROOT
 

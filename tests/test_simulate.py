@@ -37,18 +37,18 @@ import numpy as np
 import pytest
 
 from profileopt.errors import InputError
-from profileopt.forces import sbem_ef_force_n, sbem_tf_force_n
-from profileopt.simulate import boundary_times_s, position_at_time, simulate_quarter_car
-from profileopt.wheel import wheel_envelope_m
-from profileopt.terrain import step_width
-from profileopt.vehicle import load_vehicle
+from profileopt.physics.forces import sbem_ef_force_n, sbem_tf_force_n
+from profileopt.verification.simulate import boundary_times_s, position_at_time, simulate_quarter_car
+from profileopt.physics.wheel import wheel_envelope_m
+from profileopt.terrain.roughness import step_width
+from profileopt.core.vehicle import load_vehicle
 
 ATV = load_vehicle("atv")  # wn = 3 rad/s, zeta = 0.5, r = 0.1 m
 RESONANT = load_vehicle("atv-resonant")  # wn = 6 rad/s, zeta = 0.1
 
 
 def inman_transmitted_n(y_m: float, w_radps: float, vehicle) -> float:
-    """Inman section 2.4, written here from the textbook (not via profileopt.forces)."""
+    """Inman section 2.4, written here from the textbook (not via profileopt.physics.forces)."""
     k = vehicle.quarter_mass_kg * vehicle.natural_frequency_radps**2
     zeta = vehicle.damping_ratio
     r = w_radps / vehicle.natural_frequency_radps

@@ -1,7 +1,7 @@
 """The simulator against a from-scratch simulation of the same wheel, and its convergence.
 
 The reference is written here from the definitions alone, sharing no code with
-profileopt.simulate or profileopt.wheel_path:
+profileopt.verification.simulate or profileopt.physics.wheel_path:
 
 * the wheel's path, pointwise: the centre of a wheel of radius r above s stands on the
   highest of the circles of radius r about the points of the polyline within r of s. On
@@ -27,8 +27,8 @@ import pytest
 import scipy.integrate
 
 from profileopt.io import read_route
-from profileopt.simulate import MAX_ARC_STEP_RAD, simulate_quarter_car
-from profileopt.vehicle import load_vehicle
+from profileopt.verification.simulate import MAX_ARC_STEP_RAD, simulate_quarter_car
+from profileopt.core.vehicle import load_vehicle
 
 from conftest import ROUTES
 

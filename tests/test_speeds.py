@@ -10,8 +10,8 @@ import pytest
 import scipy.special
 
 from profileopt import MODELS, InputError, allowable_speed, force_n, get_model, load_vehicle, speed_bands
-from profileopt.speeds import BAND_CHOICES, speed_bands_reusing
-from profileopt.figures import PAPER_AMPLITUDES_M, TERRAIN_FREQUENCY_CPM, sinusoid_terrain
+from profileopt.physics.speeds import BAND_CHOICES, speed_bands_reusing
+from profileopt.viz.figures import PAPER_AMPLITUDES_M, TERRAIN_FREQUENCY_CPM, sinusoid_terrain
 
 ATV = load_vehicle("atv")
 RES = load_vehicle("atv-resonant")
@@ -257,27 +257,6 @@ def test_largest_band_only_keeps_the_top_band():
     np.testing.assert_array_equal(bands.first_band_only().first(), bands.first())
 
 
-def test_speed_bands_positional_model_still_works_with_a_warning():
-    ri = np.array([0.1, 0.3])
-    with pytest.warns(DeprecationWarning, match="pass model= by keyword"):
-        old = speed_bands(ri, RES, "sbem_ef")
-    new = speed_bands(ri, RES, model="sbem_ef")
-    for name in ("lower_mps", "upper_mps", "count", "peaks_mps"):
-        np.testing.assert_array_equal(getattr(old, name), getattr(new, name))
-
-
-def test_allowable_speed_positional_model_and_semantics_still_work_with_a_warning():
-    with pytest.warns(DeprecationWarning, match="pass model=, band= by keyword"):
-        old = allowable_speed(FIG_RI, RES, "sbem_tf", "largest")
-    np.testing.assert_array_equal(old, allowable_speed(FIG_RI, RES, model="sbem_tf", band="largest"))
-
-
-def test_allowable_speed_semantics_keyword_still_works_with_a_warning():
-    with pytest.warns(DeprecationWarning, match="semantics= is deprecated, use band="):
-        old = allowable_speed(FIG_RI, RES, semantics="largest")
-    np.testing.assert_array_equal(old, allowable_speed(FIG_RI, RES, band="largest"))
-
-
 # ------------------------------------------------------------ each distinct terrain value once
 
 def _row(bands, k):
@@ -310,7 +289,7 @@ def test_speed_bands_reusing_gives_each_row_what_it_gives_alone(vehicle, model):
 
 
 def test_speed_bands_reusing_finds_only_values_it_has_not_seen(monkeypatch):
-    import profileopt.speeds as speeds
+    import profileopt.physics.speeds as speeds
 
     again = np.array([0.4, 0.5, 0.1, 0.5])
     reference = speed_bands(again, RES, ri_min=0.5 * again)  # before counting

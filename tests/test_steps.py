@@ -9,13 +9,13 @@ import pytest
 from scipy import signal
 
 import profileopt
-from profileopt.ramp_force import impulse_response_peak_s, ramp_force_n, ramp_speed_cap_mps
-from profileopt.constraints import step_speed_envelope
+from profileopt.physics.ramp_force import impulse_response_peak_s, ramp_force_n, ramp_speed_cap_mps
+from profileopt.mpc.constraints import step_speed_envelope
 from profileopt.planning.limits import StepLimit, default_limits
-from profileopt.planning.limits.step import step_speed_cap_mps
-from profileopt.ramps import wheel_ramps
-from profileopt.simulate import simulate_quarter_car
-from profileopt.wheel_path import wheel_path
+from profileopt.physics.ramp_force import step_speed_cap_mps
+from profileopt.physics.ramps import wheel_ramps
+from profileopt.verification.simulate import simulate_quarter_car
+from profileopt.physics.wheel_path import wheel_path
 
 from conftest import ROUTES
 
@@ -191,8 +191,8 @@ def test_refining_keeps_a_steps_cap_to_the_samples_around_its_ramp(segment_lengt
     # [49.95, 50.15] m holds the ramp. So the cap holds 0.20-0.25 m wherever the grid falls;
     # without refining it holds the whole segment that ends at the edge and the one that
     # starts there (or the one around it).
-    from profileopt.planning.segments import MIN_SAMPLES_PER_SEGMENT
-    from profileopt.ramp_force import step_caps
+    from profileopt.core.segments import MIN_SAMPLES_PER_SEGMENT
+    from profileopt.physics.ramp_force import step_caps
 
     route, vehicle = _drop_route(), profileopt.load_vehicle("atv-resonant")
     caps = step_caps(route.s_m, route.z_m, vehicle)
@@ -214,7 +214,8 @@ def test_stretch_cuts_by_hand():
     # Samples every 1 m from 0 to 30 m, segments [0, 10], [10, 20], [20, 30] m: segment 0
     # holds samples 0-9, segment 1 samples 10-19, segment 2 samples 20-30. Every segment is
     # held at 2 m/s, and each stretch below has that cap unless said otherwise.
-    from profileopt.planning.segments import segment_route, stretch_cuts
+    from profileopt.core.segments import segment_route
+    from profileopt.planning.refine import stretch_cuts
 
     s = np.arange(0.0, 30.5, 1.0)
     route = profileopt.Route(s_m=s, z_m=np.zeros_like(s), source="by hand")
@@ -363,7 +364,7 @@ def test_an_opti_problem_keeps_the_step_limit_over_the_curb_drop():
 def test_the_step_limit_reuses_a_routes_caps_only_for_that_route():
     # A refined plan asks the limit twice on one route; the limit keeps the route's caps
     # between the calls, and must not hand them to another route or vehicle.
-    from profileopt.planning import segment_route
+    from profileopt.core.segments import segment_route
     from profileopt.planning.limits import PlanContext
 
     limit = StepLimit()

@@ -19,7 +19,7 @@ from scipy.signal import welch
 from profileopt import load_vehicle, speed_bands
 from profileopt.errors import InputError
 from profileopt.io import read_opencrg, read_xy_profile
-from profileopt.synthetic import (
+from profileopt.terrain.synthetic import (
     ISO8608_GD0_M3,
     iso8608_profile,
     iso8608_sections,
@@ -28,7 +28,7 @@ from profileopt.synthetic import (
     step,
     washboard,
 )
-from profileopt.terrain import roughness_index, segment_roughness_index
+from profileopt.terrain.roughness import roughness_index, segment_roughness_index
 
 from conftest import REAL_DATA, ROUTES
 

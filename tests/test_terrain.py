@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from profileopt import InputError, load_vehicle, roughness_index, step_width, worst_case_elevation
-from profileopt.terrain import elevation_z_score, segment_roughness_index
+from profileopt.terrain.roughness import elevation_z_score, segment_roughness_index
 
 from conftest import REAL_DATA
 
@@ -201,28 +201,6 @@ def test_ri_invariant_to_offset_and_grade_and_linear_in_amplitude(z, spacing, of
 
 
 # ------------------------------------------------------------------ deprecated forms (issue 9)
-
-def test_roughness_index_old_keywords_still_work_with_a_warning():
-    s = np.linspace(0.0, 5.0, 50)
-    z = 0.02 * np.sin(3 * s) + 0.1 * s
-    new = roughness_index(z, 0.1, positions_m=s)
-    with pytest.warns(DeprecationWarning, match="use elevations_m=.*use clearance_m=.*use positions_m="):
-        old = roughness_index(elevations=z, clearance=0.1, positions=s)
-    assert old == new
-
-
-def test_roughness_index_positional_positions_still_works_with_a_warning():
-    s = np.linspace(0.0, 5.0, 50)
-    z = 0.02 * np.sin(3 * s) + 0.1 * s
-    with pytest.warns(DeprecationWarning, match="pass positions_m=, detrend= by keyword"):
-        old = roughness_index(z, 0.1, s, False)
-    assert old == roughness_index(z, 0.1, positions_m=s, detrend=False)
-
-
-def test_step_width_old_keyword_still_works_with_a_warning():
-    with pytest.warns(DeprecationWarning, match="e_m= is deprecated, use e_max_m="):
-        old = step_width(e_m=0.02, vehicle=ATV)
-    assert old == step_width(e_max_m=0.02, vehicle=ATV) == step_width(0.02, ATV)
 
 
 def test_input_errors_name_the_parameters():

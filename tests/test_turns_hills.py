@@ -19,9 +19,9 @@ from scipy.integrate import solve_ivp
 from profileopt import load_vehicle, plan
 from profileopt.errors import InfeasibleError, InputError
 from profileopt.io import read_profile
-from profileopt.planning.binding import BINDING_NAMES
-from profileopt.planning.result import PROFILE_COLUMNS
-from profileopt.route import Route
+from profileopt.core.binding import BINDING_NAMES
+from profileopt.core.profile import PROFILE_COLUMNS
+from profileopt.core.route import Route
 from conftest import ROOT, ROUTES
 
 G = 9.80665  # standard gravity (m/s^2), ISO 80000-3
@@ -319,7 +319,7 @@ def test_verify_finds_no_breach_in_plans_on_steep_grades_and_slow_power_climbs()
     # the planner's own profiles, where a grade makes an acceleration bound negative (a 30 %
     # climb for atv: 2.5 - g sin(atan 0.3) = -0.32 m/s^2; a 50 % descent: 4 - 4.39 < 0) and where
     # the power holds a crawl (eps of the NLP's sqrt(b + eps^2) must not count against it)
-    from profileopt.limit_check import check_limits
+    from profileopt.verification.limit_check import check_limits
 
     def blended(slopes: list[tuple[float, float]], blend_m: float = 15.0) -> Route:
         """A straight route whose slope moves linearly between pieces over blend_m (a kink in

@@ -15,11 +15,12 @@ import numpy as np
 import pytest
 
 from profileopt.errors import InputError
-from profileopt.planning import Profile, segment_route
-from profileopt.route import Route
-from profileopt.vehicle import load_vehicle
-from profileopt.plots import plot_verification
-from profileopt.verification import VERIFICATION_COLUMNS, verify
+from profileopt import Profile
+from profileopt.core.segments import segment_route
+from profileopt.core.route import Route
+from profileopt.core.vehicle import load_vehicle
+from profileopt.viz.plots import plot_verification
+from profileopt.verification.verify import VERIFICATION_COLUMNS, verify
 
 from conftest import PROFILEOPT, ROOT, ROUTES
 

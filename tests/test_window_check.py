@@ -2,7 +2,7 @@
 peak while the vehicle is inside it, its own prediction and the limit.
 
 The reference is a brute-force computation written here, window by window in Python
-loops, from the definitions and not from ``profileopt.window_check``: each window's samples
+loops, from the definitions and not from ``profileopt.verification.window_check``: each window's samples
 and RI (Eq. 1 with ``numpy.polyfit``), the speeds driven inside it from the kinematics of
 constant acceleration (v^2 = v_i^2 + 2 a_i (s - s_i)), the model's largest force over them
 (a dense grid refined by ``scipy.optimize.minimize_scalar``), and the largest simulated |F|
@@ -24,10 +24,10 @@ import pytest
 import scipy.optimize
 
 from profileopt import force_n, load_vehicle, plan
-from profileopt.route import Route
-from profileopt.terrain import roughness_windows
-from profileopt.verification import verify
-from profileopt.forces import force_peak_ratio
+from profileopt.core.route import Route
+from profileopt.terrain.roughness import roughness_windows
+from profileopt.verification.verify import verify
+from profileopt.physics.forces import force_peak_ratio
 
 ATV = load_vehicle("atv")
 RESONANT = load_vehicle("atv-resonant")

@@ -11,13 +11,13 @@ import pytest
 
 from conftest import window_ri
 from profileopt.errors import InputError
-from profileopt.forces import (envelope_force_n, force_n, sbem_tf_envelope_force_n, sbem_tf_force_n,
+from profileopt.physics.forces import (envelope_force_n, force_n, sbem_tf_envelope_force_n, sbem_tf_force_n,
                                transmissibility_peak_ratio)
 from profileopt.planning import plan
-from profileopt.route import Route
-from profileopt.speeds import speed_bands
-from profileopt.synthetic import iso8608_profile
-from profileopt.terrain import range_extremes, roughness_windows
+from profileopt.core.route import Route
+from profileopt.physics.speeds import speed_bands
+from profileopt.terrain.synthetic import iso8608_profile
+from profileopt.terrain.roughness import range_extremes, roughness_windows
 
 
 def test_window_ri_matches_polyfit_on_a_100_km_route() -> None:
@@ -79,7 +79,7 @@ def test_transmissibility_peak_ratio_is_the_peak() -> None:
 
 @pytest.mark.parametrize("vehicle_name", ["atv", "atv-resonant"])
 def test_sbem_tf_envelope_bounds_every_elevation_of_the_range(vehicle_name) -> None:
-    from profileopt.vehicle import load_vehicle
+    from profileopt.core.vehicle import load_vehicle
 
     vehicle = load_vehicle(vehicle_name)
     speeds = np.linspace(0.0, 20.0, 801)[:, None]
@@ -162,7 +162,7 @@ def test_travel_time_converges_as_the_segments_shrink(atv) -> None:
 def test_batches_change_no_bit(monkeypatch) -> None:
     # the moments are formed in batches of windows (cache); every batch must give the very
     # bits of one pass over the whole route
-    import profileopt.window_sums as window_sums
+    import profileopt.terrain.window_sums as window_sums
 
     rng = np.random.default_rng(3)
     s = np.cumsum(rng.uniform(0.02, 0.08, 20000))
@@ -174,8 +174,8 @@ def test_batches_change_no_bit(monkeypatch) -> None:
 
 def test_grade_batches_change_no_bit(monkeypatch) -> None:
     # path_grade_rad forms its windows' moments in batches too (cache, at a million samples)
-    import profileopt.geometry as geometry
-    import profileopt.window_sums as window_sums
+    import profileopt.terrain.geometry as geometry
+    import profileopt.terrain.window_sums as window_sums
 
     rng = np.random.default_rng(4)
     s = 1000.0 + np.cumsum(rng.uniform(0.02, 0.08, 20000))
@@ -191,8 +191,8 @@ def test_grade_batches_change_no_bit(monkeypatch) -> None:
 def test_crawl_bound_bounds_every_force_below_the_ridge_speed(vehicle_name) -> None:
     # sbem_tf_crawl_bound_n: no elevation in [0, e_max] gives more SBEM:TF force at any speed
     # up to 2 wn r_w r_p / pi (checked on a dense grid of both)
-    from profileopt.forces import sbem_tf_crawl_bound_n
-    from profileopt.vehicle import load_vehicle
+    from profileopt.physics.forces import sbem_tf_crawl_bound_n
+    from profileopt.core.vehicle import load_vehicle
 
     vehicle = load_vehicle(vehicle_name)
     ridge = 2 * vehicle.natural_frequency_radps * vehicle.wheel_radius_m * transmissibility_peak_ratio(
@@ -263,7 +263,7 @@ def test_refining_shrinks_a_kerbs_slow_stretch_to_its_windows(atv) -> None:
 def _windows_force_over_limit(route: Route, profile, vehicle) -> float:
     """The largest predicted force over the limit of any roughness window, from the speeds
     driven inside it (window_check: v^2 linear in s in every segment), at its own RI."""
-    from profileopt.window_check import window_predicted_force_n, window_speed_range_mps
+    from profileopt.verification.window_check import window_predicted_force_n, window_speed_range_mps
 
     windows = roughness_windows(route.s_m, route.z_m, vehicle.ground_clearance_m, window_m=5.0)
     low, high = window_speed_range_mps(profile.s_m, profile.speed_mps, windows.start_m,
@@ -281,7 +281,7 @@ def test_refined_travel_time_hardly_depends_on_the_segment_length(name: str, veh
     # roughness window keeps the force limit.
     from conftest import ROUTES
     from profileopt.io.routes import read_route
-    from profileopt.vehicle import load_vehicle
+    from profileopt.core.vehicle import load_vehicle
 
     route, vehicle = read_route(ROUTES / name), load_vehicle(vehicle_name)
     options = {"smoothing": 0.0, "max_jerk_mps3": math.inf}
@@ -303,7 +303,7 @@ def test_refine_on_the_command_line_is_recorded_in_the_profile(tmp_path) -> None
     from conftest import ROUTES
     from profileopt.cli import main
     from profileopt.io import read_profile
-    from profileopt.vehicle import load_vehicle
+    from profileopt.core.vehicle import load_vehicle
 
     out, plain, asked = tmp_path / "refined.csv", tmp_path / "plain.csv", tmp_path / "asked.csv"
     assert main(["plan", str(ROUTES / "curb.csv"), "-o", str(out)]) == 0  # refined: the default
@@ -324,8 +324,8 @@ def test_compare_and_the_safety_study_plan_refined_segments_by_default(atv_reson
     # study's run is the same plan as compare's.
     from conftest import ROUTES
     from profileopt.io.routes import read_route
-    from profileopt.safety import safety_study
-    from profileopt.study import compare_models
+    from profileopt.studies.safety import safety_study
+    from profileopt.studies.compare import compare_models
 
     route = read_route(ROUTES / "curb.csv")
     plain = compare_models(route, atv_resonant, models=["sbem_tf"], refine=False)[0]
@@ -343,7 +343,7 @@ def test_refining_marks_the_segments_held_by_the_force_within_two_per_cent() -> 
     # (marked); segment 1 reaches 9.9 < 0.98 * 12 = 11.76 (not marked); segment 2 reaches its
     # top, 10 (marked); segment 3 reaches its top, 20, but the speed cap sets that top, which
     # no roughness moves (not marked).
-    from profileopt.planning.segments import REFINE_AT_CAP, at_force_cap
+    from profileopt.planning.refine import REFINE_AT_CAP, at_force_cap
 
     assert REFINE_AT_CAP == 0.02
     v = np.array([0.0, 9.9, 9.7, 10.0, 20.0])

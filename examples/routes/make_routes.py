@@ -16,7 +16,7 @@ below are per 5 m segment (the planner's default), RI detrended with h = 0.1 m (
 bundled vehicles); "first" and "largest" are the allowable speeds of NOTES.md ("Which
 root"), SBEM:TF model. The script prints them again when it runs.
 
-Synthetic routes (profileopt.synthetic, 0.05 m spacing)
+Synthetic routes (profileopt.terrain.synthetic, 0.05 m spacing)
 -------------------------------------------------------
 ``trail.csv`` (2000 m, for ``atv``): one random ISO 8608 profile whose class changes
 along the trail, joined over 10 m without steps. RI of the 5 m segments and the atv's
@@ -69,7 +69,7 @@ distance shifted to start at 0, absolute elevations kept. Segment RI 0.004-0.050
 (Apache-2.0): up from about 1625 m to 2040 m and back (smoothed elevations). GPS measures the path's turns and
 grade, not the ground's roughness: the elevation is smoothed over about 50 m, so the RI is
 near zero (segment RI up to 0.06). Grade (10 m scale) median 29 %, 90th percentile 52 %,
-up to 62 %. Turns (profileopt.geometry.smooth_path): with a 3 m path tolerance the median
+up to 62 %. Turns (profileopt.terrain.geometry.smooth_path): with a 3 m path tolerance the median
 radius is 70 m, the 1st percentile 1.9 m (switchbacks), the smallest 0.1 m where the GPS
 track doubles back (s = 2594 m); with the default 0.1 m the polyline's corners read as
 radii of centimetres.
@@ -88,12 +88,12 @@ from typing import Sequence
 import numpy as np
 
 from profileopt import InputError, load_vehicle, speed_bands
-from profileopt.geometry import path_grade_rad, smooth_path
-from profileopt.ground_track import smooth_track_elevations
+from profileopt.terrain.geometry import path_grade_rad, smooth_path
+from profileopt.terrain.ground_track import smooth_track_elevations
 from profileopt.io import atomic_write, read_opencrg, read_xy_profile
-from profileopt.synthetic import iso8608_profile, iso8608_sections, step, washboard
-from profileopt.stations import segment_samples
-from profileopt.terrain import segment_roughness_index
+from profileopt.terrain.synthetic import iso8608_profile, iso8608_sections, step, washboard
+from profileopt.core.stations import segment_samples
+from profileopt.terrain.roughness import segment_roughness_index
 
 HERE = Path(__file__).resolve().parent
 #: examples/routes -> repository -> data/real (the measured terrain bundled with it)
@@ -198,7 +198,7 @@ def summary(route: BundledRoute) -> list[str]:
 
 
 def geometry_summary(route: BundledRoute) -> list[str]:
-    """For an x,y,z route: its grade and its tightest turns (profileopt.geometry)."""
+    """For an x,y,z route: its grade and its tightest turns (profileopt.terrain.geometry)."""
     if route.x_m is None or route.y_m is None:
         return []
     s, z = rounded(route)
@@ -224,7 +224,7 @@ def trail() -> BundledRoute:
     ]
     comments = [
         "trail.csv: a 2 km off-road trail for the bundled 'atv' vehicle (profileopt example route).",
-        f"Made by `{COMMAND}`: profileopt.synthetic.iso8608_sections(seed={TRAIL_SEED},",
+        f"Made by `{COMMAND}`: profileopt.terrain.synthetic.iso8608_sections(seed={TRAIL_SEED},",
         "transition_m=10, n from 0.011 to 4 cycles/m): one random ISO 8608 profile, Gd(n) =",
         "Gd(n0) (n/n0)^-2, whose road class changes along the trail (raised-cosine joins of 10 m).",
         "Sections: " + ", ".join(f"{sec.start_m:g}-{sec.end_m:g} m {sec.label}" for sec in sections) + ".",
@@ -249,8 +249,8 @@ def washboard_route() -> BundledRoute:
     comments = [
         "washboard.csv: a washboard that the bundled 'atv-resonant' vehicle (wn = 6 rad/s,",
         "zeta = 0.1) crosses fastest above its suspension resonance (profileopt example route).",
-        f"Made by `{COMMAND}`: ISO 8608 class A ground (profileopt.synthetic.iso8608_profile,",
-        f"seed={WASHBOARD_SEED}) plus profileopt.synthetic.washboard sinusoids: 150-300 m amplitude",
+        f"Made by `{COMMAND}`: ISO 8608 class A ground (profileopt.terrain.synthetic.iso8608_profile,",
+        f"seed={WASHBOARD_SEED}) plus profileopt.terrain.synthetic.washboard sinusoids: 150-300 m amplitude",
         "0.04 m, wavelength 2/3 m (RI = A / (sqrt(2) h) = 0.283 with h = 0.1 m: SBEM:TF bands",
         "[0, 0.32] and [0.53, ~3.4] m/s); 350-375 m amplitude 0.071 m, wavelength 1 m (RI 0.495",
         "per detrended 5 m segment: only [0, 0.28] m/s), so the vehicle must slow below resonance on the smooth ground",
@@ -275,8 +275,8 @@ def curb() -> BundledRoute:
     comments = [
         "curb.csv: smooth ground with a 0.15 m curb, for the bundled 'atv' vehicle",
         "(profileopt example route).",
-        f"Made by `{COMMAND}`: ISO 8608 class B ground (profileopt.synthetic.iso8608_profile,",
-        f"seed={CURB_SEED}) plus profileopt.synthetic.step: up 0.15 m at s = 102.5 m, down",
+        f"Made by `{COMMAND}`: ISO 8608 class B ground (profileopt.terrain.synthetic.iso8608_profile,",
+        f"seed={CURB_SEED}) plus profileopt.terrain.synthetic.step: up 0.15 m at s = 102.5 m, down",
         "0.15 m at s = 152.5 m, each in the middle of a 5 m segment (a step exactly on a",
         "segment boundary would leave both segments flat and raise no segment's RI).",
         "speed_limit: 8 m/s for 40 <= s < 80 m, 12 m/s elsewhere.",
@@ -424,7 +424,7 @@ def write(route: BundledRoute, folder: Path) -> Path:
 
 
 def synthetic_routes() -> list[BundledRoute]:
-    """The routes made from profileopt.synthetic (no data needed)."""
+    """The routes made from profileopt.terrain.synthetic (no data needed)."""
     return [trail(), washboard_route(), curb()]
 
 

@@ -193,7 +193,7 @@ class OutputSet:
     --------
     >>> outputs = OutputSet([("-o", "out.csv", True), ("--plot", None)], inputs=["route.csv"])
     >>> with outputs:  # doctest: +SKIP
-    ...     profile.to_csv("out.csv")
+    ...     write_profile(profile, "out.csv")
     """
 
     def __init__(self, outputs: Iterable[tuple], inputs: Iterable[str | os.PathLike | None] = ()) -> None:

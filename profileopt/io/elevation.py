@@ -1,7 +1,7 @@
 """Readers of measured longitudinal elevation profiles: OpenCRG road files and two-column
 text profiles.
 
-Both return an :class:`~profileopt.synthetic.ElevationProfile` (distance s and elevation z
+Both return an :class:`~profileopt.terrain.synthetic.ElevationProfile` (distance s and elevation z
 in metres), the form that ``examples/routes/make_routes.py`` writes as a route CSV. A file
 that cannot be read raises :class:`~profileopt.errors.InputError` whose one-line message
 names the file (and the line), what is wrong and what would fix it.
@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import InputError
 from . import inputs
-from ..synthetic import ElevationProfile
+from ..terrain.synthetic import ElevationProfile
 from .table import split_lines
 
 __all__ = ["read_opencrg", "read_xy_profile", "parse_opencrg", "OpenCrgData"]

@@ -13,9 +13,9 @@ import os
 import numpy as np
 
 from ..errors import InputError
-from ..forces import DEFAULT_MODEL, MODELS
-from ..planning.result import BASE_COLUMNS, PROFILE_COLUMNS, Profile
-from ..planning.binding import BINDING_NAMES
+from ..physics.forces import DEFAULT_MODEL, MODELS
+from ..core.profile import BASE_COLUMNS, PROFILE_COLUMNS, Profile
+from ..core.binding import BINDING_NAMES
 from .atomic import atomic_write
 from .table import read_table
 

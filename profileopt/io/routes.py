@@ -18,9 +18,9 @@ comes from a terrain model too coarse to measure wheel-scale roughness:
 
 ``# roughness_class = C``
     an ISO 8608 class, one letter A to H (case-insensitive): every roughness window gets
-    the class's expected RI (:mod:`profileopt.roughness_classes`), or
+    the class's expected RI (:mod:`profileopt.terrain.classes`), or
 ``# roughness_ri = 0.05``
-    the RI (dimensionless, 0 to :data:`~profileopt.assumed_roughness.MAX_ASSUMED_RI`) of
+    the RI (dimensionless, 0 to :data:`~profileopt.terrain.assumed.MAX_ASSUMED_RI`) of
     every roughness window.
 
 Blanks around ``=`` are optional. At most one such line; a bad value or a second line is
@@ -36,9 +36,9 @@ from typing import Sequence
 
 import numpy as np
 
-from ..assumed_roughness import MAX_ASSUMED_RI, AssumedRoughness
+from ..terrain.assumed import MAX_ASSUMED_RI, AssumedRoughness
 from ..errors import InputError
-from ..route import Route, path_distance_m, validate_route_arrays
+from ..core.route import Route, path_distance_m, validate_route_arrays
 from .atomic import atomic_write
 from .table import Table, read_table
 
@@ -200,7 +200,7 @@ def write_route(route: Route, path: str | os.PathLike, *, comments: Sequence[str
     Columns ``x_m,y_m,z_m`` (a route with a path in the plane) or ``s_m,z_m``, then
     ``speed_limit_mps`` if the route has one; each number as the shortest decimal that reads
     back as the same float, so that the route read back is this one, float for float. The comment lines come first, each
-    prefixed with ``# ``, then the assumed roughness's metadata line, if any.
+    prefixed with ``#`` and a space, then the assumed roughness's metadata line, if any.
 
     Parameters
     ----------

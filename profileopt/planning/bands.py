@@ -35,7 +35,7 @@ class DrivePower:
     In segment i, at constant acceleration a_i, the power m (a_i + g sin theta) v <= P must
     hold at every speed driven and every grade of the segment: at its higher speed and its
     steepest grade, a_i <= P / (m max(v_i, v_{i+1})) - g sin(theta_hi,i)
-    (:func:`profileopt.motion.power_accel_mps2`).
+    (:func:`profileopt.physics.motion.power_accel_mps2`).
 
     Attributes
     ----------
@@ -59,7 +59,7 @@ class DrivePower:
         where a slower entry would climb. Segments up to (P/m)^2 / (g sin theta)^3 keep it
         exact (inf on the level and downhill).
         """
-        from ..motion import STANDARD_GRAVITY_MPS2
+        from ..physics.motion import STANDARD_GRAVITY_MPS2
 
         lift = STANDARD_GRAVITY_MPS2 * np.sin(self.grade_hi_rad)
         with np.errstate(divide="ignore"):
@@ -94,7 +94,7 @@ def _power_step(b_i: float, ds: float, pm: float, gs: float) -> float:
 def _forward_with_power(upper_b: np.ndarray, length_m: np.ndarray, accel_mps2: np.ndarray,
                         power: DrivePower) -> np.ndarray:
     """The forward pass b_{i+1} <= min(upper, b_i + 2 a ds, power step), in order."""
-    from ..motion import STANDARD_GRAVITY_MPS2
+    from ..physics.motion import STANDARD_GRAVITY_MPS2
 
     n = length_m.size
     accel = np.broadcast_to(np.asarray(accel_mps2, dtype=float), (n,))

@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from ..errors import InfeasibleError, PlanningError
-from ..speeds import SpeedBands
+from ..physics.speeds import SpeedBands
 from .bands import BandChoice, DrivePower, choose_bands
 
 __all__ = ["fallback_choice"]

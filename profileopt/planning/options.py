@@ -12,6 +12,7 @@ import math
 import types
 from typing import Any, Mapping
 
+from ..defaults import LIMIT_RTOL
 from ..errors import InputError
 
 __all__ = ["SolverOptions", "DEFAULT_IPOPT_OPTIONS", "NLP_SOLVERS"]
@@ -52,7 +53,7 @@ class SolverOptions:
     ----------
     split_above_segments : int or None, default None
         A route of more segments than this is solved in exact pieces
-        (:mod:`profileopt.planning.pieces`). None: the solver's own threshold
+        (:mod:`profileopt.planning.nlp.pieces`). None: the solver's own threshold
         (:meth:`split_threshold`), 10,000 with ``nlp_solver="ipopt"`` and never with the
         banded solver. IPOPT's time per segment and iteration is flat up to about 10,000
         segments and grows beyond, as its working set leaves the cache; pieces cost more
@@ -69,7 +70,7 @@ class SolverOptions:
     cut_rounds : int, default 5
         How many times the cuts that did not check out are replaced before the route is
         solved whole.
-    check_rtol : float, default 1e-6
+    check_rtol : float, default :data:`profileopt.defaults.LIMIT_RTOL` (1e-6)
         Relative tolerance of the independent check of every returned profile: a solution
         that breaks a limit by more is replaced by the fallback profile.
     ipopt : Mapping[str, Any], default :data:`DEFAULT_IPOPT_OPTIONS`
@@ -78,7 +79,7 @@ class SolverOptions:
         ``"ipopt.max_iter"`` too.
     nlp_solver : {"banded", "ipopt"}, default "banded"
         Which solver polishes the profile. ``"banded"``: the interior-point method of
-        :mod:`profileopt.planning.banded_ipm`, which factorises the chain-structured Newton
+        :mod:`profileopt.planning.nlp.banded_ipm`, which factorises the chain-structured Newton
         system in time proportional to N (3-4 times faster than IPOPT at 10,000 segments,
         same optimum), with IPOPT taking over wherever it does not converge; ``"ipopt"``:
         IPOPT only.
@@ -87,7 +88,7 @@ class SolverOptions:
     split_above_segments: int | None = None
     piece_segments: int = 4000
     cut_rounds: int = 5
-    check_rtol: float = 1e-6
+    check_rtol: float = LIMIT_RTOL
     ipopt: Mapping[str, Any] = dataclasses.field(default_factory=lambda: DEFAULT_IPOPT_OPTIONS)
     nlp_solver: str = "banded"
 

@@ -19,40 +19,39 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-import warnings
 from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
-from ..defaults import DEFAULT_PATH_TOLERANCE_M, DEFAULT_REFINE, DEFAULT_SMOOTHING, OLD_NLP_METHOD, PLAN_BANDS, PLAN_METHODS
+from ..defaults import DEFAULT_PATH_TOLERANCE_M, DEFAULT_REFINE, DEFAULT_SMOOTHING, PLAN_BANDS, PLAN_METHODS
 from ..errors import InfeasibleError, InputError, PlanningError
-from ..forces import DEFAULT_MODEL, get_model
-from ..kinematics import segment_accel_mps2, segment_time_s
-from ..speeds import SpeedBands
-from ..vehicle import PLAUSIBLE_RANGES, vehicle_reference
+from ..physics.forces import DEFAULT_MODEL, get_model
+from ..core.kinematics import segment_accel_mps2, segment_time_s
+from ..physics.speeds import SpeedBands
+from ..core.vehicle import PLAUSIBLE_RANGES, vehicle_reference
 from .bands import BandChoice, DrivePower, choose_bands, snap_to_band
-from .binding import binding_labels
+from ..core.binding import binding_labels
 from .fallback import fallback_choice
 from .limits import Limit, PlanContext, default_limits
-from .limits.force import max_force_over_segments
-from .nlp import Scaling, family_rows, objective_s, row_bounds
-from .solve import solve_nlp
-from .path import SegmentPath, segment_path
+from ..physics.speeds import max_force_over_segments
+from .nlp.problem import Scaling, family_rows, objective_s, row_bounds
+from .nlp.solve import solve_nlp
+from ..core.path import SegmentPath, segment_path
 from .options import SolverOptions
-from .pieces import choose_cuts, cut_scores, solve_pieces
-from .result import Profile
-from .refine import refined_segments
-from .segments import (DEFAULT_ROUGHNESS_WINDOW_M, DEFAULT_SEGMENT_LENGTH_M, REFINE_AT_CAP, Segments, roughness_source,
-                       segment_route)
+from .nlp.pieces import choose_cuts, cut_scores, solve_pieces
+from ..core.profile import Profile
+from .refine import REFINE_AT_CAP, refined_segments
+from ..core.segments import (DEFAULT_ROUGHNESS_WINDOW_M, DEFAULT_SEGMENT_LENGTH_M, Segments, roughness_source,
+                             segment_route)
 
 if TYPE_CHECKING:
-    from ..route import Route
-    from ..vehicle import Vehicle
+    from ..core.route import Route
+    from ..core.vehicle import Vehicle
 
 __all__ = ["plan", "DEFAULT_SMOOTHING", "PLAN_BANDS", "MIN_JERK_MPS3", "REFINE_AT_CAP"]
 
 #: The smallest jerk bound (m/s^3) a plan accepts: the smallest a vehicle file may give
-#: (:data:`profileopt.vehicle.PLAUSIBLE_RANGES`). Below it the jerk-limited profile crawls (a
+#: (:data:`profileopt.core.vehicle.PLAUSIBLE_RANGES`). Below it the jerk-limited profile crawls (a
 #: bound of 1e-13 left no usable profile at all, 1e-50 one standing still for ever).
 MIN_JERK_MPS3 = PLAUSIBLE_RANGES["max_jerk_mps3"][0]
 
@@ -96,7 +95,6 @@ def plan(
     band: str = "all",
     extra_limits: Sequence[Limit] = (),
     solver_options: SolverOptions | None = None,
-    bands: str | None = None,
     refine: bool = DEFAULT_REFINE,
 ) -> Profile:
     """The fastest smooth speed profile along ``route`` that keeps every limit.
@@ -115,12 +113,12 @@ def plan(
         Roughness window length W (m): the force limit holds, for every stretch [a, a + W]
         of the route (a at every sample), at every speed driven inside it, for that
         stretch's own RI (docs/paper-notes.md, "Roughness windows"). The grade is measured
-        over twice this length (:mod:`profileopt.geometry`).
+        over twice this length (:mod:`profileopt.terrain.geometry`).
     path_tolerance_m : float, default :data:`~profileopt.defaults.DEFAULT_PATH_TOLERANCE_M`
         How far (m) the smoothed path whose curvature limits the speed in turns may stray
-        from the route's x, y samples (:func:`profileopt.geometry.smooth_path`); give the
+        from the route's x, y samples (:func:`profileopt.terrain.geometry.smooth_path`); give the
         noise of the track (a few metres for a consumer GPS). Ignored for an ``s,z`` route.
-    model : str, default :data:`~profileopt.forces.DEFAULT_MODEL` (``"sbem_tf"``)
+    model : str, default :data:`~profileopt.physics.forces.DEFAULT_MODEL` (``"sbem_tf"``)
         Force model: ``"sbem_tf"``, ``"sbem_ef"``, ``"iecm"`` or ``"prev_bem"``.
     smoothing : float, default :data:`DEFAULT_SMOOTHING` (0.01)
         Weight w of the comfort term: the objective is travel time + w * integral of
@@ -134,8 +132,7 @@ def plan(
         ``"auto"`` returns the exact forward-backward profile without solving the NLP when
         it is provably optimal (smoothing 0, no jerk bound, no friction rows), else solves
         the NLP; ``"nlp"`` always solves the NLP (for benchmarks and tests of the NLP
-        itself). Which solver solves it is ``solver_options.nlp_solver``. ``"ipopt"``, the
-        old name of ``"nlp"``, works for one release with a DeprecationWarning.
+        itself). Which solver solves it is ``solver_options.nlp_solver``.
     band : {"all", "first", "largest"}, default "all"
         Which admissible speed bands each segment may use: ``"all"``, any band, chosen
         over the whole route (a resonant vehicle may cross washboard above resonance);
@@ -147,14 +144,12 @@ def plan(
         jerk; :func:`profileopt.planning.limits.default_limits`).
     solver_options : SolverOptions, optional
         How the NLP is solved (pieces, IPOPT options); default ``SolverOptions()``.
-    bands : str, optional
-        Deprecated name of ``band``.
     refine : bool, default True (:data:`profileopt.defaults.DEFAULT_REFINE`)
         Choose the bands, then cut every segment where the minimum-time profile comes within
         :data:`REFINE_AT_CAP` of its band's top, set by the force, wherever its windows'
-        roughness changes (:func:`profileopt.planning.segments.refine_segments`), and every
+        roughness changes (:func:`profileopt.planning.refine.refine_segments`), and every
         segment where it comes that close to a step's cap or a speed limit just outside the
-        step's ramp or the limit's zone (:func:`profileopt.planning.segments.stretch_cuts`), choose the bands again on those
+        step's ramp or the limit's zone (:func:`profileopt.planning.refine.stretch_cuts`), choose the bands again on those
         segments, and solve once.
         A segment is held to every window that shares a point with it, so without this the
         travel time converges only to first order in ``segment_length_m``; with it, it hardly
@@ -178,13 +173,6 @@ def plan(
         The NLP could not be solved and no limit-keeping fallback profile exists (please report it).
     """
     t_start = time.perf_counter()
-    if bands is not None:
-        warnings.warn("plan(bands=...) is deprecated; use plan(band=...)", DeprecationWarning, stacklevel=2)
-        band = bands
-    if method == OLD_NLP_METHOD:
-        warnings.warn("plan(method='ipopt') is deprecated; use plan(method='nlp') (the solver is chosen by "
-                      "SolverOptions(nlp_solver=...))", DeprecationWarning, stacklevel=2)
-        method = "nlp"
     jerk = vehicle.max_jerk_mps3 if max_jerk_mps3 is None else float(max_jerk_mps3)
     limits = (*default_limits(vehicle, model=model, max_jerk_mps3=jerk), *extra_limits)  # refuses a bad model
     _validate_options(vehicle, smoothing, jerk, v0_mps, vend_mps, method, band, refine)
@@ -194,7 +182,7 @@ def plan(
     timings["segment"] = time.perf_counter() - t_start
 
     t = time.perf_counter()
-    from ..geometry import route_geometry  # scipy: only when a plan is made
+    from ..terrain.geometry import route_geometry  # scipy: only when a plan is made
 
     geometry = route_geometry(route, tolerance_m=path_tolerance_m, grade_scale_m=2.0 * seg.roughness_window_m)
     timings["path"] = time.perf_counter() - t

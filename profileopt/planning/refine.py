@@ -5,10 +5,10 @@ point with it, so a long segment that reaches into a rough stretch or touches a 
 to its speeds over its whole length. After the bands are chosen once, the planner cuts
 
 - the segments where the minimum-time profile meets its band's top, set by the force, where
-  the roughness of their windows changes (:func:`.segments.refine_segments`);
+  the roughness of their windows changes (:func:`refine_segments`);
 - the segments where it meets a cap set on stretches of the route (a step's, a speed-limit
   zone's; :meth:`.limits.Limit.cap_stretches_m`) just outside the stretch that sets it
-  (:func:`.segments.stretch_cuts`), and where their roughness changes as well: the cap hid
+  (:func:`stretch_cuts`), and where their roughness changes as well: the cap hid
   their band's top, which the pieces off the stretch meet once they are free of it;
 
 then chooses the bands again on the finer segments and solves once.
@@ -16,14 +16,30 @@ then chooses the bands again on the finer segments and solves once.
 
 from __future__ import annotations
 
-from typing import Sequence
+import math
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
 from .limits.base import Limit, PlanContext
-from .segments import Segments, at_cap, at_force_cap, refine_segments, stretch_cuts
+from ..core.segments import MIN_SAMPLES_PER_SEGMENT, Segments, segments_at
+from ..core.stations import segment_samples
+from ..errors import InputError
+from ..terrain.roughness import range_extremes
 
-__all__ = ["refined_segments"]
+if TYPE_CHECKING:
+    from ..core.vehicle import Vehicle
+
+__all__ = ["refined_segments", "refine_segments", "stretch_cuts", "at_force_cap", "at_cap", "REFINE_RI_TOLERANCE",
+           "REFINE_AT_CAP"]
+
+#: :func:`refine_segments` cuts a segment where the RI range of the windows met between two
+#: samples departs by more than this fraction from the range where the piece began.
+REFINE_RI_TOLERANCE = 0.02
+#: With ``refine``, the segments whose minimum-time speed comes within this fraction of
+#: their band's top, where the force sets it, are the ones cut (where the speed is below
+#: it, or a speed cap holds it, the roughness does not decide the plan there).
+REFINE_AT_CAP = 0.02
 
 
 def refined_segments(limits: Sequence[Limit], context: PlanContext, greatest_b: np.ndarray, band_top_mps: np.ndarray,
@@ -61,3 +77,176 @@ def refined_segments(limits: Sequence[Limit], context: PlanContext, greatest_b: 
     # hid its band top)
     return refine_segments(seg, s_m, context.vehicle, at_force_cap(greatest_b, band_top_mps, cap_mps),
                            cut_at=np.concatenate(cuts) if cuts else None)
+
+
+def at_force_cap(greatest_b: np.ndarray, band_top_mps: np.ndarray, cap_mps: np.ndarray) -> np.ndarray:
+    """The segments ``refine`` cuts: where the minimum-time profile comes within
+    :data:`REFINE_AT_CAP` of the band's top and the force, not a speed cap, sets that top.
+
+    Parameters
+    ----------
+    greatest_b : numpy.ndarray, shape (N+1,)
+        The minimum-time profile's v^2 at the boundaries (m^2/s^2).
+    band_top_mps : numpy.ndarray, shape (N,)
+        Top of each segment's chosen band (m/s), speed caps included.
+    cap_mps : numpy.ndarray, shape (N,)
+        Each segment's speed cap (m/s): top speed, speed limits, turns.
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (N,)
+    """
+    return at_cap(greatest_b, band_top_mps) & (band_top_mps < cap_mps * (1.0 - 1e-9))
+
+
+def at_cap(greatest_b: np.ndarray, cap_mps: np.ndarray) -> np.ndarray:
+    """The segments where the minimum-time profile comes within :data:`REFINE_AT_CAP` of
+    ``cap_mps`` at either boundary.
+
+    Parameters
+    ----------
+    greatest_b : numpy.ndarray, shape (N+1,)
+        The minimum-time profile's v^2 at the boundaries (m^2/s^2).
+    cap_mps : numpy.ndarray, shape (N,)
+        A speed cap of each segment (m/s).
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (N,)
+    """
+    top_b = np.maximum(greatest_b[:-1], greatest_b[1:])
+    return top_b >= (1.0 - REFINE_AT_CAP) ** 2 * np.asarray(cap_mps, dtype=float) ** 2
+
+
+def stretch_cuts(segments: Segments, positions_m: np.ndarray, held_cap_mps: np.ndarray, start_m: np.ndarray,
+                 end_m: np.ndarray, cap_mps: np.ndarray) -> np.ndarray:
+    """The samples at which to cut the held segments so that only one piece of each shares a
+    point with the stretch [start_m, end_m] that sets its cap: the last sample before each
+    stretch and the first after it, where that sample lies inside a segment held at that
+    stretch's cap, moved away from the stretch as far as both pieces need to keep
+    :data:`MIN_SAMPLES_PER_SEGMENT` samples.
+
+    A cap that holds every segment sharing a point with a stretch (the step limit's, around a
+    ramp of the wheel's path; a speed-limit zone's) then holds that piece only, not the whole
+    segment.
+
+    Parameters
+    ----------
+    segments : Segments
+        The route's segments.
+    positions_m : numpy.ndarray, shape (M,)
+        The route's sample positions s (m), those ``segments`` was cut from.
+    held_cap_mps : numpy.ndarray, shape (N,)
+        The cap each segment is held at (m/s), NaN where it may not be cut (the planner's:
+        where the plan meets a cap of the limit giving the stretches).
+    start_m, end_m : numpy.ndarray, shape (R,)
+        The stretches' ends (m), start_m <= end_m.
+    cap_mps : numpy.ndarray, shape (R,)
+        Each stretch's cap (m/s): it cuts only segments held at that cap.
+
+    Returns
+    -------
+    numpy.ndarray of int, shape (C,)
+        Sample indices, increasing, for :func:`refine_segments`' ``cut_at``.
+    """
+    s = np.asarray(positions_m, dtype=float)
+    held_cap = np.asarray(held_cap_mps, dtype=float)
+    if held_cap.shape != (segments.count,):
+        raise ValueError(f"held_cap_mps has shape {held_cap.shape}; expected ({segments.count},)")
+    cap = np.asarray(cap_mps, dtype=float)
+    first, count = segments.first_sample, segments.samples
+
+    def within(j: np.ndarray, outward: int) -> np.ndarray:
+        # the segment holding sample j (segment k holds samples first_k .. first_k + count_k
+        # - 1), held at the stretch's cap; j moved away from the stretch (outward -1: towards
+        # the start) until both pieces keep MIN_SAMPLES_PER_SEGMENT samples, dropped where
+        # that is impossible
+        ok = (j > 0) & (j < s.size)
+        j, c = j[ok], cap[ok]
+        k = np.searchsorted(first, j, side="right") - 1
+        j, c, k = j[k >= 0], c[k >= 0], k[k >= 0]
+        a, b = first[k], first[k] + count[k]
+        j = np.minimum(j, b - MIN_SAMPLES_PER_SEGMENT) if outward < 0 else np.maximum(j, a + MIN_SAMPLES_PER_SEGMENT)
+        sets = np.abs(held_cap[k] - c) <= 1e-12 * c  # NaN (not held) compares false
+        return j[sets & (j - a >= MIN_SAMPLES_PER_SEGMENT) & (b - j >= MIN_SAMPLES_PER_SEGMENT)]
+
+    before = np.searchsorted(s, np.asarray(start_m, dtype=float), side="left") - 1  # last s_j < start
+    after = np.searchsorted(s, np.asarray(end_m, dtype=float), side="right")  # first s_j > end
+    return np.unique(np.concatenate([within(before, -1), within(after, +1)]))
+
+
+def refine_segments(segments: Segments, positions_m: np.ndarray, vehicle: "Vehicle", marked: np.ndarray, *,
+                    tolerance: float = REFINE_RI_TOLERANCE, cut_at: np.ndarray | None = None) -> Segments:
+    """Cut the marked segments where the roughness of their windows changes, and every
+    segment at the samples ``cut_at``.
+
+    A segment's speeds are held to every window that shares a point with it, so a segment
+    that reaches into a rough stretch is held to the rough stretch's speeds over its whole
+    length: the travel time converges only to first order in the segment length. Cutting
+    a segment where the roughness changes (between two samples, the windows met change)
+    lets each piece keep only its own windows. Each marked segment is walked sample by
+    sample; a new piece starts at a sample where the least or the largest RI of the windows
+    met between it and the next sample departs from the values where the current piece
+    began by more than ``tolerance`` (relative), as long as both pieces keep
+    :data:`MIN_SAMPLES_PER_SEGMENT` samples. Unmarked segments are kept whole.
+
+    Parameters
+    ----------
+    segments : Segments
+        The route's segments (:func:`segment_route`).
+    positions_m : numpy.ndarray, shape (M,)
+        The route's sample positions s (m), those ``segments`` was cut from.
+    vehicle : Vehicle
+        Supplies Pe and h (for e_max).
+    marked : numpy.ndarray of bool, shape (N,)
+        The segments to cut (the planner marks those where its plan meets the speed cap).
+    tolerance : float, default :data:`REFINE_RI_TOLERANCE`
+        Relative change of the RI range that starts a new piece, > 0.
+    cut_at : numpy.ndarray of int, optional
+        Sample indices where a piece starts as well (the planner's :func:`stretch_cuts`),
+        where both pieces keep :data:`MIN_SAMPLES_PER_SEGMENT` samples; a segment holding one
+        is walked for roughness changes too, marked or not.
+
+    Returns
+    -------
+    Segments
+        The same boundaries and more (every new one at a sample), with each segment's
+        windows and RI range found afresh (:func:`segments_at`); ``notes`` unchanged.
+    """
+    s = np.asarray(positions_m, dtype=float)
+    marked = np.asarray(marked, dtype=bool)
+    if marked.shape != (segments.count,):
+        raise ValueError(f"marked has shape {marked.shape}; expected ({segments.count},)")
+    if not (math.isfinite(tolerance) and tolerance > 0):
+        raise InputError(f"tolerance = {tolerance!r}: must be a number > 0")
+    # the RI range of the windows met between consecutive samples j and j + 1
+    first, stop = segments.windows.overlapping(s[:-1], s[1:])
+    least_all, largest_all = range_extremes(segments.windows.ri, first, stop)
+    del first, stop
+    low, high = 1.0 - tolerance, 1.0 + tolerance
+    forced = set() if cut_at is None else set(np.asarray(cut_at, dtype=np.intp).tolist())
+    marked = marked.copy()
+    if forced:  # the segments holding a forced cut
+        holder = np.searchsorted(segments.first_sample, sorted(forced), side="right") - 1
+        marked[holder[holder >= 0]] = True
+    cuts: list[int] = []
+    for k in np.flatnonzero(marked):
+        a = int(segments.first_sample[k])
+        b = a + int(segments.samples[k])  # samples a .. b-1; a piece from sample j holds j .. next-1
+        # one segment's values as Python floats (fast to index; the whole route's would take
+        # 64 bytes a sample at the peak, a third of a long route's plan)
+        least, largest = least_all[a:b].tolist(), largest_all[a:b].tolist()
+        start = a
+        base_lo, base_hi = least[0], largest[0]
+        for j in range(a + MIN_SAMPLES_PER_SEGMENT, b - MIN_SAMPLES_PER_SEGMENT + 1):
+            if j - start < MIN_SAMPLES_PER_SEGMENT:
+                continue
+            lo, hi = least[j - a], largest[j - a]
+            if j in forced or hi > base_hi * high or hi < base_hi * low or lo > base_lo * high or lo < base_lo * low:
+                cuts.append(j)
+                start, base_lo, base_hi = j, lo, hi
+    if not cuts:
+        return segments
+    bounds = np.union1d(segments.boundaries_m, s[np.asarray(cuts, dtype=np.intp)])
+    starts, stops = segment_samples(s, bounds)
+    return segments_at(bounds, segments.windows, vehicle, starts=starts, stops=stops, notes=segments.notes)

@@ -26,8 +26,7 @@ from typing import TYPE_CHECKING
 
 import math
 
-from ...motion import lateral_limit_mps2
-from ...vehicle import OPTIONAL_KEYS
+from ...physics.motion import lateral_limit_mps2, plans_on_grades
 from .accel import AccelLimit
 from .base import Limit, PlanContext, worst_ratio
 from .force import ForceLimit
@@ -39,10 +38,10 @@ from .speed import SpeedLimit
 from .step import StepLimit
 
 if TYPE_CHECKING:
-    from ...vehicle import Vehicle
+    from ...core.vehicle import Vehicle
 
 __all__ = ["Limit", "PlanContext", "worst_ratio", "ForceLimit", "SpeedLimit", "AccelLimit", "JerkLimit",
-           "LateralLimit", "FrictionLimit", "PowerLimit", "StepLimit", "default_limits", "plans_on_grades"]
+           "LateralLimit", "FrictionLimit", "PowerLimit", "StepLimit", "default_limits"]
 
 
 def default_limits(vehicle: "Vehicle", *, model: str, max_jerk_mps3: float) -> tuple[Limit, ...]:
@@ -79,20 +78,3 @@ def default_limits(vehicle: "Vehicle", *, model: str, max_jerk_mps3: float) -> t
         limits.append(PowerLimit(mass_kg=vehicle.mass_kg, max_power_w=vehicle.max_power_w))
     limits.append(JerkLimit(max_jerk_mps3=max_jerk_mps3))
     return tuple(limits)
-
-
-def plans_on_grades(vehicle: "Vehicle") -> bool:
-    """Whether the grade enters ``vehicle``'s acceleration bounds: when its file gives any key
-    of turns and hills (it then describes the vehicle's motion on 3-D routes; without any, a
-    plan is exactly what it was before they existed).
-
-    Parameters
-    ----------
-    vehicle : Vehicle
-        The vehicle.
-
-    Returns
-    -------
-    bool
-    """
-    return any(getattr(vehicle, key) is not None for key in OPTIONAL_KEYS)

@@ -2,7 +2,7 @@
 
 The vehicle's ``max_accel_mps2`` and ``max_decel_mps2`` bound the force the drive and the
 brakes put on the ground per unit mass, F / m = a + g sin(theta)
-(:func:`profileopt.motion.tyre_accel_mps2`). Along the path, then,
+(:func:`profileopt.physics.motion.tyre_accel_mps2`). Along the path, then,
 -max_decel - g sin(theta) <= a <= max_accel - g sin(theta): a climb takes acceleration
 away, a descent braking. Over a segment whose grade ranges over [theta_lo, theta_hi] the
 bounds that hold for every grade of it are a <= max_accel - g sin(theta_hi) and
@@ -22,12 +22,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ...kinematics import segment_accel_mps2
-from ...motion import tyre_accel_mps2
+from ...core.kinematics import segment_accel_mps2
+from ...physics.motion import tyre_accel_mps2
 from .base import Limit, PlanContext, worst_ratio
 
 if TYPE_CHECKING:
-    from ..result import Profile
+    from ...core.profile import Profile
 
 __all__ = ["AccelLimit"]
 

@@ -12,7 +12,7 @@ returns ``None`` (or the neutral value) when the limit has nothing to say:
 - a jerk bound (:meth:`Limit.jerk_bound_mps3`), rows of the NLP at interior boundaries;
 - a drive power limit (:meth:`Limit.drive_power`), kept exactly by the forward pass, and
   rows of the NLP on each segment's two squared speeds (:meth:`Limit.nlp_rows`, a family
-  of :data:`profileopt.planning.nlp.ROW_FAMILIES`) where the bounds above do not imply it;
+  of :data:`profileopt.physics.rows.ROW_FAMILIES`) where the bounds above do not imply it;
 - the name of what holds the speed, for the profile's ``binding`` column
   (:attr:`Limit.binding`, :meth:`Limit.cap_binding`), and where along the route a cap is
   set (:meth:`Limit.cap_stretches_m`, so that refining can keep it off the rest of a segment);
@@ -33,16 +33,16 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..nlp import family_rows
-from ..path import SegmentPath, flat_path
+from ..nlp.problem import family_rows
+from ...core.path import SegmentPath, flat_path
 
 if TYPE_CHECKING:
-    from ...route import Route
-    from ...speeds import SpeedBands
-    from ...vehicle import Vehicle
+    from ...core.route import Route
+    from ...physics.speeds import SpeedBands
+    from ...core.vehicle import Vehicle
     from ..bands import DrivePower
-    from ..result import Profile
-    from ..segments import Segments
+    from ...core.profile import Profile
+    from ...core.segments import Segments
 
 __all__ = ["PlanContext", "Limit", "RowLimit", "worst_ratio"]
 
@@ -197,7 +197,7 @@ class Limit:
         Returns
         -------
         (family, data) or None
-            A key of :data:`profileopt.planning.nlp.ROW_FAMILIES` and its data, shape
+            A key of :data:`profileopt.physics.rows.ROW_FAMILIES` and its data, shape
             (N, D); None when the caps and bounds already imply the limit in every segment.
         """
         return None
@@ -326,7 +326,7 @@ class Limit:
 
 class RowLimit(Limit):
     """A limit that a family of NLP rows keeps on each segment's two squared speeds
-    (:data:`profileopt.planning.nlp.ROW_FAMILIES`), where it can bind.
+    (:data:`profileopt.physics.rows.ROW_FAMILIES`), where it can bind.
 
     The family's expressions are evaluated once for every use: on the NLP solver's solution
     (:meth:`violation`), and on a finished profile at its exact speeds (:meth:`row_values`,
@@ -334,7 +334,7 @@ class RowLimit(Limit):
     gives its per-segment data (:meth:`row_data`).
     """
 
-    #: The key of :data:`profileopt.planning.nlp.ROW_FAMILIES` of this limit's rows.
+    #: The key of :data:`profileopt.physics.rows.ROW_FAMILIES` of this limit's rows.
     family: str = ""
 
     def row_data(self, path: SegmentPath) -> np.ndarray:

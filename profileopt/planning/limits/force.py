@@ -15,15 +15,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ...forces import DEFAULT_MODEL, get_model
-from ...speeds import SpeedBands, speed_bands_reusing
+from ...physics.forces import DEFAULT_MODEL, get_model
+from ...physics.speeds import SpeedBands, speed_bands_reusing
 from .base import Limit, PlanContext
 
 if TYPE_CHECKING:
-    from ...vehicle import Vehicle
-    from ..result import Profile
+    from ...core.profile import Profile
 
-__all__ = ["ForceLimit", "max_force_over_segments"]
+__all__ = ["ForceLimit"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -39,7 +38,7 @@ class ForceLimit(Limit):
     model: str = DEFAULT_MODEL
     name = "force"
     binding = "force"
-    #: The last call's distinct RI ranges and their bands (:class:`~profileopt.speeds.BandMemo`):
+    #: The last call's distinct RI ranges and their bands (:class:`~profileopt.physics.speeds.BandMemo`):
     #: a refined plan asks again for every segment it kept whole.
     _memo: list = dataclasses.field(default_factory=list, init=False, repr=False, compare=False)
 
@@ -119,45 +118,3 @@ class ForceLimit(Limit):
             reason += (f", held below resonance: the faster band up to {largest[i]:.3g} m/s "
                        "cannot be entered or left in time")
         return reason
-
-
-def max_force_over_segments(model: str, vehicle: "Vehicle", ri: np.ndarray, speed_mps: np.ndarray,
-                            peaks_mps: np.ndarray, *, ri_min: np.ndarray | None = None) -> np.ndarray:
-    """Largest predicted force over the speeds between each segment's two boundary speeds.
-
-    The force of a speed interval is largest at one of its ends or at an interior local
-    maximum of the force (a resonance peak), so those are the only candidates.
-
-    Parameters
-    ----------
-    model : str
-        Force model key.
-    vehicle : Vehicle
-        The quarter car and its limits.
-    ri : numpy.ndarray, shape (N,)
-        RI of each segment (with ``ri_min``: the largest RI of its windows).
-    speed_mps : numpy.ndarray, shape (N+1,)
-        Speeds at the boundaries (m/s).
-    peaks_mps : numpy.ndarray, shape (N, P)
-        Speeds of the force's interior local maxima of each segment, NaN-padded
-        (:attr:`profileopt.speeds.SpeedBands.peaks_mps`, of the same force).
-    ri_min : numpy.ndarray, shape (N,), optional
-        The least RI of each segment's windows: the force is then the largest over the RI
-        range (:func:`profileopt.forces.envelope_force_n`).
-
-    Returns
-    -------
-    numpy.ndarray, shape (N,)
-        Force (N).
-    """
-    lo = np.minimum(speed_mps[:-1], speed_mps[1:])[:, None]
-    hi = np.maximum(speed_mps[:-1], speed_mps[1:])[:, None]
-    inside = (peaks_mps >= lo) & (peaks_mps <= hi)
-    candidates = np.concatenate([lo, hi, np.where(inside, peaks_mps, lo)], axis=1)
-    spec = get_model(model)
-    high = np.broadcast_to(ri[:, None], candidates.shape)
-    if ri_min is None:
-        forces = spec.force_n(candidates, high, vehicle)
-    else:
-        forces = spec.envelope_force_n(candidates, np.broadcast_to(ri_min[:, None], candidates.shape), high, vehicle)
-    return forces.max(axis=1)

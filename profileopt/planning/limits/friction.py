@@ -1,11 +1,11 @@
 """The friction circle: the tyres' longitudinal and lateral force within mu times the normal force.
 
-(a + g sin theta)^2 + (v^2 kappa)^2 <= (mu g cos theta)^2 (:func:`profileopt.motion.friction_usage`).
+(a + g sin theta)^2 + (v^2 kappa)^2 <= (mu g cos theta)^2 (:func:`profileopt.physics.motion.friction_usage`).
 It couples the speed (through the lateral part) with the acceleration, so in general it is
 a row of the NLP: in each segment at both ends (the lateral part grows with the speed) and
 at both extremes of the segment's grade (the usage is a convex quadratic in sin theta, so
 its largest value over the segment's grades is at one of them), with the segment's
-largest |kappa|: four rows (:data:`profileopt.planning.nlp.ROW_FAMILIES`, ``friction``).
+largest |kappa|: four rows (:data:`profileopt.physics.rows.ROW_FAMILIES`, ``friction``).
 
 Two consequences hold on their own and enter the exact forward-backward pass: a speed cap
 v^2 kappa <= mu g cos theta (no acceleration at all) and the acceleration bounds
@@ -23,12 +23,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ...motion import friction_radius_mps2, lateral_accel_mps2, lateral_speed_cap_mps, tyre_accel_mps2
-from ..path import SegmentPath
+from ...physics.motion import friction_radius_mps2, lateral_accel_mps2, lateral_speed_cap_mps, tyre_accel_mps2
+from ...core.path import SegmentPath
 from .base import PlanContext, RowLimit, worst_ratio
 
 if TYPE_CHECKING:
-    from ..result import Profile
+    from ...core.profile import Profile
 
 __all__ = ["FrictionLimit"]
 

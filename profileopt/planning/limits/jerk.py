@@ -1,7 +1,7 @@
 """The jerk bound at the interior segment boundaries.
 
 Between two segments of constant acceleration the acceleration changes at the boundary;
-the planner bounds jerk = v da/ds there (:func:`profileopt.kinematics.boundary_jerk_mps3`),
+the planner bounds jerk = v da/ds there (:func:`profileopt.core.kinematics.boundary_jerk_mps3`),
 a nonlinear row of the NLP.
 """
 
@@ -13,11 +13,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ...kinematics import boundary_jerk_mps3, segment_accel_mps2
+from ...core.kinematics import boundary_jerk_mps3, segment_accel_mps2
 from .base import Limit, PlanContext, worst_ratio
 
 if TYPE_CHECKING:
-    from ..result import Profile
+    from ...core.profile import Profile
 
 __all__ = ["JerkLimit"]
 

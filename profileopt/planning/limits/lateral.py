@@ -1,7 +1,7 @@
 """The lateral acceleration limit in turns: the vehicle's own bound and its rollover threshold.
 
 v^2 kappa <= a_lat, where a_lat is the smaller of ``max_lateral_accel_mps2`` and the static
-rollover threshold g t / (2 h_cg) (:func:`profileopt.motion.lateral_limit_mps2`). With the
+rollover threshold g t / (2 h_cg) (:func:`profileopt.physics.motion.lateral_limit_mps2`). With the
 segment's largest |kappa| it caps every speed driven inside the segment at
 sqrt(a_lat / kappa_max).
 """
@@ -13,11 +13,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ...motion import lateral_accel_mps2, lateral_speed_cap_mps
+from ...physics.motion import lateral_accel_mps2, lateral_speed_cap_mps
 from .base import Limit, PlanContext, worst_ratio
 
 if TYPE_CHECKING:
-    from ..result import Profile
+    from ...core.profile import Profile
 
 __all__ = ["LateralLimit"]
 

@@ -2,9 +2,9 @@
 
 In a segment of constant acceleration the power is largest at its higher speed and its
 steepest grade, so a <= P / (m max(v_i, v_{i+1})) - g sin(theta_hi)
-(:func:`profileopt.motion.power_accel_mps2`). The exact forward-backward pass keeps it
+(:func:`profileopt.physics.motion.power_accel_mps2`). The exact forward-backward pass keeps it
 (:class:`~profileopt.planning.bands.DrivePower`); in the NLP it is two rows per segment
-(:data:`profileopt.planning.nlp.ROW_FAMILIES`, ``power``), needed only where a speed the
+(:data:`profileopt.physics.rows.ROW_FAMILIES`, ``power``), needed only where a speed the
 caps allow, at the acceleration the bounds allow, would need more than P.
 """
 
@@ -15,13 +15,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ...motion import tyre_accel_mps2
+from ...physics.motion import tyre_accel_mps2
 from ..bands import DrivePower
-from ..path import SegmentPath
+from ...core.path import SegmentPath
 from .base import PlanContext, RowLimit, worst_ratio
 
 if TYPE_CHECKING:
-    from ..result import Profile
+    from ...core.profile import Profile
 
 __all__ = ["PowerLimit"]
 

@@ -16,7 +16,7 @@ import numpy as np
 from .base import Limit, PlanContext
 
 if TYPE_CHECKING:
-    from ..result import Profile
+    from ...core.profile import Profile
 
 __all__ = ["SpeedLimit"]
 

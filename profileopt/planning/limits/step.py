@@ -2,10 +2,10 @@
 
 Eq. (13) is the steady response to a smooth quarter sine. A rigid wheel meeting a step, or
 landing after a drop, runs a steep ramp of its path that starts or ends in a kink
-(:func:`profileopt.ramps.wheel_ramps`), too fast for the body to follow; the force on it is
-bounded by :func:`profileopt.ramp_force.ramp_force_n`, which rises with speed. Every segment that
+(:func:`profileopt.physics.ramps.wheel_ramps`), too fast for the body to follow; the force on it is
+bounded by :func:`profileopt.physics.ramp_force.ramp_force_n`, which rises with speed. Every segment that
 shares a point with a ramp is capped at the speed where that bound meets the vehicle's
-``max_transmitted_force_n`` (:func:`profileopt.ramp_force.step_caps`, which builds the
+``max_transmitted_force_n`` (:func:`profileopt.physics.ramp_force.step_caps`, which builds the
 wheel's path only where a cap can bind); where a plan meets that cap, refining cuts the
 segment just outside the ramp (:meth:`StepLimit.cap_stretches_m`), so the cap holds metres
 around a step, not the whole segment.
@@ -19,52 +19,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ...ramp_force import StepCaps, step_caps
+from ...physics.ramp_force import StepCaps, segment_step_caps_mps, step_caps
 from .base import Limit, PlanContext
 
 if TYPE_CHECKING:
-    from ...vehicle import Vehicle
-    from ..result import Profile
+    from ...core.profile import Profile
 
-__all__ = ["StepLimit", "step_speed_cap_mps", "segment_step_caps_mps"]
-
-
-def segment_step_caps_mps(caps: StepCaps, boundaries_m: np.ndarray) -> np.ndarray:
-    """Each segment's lowest cap of the ramps it shares a point with (m/s), inf where none.
-
-    Parameters
-    ----------
-    caps : StepCaps
-        The route's ramps below the top speed (:func:`profileopt.ramp_force.step_caps`).
-    boundaries_m : numpy.ndarray, shape (N+1,)
-        Segment boundaries (m), increasing.
-
-    Returns
-    -------
-    numpy.ndarray, shape (N,)
-    """
-    return caps.lowest_over(boundaries_m[:-1], boundaries_m[1:], np.inf)  # segment i: [b_i, b_i+1]
-
-
-def step_speed_cap_mps(s_m: np.ndarray, z_m: np.ndarray, boundaries_m: np.ndarray, vehicle: "Vehicle"
-                       ) -> np.ndarray:
-    """The step limit's cap on every speed driven in each segment (m/s), inf where none.
-
-    Parameters
-    ----------
-    s_m, z_m : numpy.ndarray, shape (M,)
-        The route's samples: distance (m), increasing, and elevation (m).
-    boundaries_m : numpy.ndarray, shape (N+1,)
-        Segment boundaries (m), increasing.
-    vehicle : Vehicle
-        Supplies the quarter car, the wheel radius, the top speed and
-        ``max_transmitted_force_n``.
-
-    Returns
-    -------
-    numpy.ndarray, shape (N,)
-    """
-    return segment_step_caps_mps(step_caps(s_m, z_m, vehicle), boundaries_m)
+__all__ = ["StepLimit"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -81,7 +42,7 @@ class StepLimit(Limit):
     _last: list = dataclasses.field(default_factory=list, init=False, repr=False, compare=False)
 
     def speed_cap_mps(self, context: PlanContext) -> np.ndarray:
-        """:func:`step_speed_cap_mps` of the plan's route and segments (m/s), shape (N,).
+        """:func:`profileopt.physics.ramp_force.step_speed_cap_mps` of the plan's route and segments (m/s), shape (N,).
 
         Parameters
         ----------

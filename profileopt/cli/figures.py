@@ -1,0 +1,45 @@
+"""``profileopt figures``: reproduce the paper's Figs. 1, 5 and 6 as PNG + CSV files."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..errors import InputError
+from .paths import check_folder, folder_outputs, vehicle_input
+
+
+def run(args: argparse.Namespace) -> int:
+    """Write the figures into ``args.out`` (created if missing); print each file written."""
+    from ..viz.figures import paper_figure_paths, write_paper_figures  # matplotlib: only when drawing (0.3 s)
+    from ..core.vehicle import load_vehicle
+
+    out = check_folder("--out", args.out)
+    inputs = [vehicle_input(args.vehicle), vehicle_input(args.resonant_vehicle)]
+    # every file checked before any work (a fig6 path that is a folder must not let fig5 be
+    # replaced); the six are then written together, all or none
+    outputs = folder_outputs("--out", paper_figure_paths(out), inputs)
+    vehicle = load_vehicle(args.vehicle)
+    resonant = load_vehicle(args.resonant_vehicle)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"--out {out}: cannot create the folder ({exc.strerror}); choose another path") from None
+    if outputs is None:
+        outputs = folder_outputs("--out", paper_figure_paths(out), inputs)
+    with outputs:
+        written = write_paper_figures(out, vehicle, resonant)
+    for path in written:
+        print(path)
+    return 0
+
+
+def arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--out", required=True, metavar="DIR",
+                        help="folder for the figures (created if missing)")
+    parser.add_argument("--vehicle", default="atv", metavar="NAME_OR_TOML",
+                        help="vehicle of Fig. 5: a bundled name or a .toml file (default: atv, Table 1)")
+    parser.add_argument("--resonant-vehicle", default="atv-resonant", metavar="NAME_OR_TOML",
+                        help="vehicle of Fig. 6: a bundled name or a .toml file (default: atv-resonant)")
+
+
+# cli.command reads run.arguments when it registers run, so set it first, then register.

@@ -1,0 +1,39 @@
+"""Library messages in the command line's words: parameter names become the flags that set them."""
+
+from __future__ import annotations
+
+import re
+
+__all__ = ["API_FLAGS", "API_FLAGS_ASSIGNED", "flags_for_parameters"]
+
+#: The library names its parameters in messages (``segment_length_m = 0 m: must be > 0``);
+#: the command line says its flags instead. Names that are also plain words (model, band)
+#: are replaced only where a message assigns them (``model = 'x'``); a quoted name is a
+#: file's key (``key 'max_jerk_mps3'`` of a vehicle file) and stays as it is.
+API_FLAGS = {"segment_length_m": "--segment-length", "roughness_window_m": "--roughness-window",
+             "path_tolerance_m": "--path-tolerance", "v0_mps": "--v0",
+             "vend_mps": "--vend", "n_stages": "--stages", "spacing_m": "--spacing", "corridor_m": "--corridor",
+             "max_gap_m": "--max-gap", "track_crs": "--track-crs", "terrain_crs": "--terrain-crs",
+             "track_index": "--track-index", "roughness_class": "--roughness-class"}
+#: max_jerk_mps3 is a vehicle file's key too: only ``max_jerk_mps3 = ...`` (or a message's
+#: ``ri VALUE``, the form of an option and its argument) is the option.
+API_FLAGS_ASSIGNED = {"model": "--model", "smoothing": "--smoothing", "method": "--method", "band": "--band",
+                      "max_jerk_mps3": "--max-jerk", "ri": "--ri"}
+_FLAG_PATTERN = re.compile(r"(?<![\w'])(" + "|".join(API_FLAGS) + r")(?![\w'])")
+_ASSIGNED_PATTERN = re.compile(r"(?<![\w.'-])(" + "|".join(API_FLAGS_ASSIGNED) + r")(?= = | VALUE\b)")
+
+
+def flags_for_parameters(message: str) -> str:
+    """A library message with API parameter names replaced by the command's flags.
+
+    Parameters
+    ----------
+    message : str
+        An :class:`~profileopt.errors.InputError` message.
+
+    Returns
+    -------
+    str
+    """
+    message = _FLAG_PATTERN.sub(lambda m: API_FLAGS[m.group(1)], message)
+    return _ASSIGNED_PATTERN.sub(lambda m: API_FLAGS_ASSIGNED[m.group(1)], message)

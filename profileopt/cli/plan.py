@@ -1,0 +1,198 @@
+"""``profileopt plan``: the minimum-time speed profile along a route."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from ..defaults import (DEFAULT_MODEL, DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M,
+                        DEFAULT_REFINE, DEFAULT_SEGMENT_LENGTH_M, DEFAULT_SMOOTHING, MODEL_KEYS, PLAN_BANDS,
+                        PLAN_METHODS)
+from ..errors import InputError
+from .paths import vehicle_input
+from .track import (add_track_arguments, assumed_roughness, is_track, number_argument, refuse_track_options,
+                     track_inputs, track_route)
+
+
+def arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("route", help="route CSV: columns s,z or x,y,z (m), optional speed_limit (m/s); or a track "
+                                      "(GPX, GeoJSON, CSV of x,y with --terrain), sampled as 'profileopt route' does")
+    parser.add_argument("--vehicle", default="atv", metavar="NAME_OR_TOML",
+                        help="bundled vehicle name or .toml file (default: atv)")
+    parser.add_argument("-o", "--output", metavar="CSV",
+                        help="write the profile CSV here ('-': standard output, the summary then goes to stderr)")
+    parser.add_argument("--segment-length", type=number_argument, default=DEFAULT_SEGMENT_LENGTH_M, metavar="M",
+                        help=f"segment length in m, the planning resolution (default: {DEFAULT_SEGMENT_LENGTH_M:g})")
+    parser.add_argument("--refine", action=argparse.BooleanOptionalAction, default=DEFAULT_REFINE,
+                        help="cut the segments where the minimum-time plan meets the force's speed cap wherever "
+                             "the roughness changes, and those where it meets a step's or a speed limit's cap "
+                             "just outside the step or zone, then plan, so that the travel time hardly depends on "
+                             "--segment-length (default; 1-11 times the segments, 1-6 times the plan time); "
+                             "--no-refine plans on the uniform segments")
+    parser.add_argument("--roughness-window", type=number_argument, default=DEFAULT_ROUGHNESS_WINDOW_M, metavar="M",
+                        help="roughness window in m: every stretch this long, wherever it starts, is driven at "
+                             f"speeds admissible for its own RI (default: {DEFAULT_ROUGHNESS_WINDOW_M:g})")
+    parser.add_argument("--path-tolerance", type=number_argument, default=DEFAULT_PATH_TOLERANCE_M, metavar="M",
+                        help="how far in m the smoothed path, whose curvature limits the speed in turns, may stray "
+                             "from an x,y,z route's points; give the track's noise, a few m for a consumer GPS "
+                             f"(default: {DEFAULT_PATH_TOLERANCE_M:g})")
+    parser.add_argument("--model", default=DEFAULT_MODEL, choices=list(MODEL_KEYS),
+                        help="force model (default: sbem_tf)")
+    parser.add_argument("--smoothing", type=number_argument, default=DEFAULT_SMOOTHING, metavar="W",
+                        help="weight of the comfort term: objective = time + W * integral (jerk/(1 m/s^3))^2 dt "
+                             f"(default: {DEFAULT_SMOOTHING}; 0 = pure minimum time)")
+    parser.add_argument("--max-jerk", type=number_argument, default=None, metavar="MPS3",
+                        help="jerk bound in m/s^3 (default: the vehicle file's; 'inf' turns it off)")
+    parser.add_argument("--v0", type=number_argument, default=0.0, metavar="MPS", help="speed at the start, m/s (default: 0)")
+    parser.add_argument("--vend", type=number_argument, default=0.0, metavar="MPS", help="speed at the end, m/s (default: 0)")
+    parser.add_argument("--method", default="auto", choices=list(PLAN_METHODS),
+                        help="'auto': exact forward-backward profile when it is optimal, else the NLP "
+                             "(banded interior point; IPOPT where it stops); 'nlp': always the NLP")
+    parser.add_argument("--band", default="all", choices=list(PLAN_BANDS),
+                        help="'all': any admissible speed band, chosen over the whole route (may cross "
+                             "washboard above resonance); 'first': only speeds reachable from rest "
+                             "without crossing a force peak; 'largest': only the highest band (default: all)")
+    parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    parser.add_argument("--plot", metavar="PNG",
+                        help="draw speed, allowable speeds, RI, curvature, grade and the binding limit along the route")
+    parser.add_argument("--map", metavar="PNG",
+                        help="draw the route over its terrain, coloured by the planned speed, marking where each "
+                             "limit holds it (an x,y route or a track)")
+    add_track_arguments(parser)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..io.atomic import OutputSet  # imported when the command runs, not for --help (issue 14)
+    from ..io.profiles import write_profile
+    from ..core.vehicle import load_vehicle
+
+    # first, before any work: every output checked (none may be an input, nor both the same
+    # file); then written together, all or none
+    outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot), ("--map", args.map)],
+                        inputs=[args.route, vehicle_input(args.vehicle), *track_inputs(args)])
+    vehicle = load_vehicle(args.vehicle)
+    from ..planning import plan  # the numerical packages: imported only when planning
+
+    made = None
+    if is_track(args.route, args):
+        made = track_route(args.route, args, "profileopt plan")
+        route = made.route
+    else:
+        refuse_track_options(args.route, args)
+        route = _route_file(args)
+    if args.map is not None and route.x_m is None:
+        raise InputError(f"{args.route}: --map draws a route's x,y (or a track's); this route has only s,z: "
+                         "drop --map or give an x,y,z route")
+    for note in route.notes:
+        print(f"profileopt plan: note: {note}", file=sys.stderr)
+    profile = plan(
+        route, vehicle, segment_length_m=args.segment_length, roughness_window_m=args.roughness_window,
+        path_tolerance_m=args.path_tolerance, model=args.model, smoothing=args.smoothing,
+        max_jerk_mps3=args.max_jerk, v0_mps=args.v0, vend_mps=args.vend, method=args.method,
+        band=args.band, refine=args.refine,
+    )
+    with outputs:
+        if args.output is not None:
+            write_profile(profile, args.output)
+        if args.plot is not None:
+            from ..viz.plots import plot_profile
+
+            plot_profile(profile, args.plot, route=Path(args.route).name,
+                         vehicle=Path(vehicle.name).stem if vehicle.name else None)
+        if args.map is not None:
+            from ..viz.maps import plot_plan_map
+
+            plot_plan_map(profile, made if made is not None else _plain_map(route), args.map)
+    for note in profile.notes:
+        print(f"profileopt plan: note: {note}", file=sys.stderr)
+    summary = profile.summary()
+    out = sys.stderr if outputs.uses_stdout else sys.stdout  # standard output holds the profile
+    if args.json:
+        print(json.dumps(summary, indent=2), file=out)
+    else:
+        print(_human(summary, args), file=out)
+    return 0
+
+
+def _route_file(args: argparse.Namespace):  # noqa: ANN202  (Route)
+    """A route CSV, with the roughness the options assume, if any, in place of the file's."""
+    import dataclasses
+
+    from ..io.routes import read_route
+
+    try:
+        route = read_route(args.route)
+    except InputError as exc:
+        if "lacks the columns" not in str(exc):
+            raise
+        raise InputError(f"{exc}; a track of x,y points is planned with --terrain TERRAIN") from None
+    assumed = assumed_roughness(args)
+    if assumed is not None:
+        if route.assumed_roughness is not None:
+            print(f"profileopt plan: note: {args.route}: its assumed roughness ({route.assumed_roughness.label}) is "
+                  f"replaced by {assumed.label}", file=sys.stderr)
+        route = dataclasses.replace(route, assumed_roughness=assumed)
+    return route
+
+
+def _plain_map(route):  # noqa: ANN001, ANN202
+    """A map without terrain of a route file's x, y."""
+    import numpy as np
+
+    from ..terrain.ground_track import TrackRoute
+
+    return TrackRoute(route=route, crs_name="", track_x_m=route.x_m, track_y_m=route.y_m, terrain_kind="route file",
+                      roughness_measured=route.assumed_roughness is None, density_per_m2=None, resolution="",
+                      gaps_m=np.zeros((0, 2)), comments=(), notes=())
+
+
+def _ratio(m: dict) -> str:
+    return "off or unused" if m["ratio"] is None else f"{100 * m['ratio']:.1f} % of limit at s = {m['s_m']:g} m"
+
+
+def _human(summary: dict, args: argparse.Namespace) -> str:
+    from ..io.atomic import STDOUT  # already imported by the run
+
+    slow = summary["slowest_segment"]
+    margins = summary["margins"]
+    solver = summary["solver"]
+    lines = [
+        f"route {args.route}: {summary['distance_m']:.1f} m in {summary['segments']} segments, "
+        f"vehicle {args.vehicle}, model {_label(summary['model'])}",
+        f"  travel time  {summary['travel_time_s']:.2f} s   mean speed {summary['mean_speed_mps']:.2f} m/s",
+        f"  slowest      {slow['s_start_m']:g}-{slow['s_end_m']:g} m at {slow['top_speed_mps']:.3g} m/s: "
+        f"{slow['reason']}",
+        f"  force        {_ratio(margins['force'])}",
+        *([f"  roughness    assumed, not measured: {summary['roughness']['label']} (RI {summary['roughness']['ri']:.4g} "
+           f"over {summary['roughness']['window_m']:g} m windows)"]
+          if summary.get("roughness", {}).get("source") == "assumed" else []),
+        *(f"  {name:<12} {_ratio(margins[key])}" for key, name in (("lateral", "lateral"), ("friction", "friction"))
+          if key in margins),
+        f"  acceleration {_ratio(margins['accel'])}",
+        f"  deceleration {_ratio(margins['decel'])}",
+        *([f"  power        {_ratio(margins['power'])}"] if "power" in margins else []),
+        f"  jerk         {_ratio(margins['jerk'])}",
+        "  binding      " + ", ".join(f"{name} {100 * share:.0f} %" for name, share in summary["binding"].items())
+        + " of the distance",
+        *([f"  limits off   {', '.join(summary['limits_off'])} (not in the vehicle file)"]
+          if summary["limits_off"] else []),
+        f"  solver       {solver['status']} ({solver['iterations']} NLP iterations"
+        + (f" over {solver['pieces']} pieces" if solver["pieces"] > 1 else "")
+        + f"), planned in {solver['time_s']:.3f} s",
+    ]
+    if args.output is not None:
+        lines.append("wrote the profile to standard output" if args.output == STDOUT else f"wrote {args.output}")
+    for picture in (args.plot, args.map):
+        if picture is not None:
+            lines.append(f"wrote {picture}")
+    return "\n".join(lines)
+
+
+
+
+def _label(model: str) -> str:
+    from ..physics.forces import get_model
+
+    return get_model(model).label

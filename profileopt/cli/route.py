@@ -1,0 +1,67 @@
+"""``profileopt route``: the route a vehicle drives along a GPS track over a terrain map."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .. import __version__
+from .track import add_track_arguments, track_inputs, track_route
+
+
+def arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("track", help="the track: GPX (tracks or routes), a GeoJSON LineString, or a CSV of x,y")
+    parser.add_argument("-o", "--output", required=True, metavar="CSV",
+                        help="write the route CSV (x_m,y_m,z_m) here ('-': standard output)")
+    parser.add_argument("--plot", metavar="PNG", help="draw the track over the terrain and the route's elevation")
+    add_track_arguments(parser)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..io.atomic import STDOUT, OutputSet  # imported when the command runs, not for --help (issue 14)
+
+    outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot)], inputs=[args.track, *track_inputs(args)])
+    result = track_route(args.track, args, "profileopt route")
+    from ..io.routes import write_route
+
+    name = Path(args.output).name if args.output != STDOUT else "route"
+    made = f"profileopt {__version__} route {args.track}" + (f" --terrain {args.terrain}" if args.terrain else "")
+    comments = [f"{name}: the ground under the wheels along a track, made by `{made}`", *result.comments,
+                f"options: spacing {args.spacing:g} m, corridor {args.corridor:g} m, max gap {args.max_gap:g} m"]
+    with outputs:
+        write_route(result.route, args.output, comments=comments)
+        if args.plot is not None:
+            from ..viz.maps import plot_route_map
+
+            plot_route_map(result, args.plot, title=f"{Path(args.track).name}"
+                           + (f" over {Path(args.terrain).name}" if args.terrain else ""))
+    out = sys.stderr if outputs.uses_stdout else sys.stdout
+    print(_human(result, args), file=out)
+    return 0
+
+
+def _human(result: object, args: argparse.Namespace) -> str:
+    from ..io.atomic import STDOUT  # already imported by the run
+
+    route = result.route
+    z = route.z_m
+    roughness = (f"assumed, {route.assumed_roughness.label} ({result.resolution})" if route.assumed_roughness
+                 else f"measured ({result.resolution})" if result.terrain_kind != "track" else "")
+    frame = result.crs_name or "the track's own frame (no CRS)"
+    terrain = args.terrain or "none (the track's own elevations)"
+    lines = [
+        f"route {args.track}: {route.length_m:.1f} m, {route.s_m.size} samples every {args.spacing:g} m, "
+        f"x, y in {frame}",
+        f"  terrain    {terrain} ({result.terrain_kind})",
+        f"  roughness  {roughness}",
+        f"  elevation  {z.min():.2f} to {z.max():.2f} m",
+        "  gaps       " + (f"{len(result.gaps_m)} bridged by straight lines, the longest "
+                           f"{(result.gaps_m[:, 1] - result.gaps_m[:, 0]).max():.2f} m" if len(result.gaps_m) else "none"),
+    ]
+    lines.append("wrote the route to standard output" if args.output == STDOUT else f"wrote {args.output}")
+    if args.plot is not None:
+        lines.append(f"wrote {args.plot}")
+    return "\n".join(lines)
+
+

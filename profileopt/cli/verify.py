@@ -1,0 +1,207 @@
+"""``profileopt verify``: check a planned profile against a simulated vehicle.
+
+It checks a profile against the vehicle's own limits, drives the vehicle's quarter car over
+the route at its speeds and judges the drive by roughness windows: in every window
+[a, a + W] of the route, the simulated peak force while the vehicle is inside it beside the
+window's own prediction (recomputed from the speeds) and the limit; the same per segment.
+Its exit status is a verdict a script or CI can gate on (:data:`VERIFY_EXIT_STATUSES`). It
+prints only numbers that do not depend on the machine, so the same input gives the same
+output bytes on every run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from ..errors import InputError
+from ..defaults import MODEL_KEYS
+from .paths import vehicle_input
+
+
+def _vehicle_of(args: argparse.Namespace, profile) -> str:
+    """The vehicle to verify with: the one the profile records, unless --vehicle names it."""
+    recorded = str(profile.settings.get("vehicle", ""))
+    if recorded in ("", "unnamed"):
+        if args.vehicle is None:
+            raise InputError(f"{args.profile}: the profile does not record its vehicle; pass --vehicle")
+        return args.vehicle
+    if args.vehicle is not None and Path(args.vehicle).stem != Path(recorded).stem:
+        raise InputError(f"{args.profile}: the profile was planned for vehicle '{recorded}' but --vehicle is "
+                         f"'{args.vehicle}'; pass --vehicle {recorded} (or leave it out), or plan again")
+    args.vehicle = args.vehicle or recorded
+    return args.vehicle
+
+
+#: The exit status of ``profileopt verify``: the plan keeps every limit of the vehicle and no
+#: roughness window's (nor segment's) simulated force exceeds the limit.
+EXIT_PASSES = 0
+#: The profile breaks one of the vehicle's own limits (speed, acceleration, jerk, predicted force).
+EXIT_BREAKS_LIMITS = 3
+#: The limits hold on paper, but the simulation puts a roughness window (or a segment) over
+#: the force limit.
+EXIT_OVER_IN_SIMULATION = 4
+#: Every exit status of ``profileopt verify`` and its meaning (also in its ``--help``).
+VERIFY_EXIT_STATUSES = {
+    EXIT_PASSES: "the plan keeps every limit of the vehicle (speed, acceleration, jerk, predicted force) and no "
+                 "roughness window's (nor segment's) simulated force exceeds the force limit",
+    1: "internal error",
+    2: "bad input (one line on stderr), e.g. a profile that does not cover its route exactly",
+    EXIT_BREAKS_LIMITS: "the profile breaks one of the vehicle's own limits (speed, acceleration, jerk or "
+                        "predicted force); the simulation is still reported when it can be run",
+    EXIT_OVER_IN_SIMULATION: "the limits hold on paper, but the simulation puts a roughness window (or a segment) "
+                             "over the force limit",
+}
+
+
+def _verdict(check, result=None) -> tuple[int, str]:
+    """The exit status and the verdict line (``result`` None: not simulated)."""
+    if check.breaches:
+        kinds = ", ".join(dict.fromkeys(b.quantity for b in check.breaches))
+        return EXIT_BREAKS_LIMITS, (f"  verdict: the profile breaks the vehicle's limits ({kinds}); "
+                                    f"exit {EXIT_BREAKS_LIMITS}")
+    if result is not None and not result.passes:
+        win = result.windows
+        return EXIT_OVER_IN_SIMULATION, (
+            f"  verdict: the profile keeps the vehicle's limits on paper, but in simulation {win.over_count} of "
+            f"{win.count} roughness windows ({win.window_m:g} m) and {result.over_count} of {result.ratio.size} "
+            f"segments exceed the force limit; exit {EXIT_OVER_IN_SIMULATION}")
+    return EXIT_PASSES, ("  verdict: the profile keeps every limit of the vehicle (speed, acceleration, jerk, "
+                         "predicted force) and no roughness window or segment exceeds the force limit in "
+                         f"simulation; exit {EXIT_PASSES}")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``profileopt verify``; returns the verdict's status (:data:`VERIFY_EXIT_STATUSES`)."""
+    from ..io.atomic import STDOUT, OutputSet  # imported when the command runs, not for --help (issue 14)
+    from ..core.vehicle import load_vehicle
+    from ..physics.forces import get_model
+    from ..io import read_profile, read_route
+    from ..viz.plots import plot_verification
+    from ..verification.limit_check import check_limits
+    from ..verification.verify import verify
+
+    # first, before any work: every output checked (none may be an input, nor both the same
+    # file); then written together, all or none
+    outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot)],
+                        inputs=[args.route, args.profile, vehicle_input(args.vehicle)])
+    from .track import TRACK_SUFFIXES
+
+    if Path(args.route).suffix.lower() in TRACK_SUFFIXES:
+        raise InputError(f"{args.route}: verify drives a route file, not a track: make one with 'profileopt route "
+                         f"{args.route} --terrain TERRAIN -o route.csv', plan and verify that")
+    route = read_route(args.route)
+    profile = read_profile(args.profile)
+    vehicle = load_vehicle(_vehicle_of(args, profile))
+    check = check_limits(route, profile, vehicle, model=args.model)
+    model = get_model(check.model)
+    header = (f"verified {args.profile} on {args.route} with vehicle {args.vehicle}, "
+              f"model {model.label} ({model.quantity} force, limit {check.limit_n:g} N)")
+    try:
+        result = verify(route, profile, vehicle, model=args.model, check=check, roughness_seed=args.seed)
+    except InputError as exc:
+        if not check.breaches:
+            raise
+        # a profile so far beyond the vehicle's limits that it cannot be simulated (1e155 m/s)
+        return _report_unsimulated(args, check, header, str(exc))
+    with outputs:
+        if args.output is not None:
+            result.to_csv(args.output)
+        if args.plot is not None:
+            plot_verification(result, args.plot)
+    out = sys.stderr if outputs.uses_stdout else sys.stdout  # standard output holds the table
+    status, verdict = _verdict(check, result)
+    if args.json:
+        print(json.dumps(result.summary(timings=False) | {"exit_status": status}, indent=2), file=out)
+        return status
+    i = result.worst_segment
+    win = result.windows
+    worst = win.describe(win.worst)
+    lines = [
+        header,
+        verdict,
+        *(f"  {breach.describe()}" for breach in check.breaches),
+        f"  roughness windows ({win.window_m:g} m) over the limit: {win.over_count} of {win.count} "
+        f"({100 * win.over_count / win.count:.1f} %)",
+        f"  worst window: {worst['start_m']:g} to {worst['stop_m']:g} m (RI {worst['ri']:.3f}, speeds "
+        f"{worst['speed_low_mps']:.3g} to {worst['speed_high_mps']:.3g} m/s): {_ratio_text(worst['ratio'])} of the "
+        f"limit, {worst['simulated_n']:.0f} N simulated at s = {worst['peak_s_m']:.2f} m, "
+        f"{worst['predicted_n']:.0f} N predicted, limit {worst['limit_n']:g} N",
+        f"  windows where the simulation exceeds the prediction by > 1 % of the limit: "
+        f"{int(win.underpredicted.sum())}",
+        f"  segments over the limit: {result.over_count} of {result.ratio.size} "
+        f"({100 * result.over_fraction:.1f} %, {result.over_length_m:g} m)",
+        f"  worst segment, simulated / limit: {_ratio_text(result.worst_ratio)} in the segment from s = {result.s_m[i]:g} m "
+        f"({result.simulated_n[i]:.0f} N simulated, {result.predicted_n[i]:.0f} N predicted)",
+        f"  segments where the simulation exceeds the prediction by > 1 % of the limit: "
+        f"{int(result.underpredicted.sum())}",
+        f"  segments where the wheel would leave the ground (F_T < -m g = {-result.weight_n:.0f} N): "
+        f"{int(result.lift_off.sum())}",
+        f"  simulated {result.travel_time_s:.2f} s of driving in {result.run.steps} steps of "
+        f"{1e3 * result.run.time_step_s:.4f} ms",
+    ]
+    lines += [f"  note: {note}" for note in result.notes]
+    if args.output is not None:
+        lines.append("wrote the table to standard output" if args.output == STDOUT else f"wrote {args.output}")
+    if args.plot is not None:
+        lines.append(f"wrote {args.plot}")
+    print("\n".join(lines), file=out)
+    return status
+
+
+def _report_unsimulated(args: argparse.Namespace, check, header: str, reason: str) -> int:
+    """The verdict of a profile that breaks the limits and cannot be simulated; nothing is written."""
+    status, verdict = _verdict(check)
+    unwritten = [name for name in (args.output, args.plot) if name]
+    if args.json:
+        print(json.dumps({"route": str(args.route), "vehicle": str(args.vehicle), "model": check.model,
+                          "segments": int(check.predicted_n.size), "keeps_limits": False,
+                          "breaches": [b.to_dict() for b in check.breaches], "simulated": False,
+                          "not_simulated": reason, "notes": list(check.notes), "exit_status": status}, indent=2))
+        return status
+    lines = [header, verdict, *(f"  {breach.describe()}" for breach in check.breaches),
+             f"  not simulated: {reason}"]
+    lines += [f"  note: {note}" for note in check.notes]
+    if unwritten:
+        lines.append(f"not written (there is no simulation to write): {', '.join(unwritten)}")
+    print("\n".join(lines))
+    return status
+
+
+def arguments(parser: argparse.ArgumentParser) -> None:
+    parser.epilog = "exit status: " + "; ".join(f"{code}: {text}" for code, text in
+                                                sorted(VERIFY_EXIT_STATUSES.items())) + "."
+    parser.add_argument("route", help="route CSV (the terrain the profile was planned on)")
+    parser.add_argument("profile", help="profile CSV written by 'profileopt plan -o'")
+    parser.add_argument("--vehicle", default=None, metavar="NAME_OR_TOML",
+                        help="bundled vehicle name or .toml file (default: the vehicle the profile "
+                             "records; a different one is refused)")
+    parser.add_argument("--model", default=None, choices=list(MODEL_KEYS),
+                        help="force model to check against (default: the model the profile records)")
+    parser.add_argument("-o", "--output", metavar="CSV",
+                        help="write one row per segment to this CSV, with the worst roughness window that meets "
+                             "it ('-': standard output, the summary then goes to stderr)")
+    parser.add_argument("--plot", metavar="PNG", help="write forces along s and simulated vs predicted per window")
+    parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    parser.add_argument("--seed", type=_seed, default=0, metavar="N",
+                        help="for a route with an assumed roughness (a '# roughness_class' or '# roughness_ri' "
+                             "line): the seed of the random ISO 8608 profile added to its elevation for the "
+                             "simulation (default: 0); unused for other routes")
+
+
+def _seed(text: str) -> int:
+    """An integer >= 0 for --seed, or argparse's one-line error."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not an integer; give a seed >= 0, e.g. --seed 1") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{value} is negative; give a seed >= 0")
+    return value
+
+
+def _ratio_text(ratio: float) -> str:
+    """A force ratio with 3 decimals, or 3 significant digits when it is absurdly large."""
+    return f"{ratio:.3f}" if ratio < 1e6 else f"{ratio:.3g}"

@@ -1,0 +1,444 @@
+"""A speed profile checked on paper against the vehicle's own limits, before any simulation.
+
+:func:`check_limits` checks that a profile covers its route, recomputes each segment's
+predicted force from the profile's speeds (the file's ``force_n`` column is not trusted) and
+finds where the profile first breaks each limit of the vehicle: top speed, the caps of
+steps, the route's speed limits and turns, acceleration, deceleration, the friction circle,
+drive power, jerk and predicted force. Every limit is computed here from the vehicle, the
+route and :mod:`profileopt.physics`, never from the planner's own numbers, so it checks the
+planner rather than repeating it. :func:`profileopt.verify` calls it before it simulates;
+``profileopt verify`` turns its breaches into exit status 3.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..core.kinematics import boundary_jerk_mps3, segment_accel_mps2
+from ..core.path import segment_path
+from ..core.segments import Segments, route_roughness_windows, segments_at
+from ..core.stations import segment_samples
+from ..defaults import DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M, LIMIT_RTOL
+from ..errors import InputError
+from ..physics.forces import get_model
+from ..physics.motion import STANDARD_GRAVITY_MPS2 as G
+from ..physics.motion import (friction_radius_mps2, lateral_limit_mps2, lateral_speed_cap_mps, plans_on_grades,
+                              tyre_accel_mps2)
+from ..physics.ramp_force import step_speed_cap_mps
+from ..physics.rows import ROW_FAMILIES, exact_row_values
+from ..physics.speeds import max_force_over_segments, speed_bands
+from ..terrain.roughness import RoughnessWindows
+
+if TYPE_CHECKING:
+    from ..core.path import SegmentPath
+    from ..core.profile import Profile
+    from ..core.route import Route
+    from ..core.vehicle import Vehicle
+
+__all__ = ["check_limits", "route_as_planned", "LimitCheck", "LimitBreach", "STALE_FORCE_RTOL"]
+
+#: The profile's force_n column counts as stale when it differs from the forces its speeds
+#: give by more than this share of the limit (the file's 17 digits give them back exactly).
+STALE_FORCE_RTOL = 1e-9
+
+
+@dataclasses.dataclass(frozen=True)
+class LimitBreach:
+    """Where a profile first breaks one of the vehicle's limits, and how often.
+
+    Attributes
+    ----------
+    quantity : str
+        ``"speed"``, ``"acceleration"``, ``"deceleration"``, ``"jerk"``, ``"friction"``,
+        ``"power"`` or ``"force"``.
+    limit_name : str
+        The limit broken, in words (``"the vehicle's top speed"``).
+    segment : int
+        The first segment that breaks it (for jerk: the segment after the boundary).
+    s_m : float
+        Where (m): the segment's start, or the boundary for jerk.
+    value : float
+        The profile's value there (m/s, m/s^2, m/s^3 or N; deceleration as a positive number).
+    limit : float
+        The limit there, in the same unit.
+    unit : str
+        The unit of ``value`` and ``limit``.
+    count : int
+        How many segments (boundaries, for jerk) break it.
+    of : int
+        How many there are.
+    worst_ratio : float
+        The largest value / limit anywhere.
+    """
+
+    quantity: str
+    limit_name: str
+    segment: int
+    s_m: float
+    value: float
+    limit: float
+    unit: str
+    count: int
+    of: int
+    worst_ratio: float
+
+    def describe(self) -> str:
+        """One line: which limit, where first, by how much, how often."""
+        where = "at the boundary" if self.quantity == "jerk" else "in the segment from"
+        places = "boundaries" if self.quantity == "jerk" else "segments"
+        # enough digits that a breach just over the limit (LIMIT_RTOL = 1e-6) does not read as "1"
+        digits = 4 if not math.isfinite(self.worst_ratio) or self.worst_ratio > 1.001 else 8
+        value = f"{self.value:.{digits}g} {self.unit}" if math.isfinite(self.value) else "too large to compute"
+        worst = (f"{self.worst_ratio:.{digits}g} times the limit" if math.isfinite(self.worst_ratio)
+                 else "beyond any number")
+        return (f"breaks {self.limit_name} ({self.limit:.4g} {self.unit}) first {where} s = {self.s_m:g} m "
+                f"(segment {self.segment}): {self.quantity} {value}; {self.count} of {self.of} {places}, "
+                f"worst {worst}")
+
+    def to_dict(self) -> dict:
+        """The fields, JSON-ready (a value that is not a finite number is None)."""
+        return {key: None if isinstance(value, float) and not math.isfinite(value) else value
+                for key, value in dataclasses.asdict(self).items()}
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class LimitCheck:
+    """A profile checked against the vehicle's own limits, on paper (:func:`check_limits`).
+
+    Attributes
+    ----------
+    model : str
+        Force model key.
+    ri : numpy.ndarray, shape (N,)
+        Each segment's RI, measured on the route.
+    predicted_n : numpy.ndarray, shape (N,)
+        The model's largest force over the speeds between each segment's two boundary
+        speeds (resonance peaks included), from the profile's speeds (N).
+    limit_n : float
+        The vehicle's limit for the model's force (N).
+    breaches : tuple of LimitBreach
+        The limits the profile breaks, in the order speed, acceleration, deceleration,
+        jerk, force; empty when it keeps them all.
+    notes : tuple of str
+        Remarks (a stale force column, a force limit in the file that is not the vehicle's).
+    windows : RoughnessWindows
+        The route's roughness windows, of the length the profile records (the segments' RI
+        comes from them; :func:`profileopt.verification.window_check.check_windows` judges by them).
+    """
+
+    model: str
+    ri: np.ndarray
+    predicted_n: np.ndarray
+    limit_n: float
+    breaches: tuple[LimitBreach, ...]
+    notes: tuple[str, ...]
+    windows: RoughnessWindows
+
+
+def _check_coverage(route: "Route", s: np.ndarray) -> None:
+    """Refuse a profile whose first or last boundary is not the route's first or last sample."""
+    span = max(abs(route.s_m[0]), abs(route.s_m[-1]), 1.0) * 1e-9
+    for end, mine, theirs in (("start", s[0], route.s_m[0]), ("end", s[-1], route.s_m[-1])):
+        gap = float(mine - theirs)
+        if abs(gap) > span:
+            side = "after" if gap > 0 else "before"
+            raise InputError(
+                f"{route.source}: the profile covers s = {s[0]:g} to {s[-1]:g} m but the route {route.s_m[0]:g} to "
+                f"{route.s_m[-1]:g} m: the profile's {end} lies {abs(gap):g} m {side} the route's {end}; a profile "
+                "must cover its route exactly, so verify the whole profile planned on this route"
+            )
+
+
+def _roughness_window_m(profile: "Profile") -> float:
+    """The roughness window the profile records in its settings (else the default), in m."""
+    recorded = profile.settings.get("roughness_window_m")
+    if recorded is None:
+        return DEFAULT_ROUGHNESS_WINDOW_M
+    try:
+        window = float(recorded)
+    except (TypeError, ValueError):
+        window = math.nan
+    if not (math.isfinite(window) and window > 0):
+        raise InputError(f"profile: roughness_window_m={recorded} in its settings line is not a number > 0; "
+                         "write the profile with 'profileopt plan -o'")
+    return window
+
+
+def _jerk_bound_mps3(profile: "Profile", vehicle: "Vehicle") -> tuple[float, str]:
+    """The jerk bound the profile records in its settings (else the vehicle's), and its name."""
+    recorded = profile.settings.get("max_jerk_mps3")
+    if recorded is None:
+        return vehicle.max_jerk_mps3, "the vehicle's jerk limit"
+    try:
+        bound = float(recorded)
+    except (TypeError, ValueError):
+        bound = math.nan
+    if not bound > 0:
+        raise InputError(f"profile: max_jerk_mps3={recorded} in its settings line is not a number > 0; write "
+                         "the profile with 'profileopt plan -o'")
+    return bound, "the jerk bound the profile was planned with"
+
+
+def _first_breach(quantity: str, limit_name: str, values: np.ndarray, limit: np.ndarray, where_m: np.ndarray,
+                  segments: np.ndarray, unit: str) -> LimitBreach | None:
+    """The first place where ``values`` exceed ``limit`` by more than :data:`profileopt.defaults.LIMIT_RTOL`
+    (a value that is not a number counts as beyond), or None."""
+    limit = np.broadcast_to(np.asarray(limit, dtype=float), values.shape)
+    broken = ~(values <= limit * (1.0 + LIMIT_RTOL))
+    if not np.any(broken):
+        return None
+    k = int(np.flatnonzero(broken)[0])
+    ratio = values / limit
+    worst = float(np.max(np.where(np.isnan(ratio), np.inf, ratio)))
+    return LimitBreach(quantity=quantity, limit_name=limit_name, segment=int(segments[k]), s_m=float(where_m[k]),
+                       value=float(values[k]), limit=float(limit[k]), unit=unit,
+                       count=int(np.count_nonzero(broken)), of=int(values.size), worst_ratio=worst)
+
+
+def _setting_m(profile: "Profile", key: str, default: float) -> float:
+    """A length the profile records in its settings (m), else ``default``."""
+    try:
+        value = float(profile.settings.get(key, default))
+    except (TypeError, ValueError):
+        value = default
+    return value if math.isfinite(value) and value > 0 else default
+
+
+def route_as_planned(route: "Route", profile: "Profile") -> tuple["Route", str | None]:
+    """The route with the assumed roughness its profile was planned with.
+
+    ``plan route.csv --roughness-class C`` (``plan(dataclasses.replace(route,
+    assumed_roughness=...))``) records the assumption in the profile's settings, not in the
+    route file: a profile is judged on the roughness it was planned for.
+
+    Parameters
+    ----------
+    route : Route
+        The route as read.
+    profile : Profile
+        A profile of it; ``profile.settings["roughness"]`` names an assumed roughness, if any.
+
+    Returns
+    -------
+    (Route, str or None)
+        The route (itself when the profile records no assumption) and a note when the
+        profile's assumption differs from the route's own.
+
+    Raises
+    ------
+    InputError
+        The profile records a roughness that names no class and no RI.
+    """
+    from ..terrain.assumed import AssumedRoughness
+
+    label = profile.settings.get("roughness")
+    if label is None:
+        return route, None
+    try:
+        assumed = AssumedRoughness.from_label(label)
+    except InputError as exc:
+        raise InputError(f"profile: its settings line records roughness={label}: {exc}; plan it again") from None
+    if assumed == route.assumed_roughness:
+        return route, None
+    was = route.assumed_roughness.label if route.assumed_roughness else "none, measured"
+    note = (f"the profile was planned with the assumed roughness {assumed.label} (the route's: {was}); it is "
+            "judged with the profile's")
+    return dataclasses.replace(route, assumed_roughness=assumed), note
+
+
+def check_limits(
+    route: "Route",
+    profile: "Profile",
+    vehicle: "Vehicle",
+    *,
+    model: str | None = None,
+) -> LimitCheck:
+    """Check a profile against the vehicle's own limits, on paper, from its speeds alone.
+
+    The profile must cover the route exactly (its first and last boundaries are the route's
+    first and last samples) and its RI column must be the route's own. The limits are the
+    vehicle's, each computed here from :mod:`profileopt.physics`: the speed caps (the
+    vehicle's top speed, SBEM:TF's step limit, the route's ``speed_limit`` and, for a vehicle
+    that gives their keys, the lateral and friction caps of turns, with the path's curvature
+    found with the profile's recorded ``path_tolerance_m``), the acceleration and
+    deceleration bounds (on the route's grades, for such a vehicle), the friction circle and
+    the drive power, the jerk bound the profile records in its settings (else the
+    vehicle's), and the model's force limit. The predicted force of each segment is recomputed from the speeds:
+    the largest force over every speed between its two boundary speeds, resonance peaks
+    included (:func:`profileopt.physics.speeds.max_force_over_segments`). The file's
+    ``force_n`` column is not used (a note says so when it differs). A limit counts as kept
+    within :data:`profileopt.defaults.LIMIT_RTOL` of it, the planner's own tolerance.
+
+    Parameters
+    ----------
+    route : Route
+        The terrain the profile was planned on.
+    profile : Profile
+        The speeds at the segment boundaries (m/s) and the RI of each segment.
+    vehicle : Vehicle
+        The vehicle and its limits.
+    model : str, optional
+        Force model key; default ``profile.model``.
+
+    Returns
+    -------
+    LimitCheck
+
+    Raises
+    ------
+    InputError
+        The profile does not cover the route exactly, its RI column does not match the
+        route's segments, its recorded jerk bound is not a number > 0, or the model is
+        unknown.
+    """
+    key = profile.model if model is None else model
+    force_model = get_model(key)
+    route, planned_with = route_as_planned(route, profile)
+    s = np.asarray(profile.s_m, dtype=float)
+    v = np.asarray(profile.speed_mps, dtype=float)
+    _check_coverage(route, s)
+    starts, stops = segment_samples(route.s_m, s)
+    window_m = _roughness_window_m(profile)
+    windows = route_roughness_windows(route, vehicle, window_m=window_m)
+    segments = segments_at(s, windows, vehicle, starts=starts, stops=stops)
+    ri_here = segments.ri
+    mismatch = np.flatnonzero(~np.isclose(np.asarray(profile.ri, dtype=float)[:-1], ri_here, rtol=1e-6, atol=1e-9))
+    if mismatch.size:
+        i = mismatch[0]
+        raise InputError(
+            f"{route.source}: segment {i} ({s[i]:g} to {s[i + 1]:g} m) has RI {ri_here[i]:.4g} on this route "
+            f"but {profile.ri[i]:.4g} in the profile (largest RI of the {window_m:g} m roughness windows it "
+            "meets); verify a profile on the route and vehicle (ground clearance) it was planned for, or plan "
+            "it again"
+        )
+    notes = [planned_with] if planned_with else []
+    limit = force_model.limit_n(vehicle)
+    profile_limit = np.asarray(profile.force_limit_n, dtype=float)[:-1]
+    if np.any(np.abs(profile_limit - limit) > 1e-9 * limit):
+        notes.append(
+            f"the profile's force_limit_n ({profile_limit.min():g} to {profile_limit.max():g} N) differs from "
+            f"{vehicle.name or 'the vehicle'}'s {force_model.limit_key} = {limit:g} N: was it planned with "
+            "another vehicle or model? The vehicle's limit is used"
+        )
+    jerk_bound, jerk_name = _jerk_bound_mps3(profile, vehicle)
+    length = np.diff(s)
+    from ..terrain.geometry import route_geometry  # scipy: only when a profile is checked
+
+    tolerance = _setting_m(profile, "path_tolerance_m", DEFAULT_PATH_TOLERANCE_M)
+    path = segment_path(route, segments, route_geometry(route, tolerance_m=tolerance,
+                                                        grade_scale_m=2.0 * segments.roughness_window_m))
+    caps = _speed_caps(route, vehicle, segments, path, force_model.key)
+    decel_bound, accel_bound = _accel_bounds(vehicle, path)
+    bands = speed_bands(ri_here, vehicle, model=force_model.key, ri_min=segments.ri_min)
+    n = s.size - 1
+    index = np.arange(n)
+    breaches: list[LimitBreach | None] = []
+    # numbers as large as 1e155 m/s overflow on squaring: they break the limits, silently
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        # the vehicle's top speed first, then the caps of steps, the route's speed_limit and turns where lower
+        top = np.maximum(v[:-1], v[1:])
+        breaches.append(_first_breach("speed", "the vehicle's top speed", top, np.array(vehicle.max_speed_mps),
+                                      s[:-1], index, "m/s"))
+        for name, lim_cap in caps:
+            lower = lim_cap < vehicle.max_speed_mps
+            breaches.append(_first_breach("speed", name, top[lower], lim_cap[lower], s[:-1][lower], index[lower],
+                                          "m/s"))
+        b = v * v
+        accel = segment_accel_mps2(b[:-1], b[1:], length)
+        # judged as the tyres' force per unit mass, a + g sin(theta) (the grades the bounds
+        # used): its bounds stay positive where a grade makes a's own bound negative
+        on_grades = plans_on_grades(vehicle)
+        lift_hi = G * np.sin(path.grade_hi_rad) if on_grades else 0.0
+        lift_lo = G * np.sin(path.grade_lo_rad) if on_grades else 0.0
+        words = " (drive force per unit mass, a + g sin(theta))" if on_grades else ""
+        breaches.append(_first_breach("acceleration", "the vehicle's acceleration limit" + words, accel + lift_hi,
+                                      accel_bound + lift_hi, s[:-1], index, "m/s^2"))
+        breaches.append(_first_breach("deceleration", "the vehicle's deceleration limit" + words.replace(
+            "drive", "braking").replace("a + g", "-(a + g").replace("theta))", "theta)))"), -(accel + lift_lo),
+            decel_bound - lift_lo, s[:-1], index, "m/s^2"))
+        for family, data in _row_data(vehicle, path, accel_bound):  # the friction circle, the drive power
+            usage = exact_row_values(family, b, length, data).max(axis=0)
+            breaches.append(_first_breach(family, ROW_FAMILIES[family].description, usage, np.array(1.0), s[:-1], index, "of the limit"))
+        if n >= 2 and math.isfinite(jerk_bound):
+            jerk = boundary_jerk_mps3(v[1:-1], accel[:-1], accel[1:], length[:-1], length[1:])
+            breaches.append(_first_breach("jerk", jerk_name, np.abs(jerk), np.array(jerk_bound), s[1:-1],
+                                          index[1:], "m/s^3"))
+        predicted = max_force_over_segments(force_model.key, vehicle, ri_here, v, bands.peaks_mps,
+                                            ri_min=segments.ri_min)
+        breaches.append(_first_breach("force", f"the {force_model.label} force limit", predicted, np.array(limit),
+                                      s[:-1], index, "N"))
+        recorded = np.asarray(profile.force_n, dtype=float)[:-1]
+        stale = np.flatnonzero(~(np.abs(recorded - predicted) <= STALE_FORCE_RTOL * limit))
+    if stale.size:
+        i = stale[0]
+        notes.append(
+            f"the profile's force_n column is stale in {stale.size} of {n} segments (first at s = {s[i]:g} m: "
+            f"{recorded[i]:.6g} N recorded, {predicted[i]:.6g} N from its speeds): the predicted forces were "
+            "recomputed from the speeds"
+        )
+    return LimitCheck(model=force_model.key, ri=ri_here, predicted_n=predicted, limit_n=float(limit),
+                      breaches=tuple(b for b in breaches if b is not None), notes=tuple(notes), windows=windows)
+
+
+def _speed_caps(route: "Route", vehicle: "Vehicle", segments: Segments, path: "SegmentPath",
+                model: str) -> list[tuple[str, np.ndarray]]:
+    """The caps on every speed driven in each segment besides the top speed, in words and m/s:
+    SBEM:TF's step limit where the wheel meets a step or lands after a drop, the route's
+    ``speed_limit`` (the lowest of the segment's samples), and the lateral acceleration and
+    the friction circle in turns (for a vehicle that gives their keys)."""
+    caps = []
+    if model == "sbem_tf":
+        caps.append(("the step limit (SBEM:TF where the wheel meets a step or lands after a drop)",
+                     step_speed_cap_mps(route.s_m, route.z_m, segments.boundaries_m, vehicle)))
+    if route.speed_limit_mps is not None:
+        caps.append(("the route's speed_limit", np.minimum.reduceat(route.speed_limit_mps, segments.first_sample)))
+    lateral = lateral_limit_mps2(vehicle)
+    if math.isfinite(lateral):
+        caps.append(("the lateral acceleration limit in turns", lateral_speed_cap_mps(lateral, path.curvature_max_1pm)))
+    if vehicle.friction_coefficient is not None:
+        caps.append(("the friction limit in turns", lateral_speed_cap_mps(_friction_radius(vehicle, path),
+                                                                         path.curvature_max_1pm)))
+    return caps
+
+
+def _friction_radius(vehicle: "Vehicle", path: "SegmentPath") -> np.ndarray:
+    """The smallest friction circle of each segment, mu g cos(max |theta|) (m/s^2)."""
+    steepest = np.maximum(np.abs(path.grade_lo_rad), np.abs(path.grade_hi_rad))
+    return friction_radius_mps2(vehicle.friction_coefficient, steepest)
+
+
+def _accel_bounds(vehicle: "Vehicle", path: "SegmentPath") -> tuple[np.ndarray, np.ndarray]:
+    """The deceleration (positive) and acceleration bounds of each segment (m/s^2): the
+    vehicle's, less the grade's pull for a vehicle that plans on grades, and the friction
+    circle's along the path, -mu g cos theta <= a + g sin theta <= mu g cos theta."""
+    n = path.grade_lo_rad.size
+    if plans_on_grades(vehicle):
+        decel = tyre_accel_mps2(vehicle.max_decel_mps2, path.grade_lo_rad)
+        accel = -tyre_accel_mps2(-vehicle.max_accel_mps2, path.grade_hi_rad)
+    else:
+        decel, accel = np.full(n, vehicle.max_decel_mps2), np.full(n, vehicle.max_accel_mps2)
+    if vehicle.friction_coefficient is not None:
+        radius = _friction_radius(vehicle, path)
+        decel = np.minimum(decel, tyre_accel_mps2(radius, path.grade_lo_rad))
+        accel = np.minimum(accel, -tyre_accel_mps2(-radius, path.grade_hi_rad))
+    return decel, accel
+
+
+def _row_data(vehicle: "Vehicle", path: "SegmentPath", accel_mps2: np.ndarray) -> list[tuple[str, np.ndarray]]:
+    """The row families (:data:`profileopt.physics.rows.ROW_FAMILIES`) that can bind, with
+    their data per segment: the friction circle where the route turns (on a straight the
+    acceleration bounds keep it), the drive power where the bounds allow any drive force."""
+    n = path.grade_lo_rad.size
+    out = []
+    if vehicle.friction_coefficient is not None and np.any(path.curvature_max_1pm > 0):
+        out.append(("friction", np.column_stack([path.curvature_max_1pm, path.grade_lo_rad, path.grade_hi_rad,
+                                                 np.full(n, vehicle.friction_coefficient)])))
+    if vehicle.max_power_w is not None and vehicle.mass_kg is not None:
+        if np.any(tyre_accel_mps2(accel_mps2, path.grade_hi_rad) > 0):
+            out.append(("power", np.column_stack([path.grade_hi_rad, np.full(n, vehicle.mass_kg),
+                                                  np.full(n, vehicle.max_power_w)])))
+    return out
