@@ -103,7 +103,7 @@ from profileopt.core.kinematics import boundary_jerk_mps3
 from profileopt import Profile
 from profileopt.core.segments import segment_route
 from profileopt.planning import DEFAULT_SMOOTHING, SolverOptions, greatest_profile, plan
-from profileopt.physics.ramp_force import step_speed_cap_mps
+from profileopt.physics.steps import step_speed_cap_mps
 from profileopt.planning.refine import at_force_cap, refine_segments
 from profileopt.physics.speeds import speed_bands
 from profileopt.terrain.synthetic import iso8608_sections

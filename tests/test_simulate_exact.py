@@ -1,7 +1,7 @@
 """The simulator against a from-scratch simulation of the same wheel, and its convergence.
 
 The reference is written here from the definitions alone, sharing no code with
-profileopt.verification.simulate or profileopt.physics.wheel_path:
+profileopt.verification.simulate or profileopt.physics.wheel:
 
 * the wheel's path, pointwise: the centre of a wheel of radius r above s stands on the
   highest of the circles of radius r about the points of the polyline within r of s. On

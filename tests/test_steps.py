@@ -9,13 +9,13 @@ import pytest
 from scipy import signal
 
 import profileopt
-from profileopt.physics.ramp_force import impulse_response_peak_s, ramp_force_n, ramp_speed_cap_mps
+from profileopt.physics.steps import impulse_response_peak_s, ramp_force_n, ramp_speed_cap_mps
 from profileopt.mpc.constraints import step_speed_envelope
 from profileopt.planning.limits import StepLimit, default_limits
-from profileopt.physics.ramp_force import step_speed_cap_mps
-from profileopt.physics.ramps import wheel_ramps
+from profileopt.physics.steps import step_speed_cap_mps
+from profileopt.physics.steps import wheel_ramps
 from profileopt.verification.simulate import simulate_quarter_car
-from profileopt.physics.wheel_path import wheel_path
+from profileopt.physics.wheel import wheel_path
 
 from conftest import ROUTES
 
@@ -192,7 +192,7 @@ def test_refining_keeps_a_steps_cap_to_the_samples_around_its_ramp(segment_lengt
     # without refining it holds the whole segment that ends at the edge and the one that
     # starts there (or the one around it).
     from profileopt.core.segments import MIN_SAMPLES_PER_SEGMENT
-    from profileopt.physics.ramp_force import step_caps
+    from profileopt.physics.steps import step_caps
 
     route, vehicle = _drop_route(), profileopt.load_vehicle("atv-resonant")
     caps = step_caps(route.s_m, route.z_m, vehicle)

@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike
 from ..errors import InputError
 from ..physics.forces import (DEFAULT_MODEL, check_e_max_model, force_n, force_peak_ratio, get_model,
                      sbem_tf_envelope_force_n)
-from ..physics.ramp_force import step_caps
+from ..physics.steps import step_caps
 from ..core.route import Route
 from ..core.symbolic import is_symbolic
 from ..terrain.roughness import check_e_max, range_extremes, roughness_windows, step_width, worst_case_elevation
@@ -247,9 +247,9 @@ def step_speed_envelope(
 
     The planner keeps, beside Eq. (13), a cap wherever the rigid wheel meets a step or lands
     after a drop (README, "Steps and drops"): each ramp of the wheel's path that starts or
-    ends in a kink (:func:`profileopt.physics.ramps.wheel_ramps`) caps every speed driven while the
-    vehicle is on it at :func:`profileopt.physics.ramp_force.ramp_speed_cap_mps`
-    (:func:`profileopt.physics.ramp_force.step_caps`, the planner's very caps). The requirement at
+    ends in a kink (:func:`profileopt.physics.steps.wheel_ramps`) caps every speed driven while the
+    vehicle is on it at :func:`profileopt.physics.steps.ramp_speed_cap_mps`
+    (:func:`profileopt.physics.steps.step_caps`, the planner's very caps). The requirement at
     s is the lowest cap of the ramps that overlap [s, s + reach_m], or the vehicle's top
     speed; the Function is never above it. Built as :func:`terrain_envelope` is (a uniform
     cubic B-spline whose coefficient j is the requirement's minimum over basis function j's

@@ -28,7 +28,7 @@ from ..physics.forces import get_model
 from ..physics.motion import STANDARD_GRAVITY_MPS2 as G
 from ..physics.motion import (friction_radius_mps2, lateral_limit_mps2, lateral_speed_cap_mps, plans_on_grades,
                               tyre_accel_mps2)
-from ..physics.ramp_force import step_speed_cap_mps
+from ..physics.steps import step_speed_cap_mps
 from ..physics.rows import ROW_FAMILIES, exact_row_values
 from ..physics.speeds import max_force_over_segments, speed_bands
 from ..terrain.roughness import RoughnessWindows

@@ -34,7 +34,7 @@ Wheel geometry
 --------------
 The ground the route means is the polyline through its samples (straight lines between
 them). A rigid wheel of radius r rolls on it, and the base input is the exact path of its
-lowest point, :func:`profileopt.physics.wheel_path.wheel_path`: a chain of the segments offset by r
+lowest point, :func:`profileopt.physics.wheel.wheel_path`: a chain of the segments offset by r
 along their normals and of circular arcs of radius r about the convex vertices (Fig. 2), with
 every kink (where the contact jumps from one piece to another: a concave vertex, the edge
 of a step met ahead, a pothole bridged) located exactly. A step of height e < r is climbed
@@ -82,7 +82,7 @@ from ..core.kinematics import segment_accel_mps2, segment_time_s
 from ..physics.quarter_car import hermite_extremum, knot_jumps, respond, transition
 from ..core.stations import segment_index, segment_samples
 from ..terrain.roughness import segment_line_fit
-from ..physics.wheel_path import WheelPath, wheel_path
+from ..physics.wheel import WheelPath, wheel_path
 
 if TYPE_CHECKING:
     from ..core.vehicle import Vehicle

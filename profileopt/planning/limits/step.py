@@ -2,10 +2,10 @@
 
 Eq. (13) is the steady response to a smooth quarter sine. A rigid wheel meeting a step, or
 landing after a drop, runs a steep ramp of its path that starts or ends in a kink
-(:func:`profileopt.physics.ramps.wheel_ramps`), too fast for the body to follow; the force on it is
-bounded by :func:`profileopt.physics.ramp_force.ramp_force_n`, which rises with speed. Every segment that
+(:func:`profileopt.physics.steps.wheel_ramps`), too fast for the body to follow; the force on it is
+bounded by :func:`profileopt.physics.steps.ramp_force_n`, which rises with speed. Every segment that
 shares a point with a ramp is capped at the speed where that bound meets the vehicle's
-``max_transmitted_force_n`` (:func:`profileopt.physics.ramp_force.step_caps`, which builds the
+``max_transmitted_force_n`` (:func:`profileopt.physics.steps.step_caps`, which builds the
 wheel's path only where a cap can bind); where a plan meets that cap, refining cuts the
 segment just outside the ramp (:meth:`StepLimit.cap_stretches_m`), so the cap holds metres
 around a step, not the whole segment.
@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ...physics.ramp_force import StepCaps, segment_step_caps_mps, step_caps
+from ...physics.steps import StepCaps, segment_step_caps_mps, step_caps
 from .base import Limit, PlanContext
 
 if TYPE_CHECKING:
@@ -42,7 +42,7 @@ class StepLimit(Limit):
     _last: list = dataclasses.field(default_factory=list, init=False, repr=False, compare=False)
 
     def speed_cap_mps(self, context: PlanContext) -> np.ndarray:
-        """:func:`profileopt.physics.ramp_force.step_speed_cap_mps` of the plan's route and segments (m/s), shape (N,).
+        """:func:`profileopt.physics.steps.step_speed_cap_mps` of the plan's route and segments (m/s), shape (N,).
 
         Parameters
         ----------

@@ -1,13 +1,28 @@
-"""The force on a steep ramp of a rigid wheel's path: the step limit of SBEM:TF.
+"""Steps met and drops landed: the steep ramps of a rigid wheel's path, the force on them, and
+the step limit of SBEM:TF.
+
+A rigid wheel's path y(s) (:mod:`profileopt.physics.wheel`) kinks where its contact jumps from
+one piece of the ground to another, and there its slope always rises (the path is an upper
+envelope). Two kinds of kink start or end a ramp that the quarter car meets suddenly:
+
+* a **landing**: the path runs down at slope -s and the kink takes at least half of that
+  slope away at once (the wheel lands after a drop). The ramp runs from the path's last
+  highest point before the kink down to the kink;
+* a **climb**: the kink gives the path at least half of its following slope +s at once
+  (the wheel meets a step ahead, or the foot of a steep ramp). The ramp runs from the kink
+  up to the path's next highest point.
+
+The rise d of a ramp is the height between its kink and that highest point. The step limit
+of SBEM:TF bounds the force on each ramp with :func:`ramp_force_n` and
+caps the speed of every segment that shares a point with it.
 
 Eq. (13) (:func:`profileopt.physics.forces.sbem_tf_force_n`) is the steady response to a smooth
 quarter sine. Where the wheel meets a step or lands after a drop, its path runs a steep ramp
-that starts or ends in a kink (:mod:`profileopt.physics.ramps`), faster than the body can follow;
+that starts or ends in a kink (:func:`wheel_ramps`), faster than the body can follow;
 :func:`ramp_force_n` bounds the transmitted force there, from the quarter car's impulse
 response, and :func:`ramp_speed_cap_mps` is the speed where that bound meets a limit. Like
 the force models, the bound is one CasADi expression for numbers, arrays, DM, SX and MX.
-Quarter-car constants: k = m wn^2, c = 2 zeta m wn (docs/paper-notes.md).
-"""
+Quarter-car constants: k = m wn^2, c = 2 zeta m wn (docs/paper-notes.md)."""
 
 from __future__ import annotations
 
@@ -18,15 +33,106 @@ from typing import TYPE_CHECKING, Any
 import casadi as ca
 import numpy as np
 
-from .ramps import wheel_ramps
 from ..core.symbolic import elementwise
-from .wheel_path import wheel_path
+from .wheel import WheelPath, wheel_path
 
 if TYPE_CHECKING:
     from ..core.vehicle import Vehicle
 
-__all__ = ["impulse_response_peak_s", "ramp_force_n", "ramp_speed_cap_mps", "StepCaps", "step_caps", "MAX_STRETCHES",
-           "segment_step_caps_mps", "step_speed_cap_mps"]
+__all__ = ["WheelRamps", "wheel_ramps", "SUDDEN_SHARE", "impulse_response_peak_s", "ramp_force_n",
+           "ramp_speed_cap_mps", "StepCaps", "step_caps", "MAX_STRETCHES", "segment_step_caps_mps",
+           "step_speed_cap_mps"]
+
+
+#: A kink starts or ends a ramp when it takes away (landing) or brings (climb) at least this
+#: share of the ramp's slope at once (dimensionless).
+SUDDEN_SHARE = 0.5
+
+
+@dataclasses.dataclass(frozen=True)
+class WheelRamps:
+    """R ramps of a wheel's path, each with a kink at one end.
+
+    Attributes
+    ----------
+    start_m, end_m : numpy.ndarray, shape (R,)
+        Where each ramp starts and ends along the route (m), start <= end.
+    kink_m : numpy.ndarray, shape (R,)
+        Where its kink is (m): ``end_m`` for a landing, ``start_m`` for a climb.
+    slope : numpy.ndarray, shape (R,)
+        |dy/ds| of the path next to the kink on the ramp's side (dimensionless), > 0.
+    rise_m : numpy.ndarray, shape (R,)
+        Height between the kink and the ramp's highest end (m), >= 0.
+    landing : numpy.ndarray of bool, shape (R,)
+        True for a landing, False for a climb.
+    """
+
+    start_m: np.ndarray
+    end_m: np.ndarray
+    kink_m: np.ndarray
+    slope: np.ndarray
+    rise_m: np.ndarray
+    landing: np.ndarray
+
+    @property
+    def count(self) -> int:
+        """Number of ramps R."""
+        return int(self.slope.size)
+
+
+def _landings(path: WheelPath) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Kink position, slope, rise and top position of every landing of ``path``."""
+    inner = path.breaks_m[1:-1]
+    piece = np.arange(path.pieces - 1)
+    y_kink, before, _ = path.evaluate(inner, piece)
+    after = path.evaluate(inner, piece + 1)[1]
+    land = (before < 0) & (after - before >= -SUDDEN_SHARE * before)
+    # the path's highest points: its breaks and the tops of its arcs are where it can turn
+    s = np.unique(np.clip(np.concatenate([path.breaks_m, path.x_ref_m[path.is_arc]]),
+                          path.breaks_m[0], path.breaks_m[-1]))
+    y = path.evaluate(s)[0]
+    top = np.concatenate([[True], (y[1:-1] >= y[:-2]) & (y[1:-1] >= y[2:]), [True]])
+    last_top = np.maximum.accumulate(np.where(top, np.arange(s.size), 0))
+    # the last highest point strictly before each kink
+    at = np.searchsorted(s, inner[land], side="left") - 1
+    j = last_top[np.maximum(at, 0)]
+    return inner[land], -before[land], np.maximum(y[j] - y_kink[land], 0.0), s[j]
+
+
+def _mirrored(path: WheelPath) -> WheelPath:
+    """The same path driven the other way, on positions ``L - s`` (L = first + last break)."""
+    total = path.breaks_m[0] + path.breaks_m[-1]
+    return WheelPath(breaks_m=(total - path.breaks_m)[::-1].copy(), x_ref_m=(total - path.x_ref_m)[::-1].copy(),
+                     z_ref_m=path.z_ref_m[::-1].copy(), slope=-path.slope[::-1].copy(),
+                     is_arc=path.is_arc[::-1].copy(), wheel_radius_m=path.wheel_radius_m)
+
+
+def wheel_ramps(path: WheelPath) -> WheelRamps:
+    """Every landing and climb of a wheel's path (:class:`WheelRamps`), sorted by start.
+
+    A climb is a landing of the path driven the other way, so both are found by one rule.
+
+    Parameters
+    ----------
+    path : WheelPath
+        The path of the wheel's lowest point (:func:`profileopt.physics.wheel.wheel_path`).
+
+    Returns
+    -------
+    WheelRamps
+    """
+    total = path.breaks_m[0] + path.breaks_m[-1]
+    kink_l, slope_l, rise_l, top_l = _landings(path)
+    kink_c, slope_c, rise_c, top_c = _landings(_mirrored(path))
+    kink_c, top_c = total - kink_c, total - top_c
+    start = np.concatenate([top_l, kink_c])
+    order = np.argsort(start, kind="stable")
+    return WheelRamps(start_m=start[order], end_m=np.concatenate([kink_l, top_c])[order],
+                      kink_m=np.concatenate([kink_l, kink_c])[order],
+                      slope=np.concatenate([slope_l, slope_c])[order],
+                      rise_m=np.concatenate([rise_l, rise_c])[order],
+                      landing=np.concatenate([np.ones(kink_l.size, bool), np.zeros(kink_c.size, bool)])[order])
+
 
 #: Above this many steep stretches :func:`step_caps` builds the wheel's path over the whole
 #: route at once.
@@ -164,7 +270,7 @@ class StepCaps:
 
 def step_caps(s_m: np.ndarray, z_m: np.ndarray, vehicle: "Vehicle") -> StepCaps:
     """The step limit's caps on a route: every ramp of the wheel's path
-    (:func:`profileopt.physics.ramps.wheel_ramps`) whose cap is below the top speed.
+    (:func:`profileopt.physics.steps.wheel_ramps`) whose cap is below the top speed.
 
     The wheel's path is built only around slopes of the route that could need a cap: the
     bound is at most V s (k phi_max + c), and the path's slopes never exceed the route's (its
@@ -240,7 +346,7 @@ def segment_step_caps_mps(caps: StepCaps, boundaries_m: np.ndarray) -> np.ndarra
     Parameters
     ----------
     caps : StepCaps
-        The route's ramps below the top speed (:func:`profileopt.physics.ramp_force.step_caps`).
+        The route's ramps below the top speed (:func:`profileopt.physics.steps.step_caps`).
     boundaries_m : numpy.ndarray, shape (N+1,)
         Segment boundaries (m), increasing.
 

@@ -1,4 +1,4 @@
-"""The exact path of a rigid wheel over the polyline of the samples (profileopt.physics.wheel_path).
+"""The exact path of a rigid wheel over the polyline of the samples (profileopt.physics.wheel).
 
 References, each derived here by hand from the geometry (not from the module):
 
@@ -32,7 +32,7 @@ from profileopt.io import read_route
 from profileopt.terrain.roughness import step_width
 from profileopt.core.vehicle import load_vehicle
 from profileopt.physics.wheel import wheel_envelope_m
-from profileopt.physics.wheel_path import wheel_path
+from profileopt.physics.wheel import wheel_path
 
 from conftest import ROUTES
 
