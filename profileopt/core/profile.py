@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..physics.forces import DEFAULT_MODEL
+from ..defaults import DEFAULT_MODEL
 from .kinematics import boundary_jerk_mps3
 from .binding import binding_shares
 
