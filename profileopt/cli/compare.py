@@ -16,9 +16,9 @@ from ..defaults import DEFAULT_REFINE
 
 def run(args: argparse.Namespace) -> int:
     """Run ``profileopt compare``: plan and verify with each model, print one table."""
+    from ..core.vehicle import load_vehicle
     from ..io.routes import read_route
     from ..studies.compare import compare_models
-    from ..core.vehicle import load_vehicle
 
     vehicle = load_vehicle(args.vehicle)
     route = read_route(args.route)

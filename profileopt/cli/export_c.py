@@ -27,12 +27,17 @@ def arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..core.vehicle import load_vehicle  # imported when the command runs, not for --help (issue 14)
+    from ..core.vehicle import (
+        load_vehicle,  # imported when the command runs, not for --help (issue 14)
+    )
 
     out = check_folder("-o", args.output)
     vehicle = load_vehicle(args.vehicle)
     # the four files checked before any work (none may be the vehicle file), written all or none
-    from ..mpc.codegen import export_c, export_c_paths  # CasADi: imported only when exporting
+    from ..mpc.codegen import (  # CasADi: imported only when exporting
+        export_c,
+        export_c_paths,
+    )
 
     outputs = folder_outputs("-o", export_c_paths(vehicle, out), [vehicle_input(args.vehicle)])
     with outputs or contextlib.nullcontext():

@@ -10,8 +10,11 @@ from .paths import check_folder, folder_outputs, vehicle_input
 
 def run(args: argparse.Namespace) -> int:
     """Write the figures into ``args.out`` (created if missing); print each file written."""
-    from ..viz.figures import paper_figure_paths, write_paper_figures  # matplotlib: only when drawing (0.3 s)
     from ..core.vehicle import load_vehicle
+    from ..viz.figures import (  # matplotlib: only when drawing (0.3 s)
+        paper_figure_paths,
+        write_paper_figures,
+    )
 
     out = check_folder("--out", args.out)
     inputs = [vehicle_input(args.vehicle), vehicle_input(args.resonant_vehicle)]

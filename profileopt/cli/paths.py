@@ -36,7 +36,9 @@ def check_folder(label: str, folder: str) -> Path:
 def folder_outputs(label: str, files: Iterable[Path], inputs: Iterable[str | None]) -> OutputSet | None:
     """An :class:`OutputSet` of the files a command writes into one folder, checked now if the
     folder exists (None if it does not: then no file in it exists or is an input yet)."""
-    from ..io.atomic import OutputSet  # imported when the command runs, not for --help (issue 14)
+    from ..io.atomic import (
+        OutputSet,  # imported when the command runs, not for --help (issue 14)
+    )
 
     files = list(files)
     if not files or not os.path.isdir(files[0].parent):

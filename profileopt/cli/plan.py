@@ -7,13 +7,28 @@ import json
 import sys
 from pathlib import Path
 
-from ..defaults import (DEFAULT_MODEL, DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M,
-                        DEFAULT_REFINE, DEFAULT_SEGMENT_LENGTH_M, DEFAULT_SMOOTHING, MODEL_KEYS, PLAN_BANDS,
-                        PLAN_METHODS)
+from ..defaults import (
+    DEFAULT_MODEL,
+    DEFAULT_PATH_TOLERANCE_M,
+    DEFAULT_REFINE,
+    DEFAULT_ROUGHNESS_WINDOW_M,
+    DEFAULT_SEGMENT_LENGTH_M,
+    DEFAULT_SMOOTHING,
+    MODEL_KEYS,
+    PLAN_BANDS,
+    PLAN_METHODS,
+)
 from ..errors import InputError
 from .paths import vehicle_input
-from .track import (add_track_arguments, assumed_roughness, is_track, number_argument, refuse_track_options,
-                     track_inputs, track_route)
+from .track import (
+    add_track_arguments,
+    assumed_roughness,
+    is_track,
+    number_argument,
+    refuse_track_options,
+    track_inputs,
+    track_route,
+)
 
 
 def arguments(parser: argparse.ArgumentParser) -> None:
@@ -64,9 +79,11 @@ def arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..io.atomic import OutputSet  # imported when the command runs, not for --help (issue 14)
-    from ..io.profiles import write_profile
     from ..core.vehicle import load_vehicle
+    from ..io.atomic import (
+        OutputSet,  # imported when the command runs, not for --help (issue 14)
+    )
+    from ..io.profiles import write_profile
 
     # first, before any work: every output checked (none may be an input, nor both the same
     # file); then written together, all or none

@@ -19,7 +19,10 @@ def arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..io.atomic import STDOUT, OutputSet  # imported when the command runs, not for --help (issue 14)
+    from ..io.atomic import (  # imported when the command runs, not for --help (issue 14)
+        STDOUT,
+        OutputSet,
+    )
 
     outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot)], inputs=[args.track, *track_inputs(args)])
     result = track_route(args.track, args, "profileopt route")

@@ -98,9 +98,9 @@ def track_route(track_path: str, args: argparse.Namespace, prog: str) -> "TrackR
     -------
     TrackRoute
     """
-    from ..terrain.ground_track import route_from_track
     from ..io.terrain_maps import read_terrain
     from ..io.tracks import read_track
+    from ..terrain.ground_track import route_from_track
 
     terrain = read_terrain(args.terrain, terrain_crs=args.terrain_crs) if args.terrain is not None else None
     track = read_track(track_path, track_crs=args.track_crs, track_index=args.track_index)

@@ -16,8 +16,8 @@ import json
 import sys
 from pathlib import Path
 
-from ..errors import InputError
 from ..defaults import MODEL_KEYS
+from ..errors import InputError
 from .paths import vehicle_input
 
 
@@ -75,13 +75,16 @@ def _verdict(check, result=None) -> tuple[int, str]:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``profileopt verify``; returns the verdict's status (:data:`VERIFY_EXIT_STATUSES`)."""
-    from ..io.atomic import STDOUT, OutputSet  # imported when the command runs, not for --help (issue 14)
     from ..core.vehicle import load_vehicle
-    from ..physics.forces import get_model
     from ..io import read_profile, read_route
-    from ..viz.plots import plot_verification
+    from ..io.atomic import (  # imported when the command runs, not for --help (issue 14)
+        STDOUT,
+        OutputSet,
+    )
+    from ..physics.forces import get_model
     from ..verification.limit_check import check_limits
     from ..verification.verify import verify
+    from ..viz.plots import plot_verification
 
     # first, before any work: every output checked (none may be an input, nor both the same
     # file); then written together, all or none

@@ -15,8 +15,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..defaults import DEFAULT_MODEL
-from .kinematics import boundary_jerk_mps3
 from .binding import binding_shares
+from .kinematics import boundary_jerk_mps3
 
 if TYPE_CHECKING:
     from .path import SegmentPath

@@ -11,8 +11,8 @@ import dataclasses
 
 import numpy as np
 
-from ..terrain.assumed import AssumedRoughness
 from ..errors import InputError
+from ..terrain.assumed import AssumedRoughness
 
 __all__ = ["Route", "validate_route_arrays", "path_distance_m", "MAX_ABS_ELEVATION_M", "MAX_ELEVATION_STEP_M", "MIN_SPEED_LIMIT_MPS"]
 

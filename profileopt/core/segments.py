@@ -21,8 +21,13 @@ import numpy as np
 
 from ..defaults import DEFAULT_ROUGHNESS_WINDOW_M, DEFAULT_SEGMENT_LENGTH_M
 from ..errors import InputError
+from ..terrain.roughness import (
+    RoughnessWindows,
+    range_extremes,
+    roughness_windows,
+    worst_case_elevation,
+)
 from .stations import segment_samples
-from ..terrain.roughness import RoughnessWindows, range_extremes, roughness_windows, worst_case_elevation
 
 if TYPE_CHECKING:
     from .route import Route

@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from . import inputs
 from ..terrain.synthetic import ElevationProfile
+from . import inputs
 from .table import split_lines
 
 __all__ = ["read_opencrg", "read_xy_profile", "parse_opencrg", "OpenCrgData"]

@@ -11,8 +11,8 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-import struct
 import re
+import struct
 from pathlib import Path
 from typing import Any
 

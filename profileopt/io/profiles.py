@@ -12,10 +12,10 @@ import os
 
 import numpy as np
 
+from ..core.binding import BINDING_NAMES
+from ..core.profile import BASE_COLUMNS, PROFILE_COLUMNS, Profile
 from ..errors import InputError
 from ..physics.forces import DEFAULT_MODEL, MODELS
-from ..core.profile import BASE_COLUMNS, PROFILE_COLUMNS, Profile
-from ..core.binding import BINDING_NAMES
 from .atomic import atomic_write
 from .table import read_table
 

@@ -36,9 +36,9 @@ from typing import Sequence
 
 import numpy as np
 
-from ..terrain.assumed import MAX_ASSUMED_RI, AssumedRoughness
-from ..errors import InputError
 from ..core.route import Route, path_distance_m, validate_route_arrays
+from ..errors import InputError
+from ..terrain.assumed import MAX_ASSUMED_RI, AssumedRoughness
 from .atomic import atomic_write
 from .table import Table, read_table
 

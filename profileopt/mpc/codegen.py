@@ -33,11 +33,11 @@ from typing import TYPE_CHECKING, Sequence
 import casadi as ca
 
 from ..defaults import MAX_C_BYTES
-from ..io.atomic import OutputSet, atomic_write
-from .functions import constraint_function, force_function, jacobian_function
-from .constraints import force_limit_n
 from ..errors import InputError
+from ..io.atomic import OutputSet, atomic_write
 from ..physics.forces import DEFAULT_MODEL, FORCE_OF_E_MAX, MODELS, get_model
+from .constraints import force_limit_n
+from .functions import constraint_function, force_function, jacobian_function
 
 if TYPE_CHECKING:
     from ..core.vehicle import Vehicle

@@ -118,11 +118,8 @@ import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..core.vehicle import Vehicle
 from ..errors import InputError
-from .functions import constraint_function, force_function, jacobian_function
-from .horizon import (ForceConstraints, force_peak_ratio, interval_force_constraints, step_speed_envelope,
-                      terrain_envelope)
-from .motion_constraints import MotionConstraints, friction_constraints, lateral_constraints, power_constraints
 from ..physics.forces import (
     DEFAULT_MODEL,
     check_e_max_model,
@@ -135,7 +132,20 @@ from ..physics.forces import (
 )
 from ..physics.speeds import SpeedBands, allowable_speed, speed_bands
 from ..terrain.roughness import check_e_max, check_ri
-from ..core.vehicle import Vehicle
+from .functions import constraint_function, force_function, jacobian_function
+from .horizon import (
+    ForceConstraints,
+    force_peak_ratio,
+    interval_force_constraints,
+    step_speed_envelope,
+    terrain_envelope,
+)
+from .motion_constraints import (
+    MotionConstraints,
+    friction_constraints,
+    lateral_constraints,
+    power_constraints,
+)
 
 Band = Literal["first", "largest", "containing"]
 

@@ -18,9 +18,9 @@ from typing import Any, Literal
 
 import casadi as ca
 
+from ..core.vehicle import Vehicle
 from ..errors import InputError
 from ..physics.forces import DEFAULT_MODEL, FORCE_OF_E_MAX, force_n, get_model
-from ..core.vehicle import Vehicle
 
 __all__ = ["force_function", "constraint_function", "jacobian_function"]
 

@@ -36,13 +36,25 @@ import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import InputError
-from ..physics.forces import (DEFAULT_MODEL, check_e_max_model, force_n, force_peak_ratio, get_model,
-                     sbem_tf_envelope_force_n)
-from ..physics.steps import step_caps
 from ..core.route import Route
 from ..core.symbolic import is_symbolic
-from ..terrain.roughness import check_e_max, range_extremes, roughness_windows, step_width, worst_case_elevation
+from ..errors import InputError
+from ..physics.forces import (
+    DEFAULT_MODEL,
+    check_e_max_model,
+    force_n,
+    force_peak_ratio,
+    get_model,
+    sbem_tf_envelope_force_n,
+)
+from ..physics.steps import step_caps
+from ..terrain.roughness import (
+    check_e_max,
+    range_extremes,
+    roughness_windows,
+    step_width,
+    worst_case_elevation,
+)
 
 if TYPE_CHECKING:
     from ..core.vehicle import Vehicle

@@ -53,11 +53,16 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..errors import InputError
-from .horizon import ConstraintTriple
-from ..physics.motion import drive_power_w, friction_usage, lateral_accel_mps2, lateral_limit_mps2
 from ..core.symbolic import is_symbolic
 from ..core.vehicle import Vehicle
+from ..errors import InputError
+from ..physics.motion import (
+    drive_power_w,
+    friction_usage,
+    lateral_accel_mps2,
+    lateral_limit_mps2,
+)
+from .horizon import ConstraintTriple
 
 __all__ = ["MotionConstraints", "lateral_constraints", "friction_constraints", "power_constraints"]
 

@@ -39,7 +39,6 @@ import math
 from typing import TYPE_CHECKING, Any, Callable
 
 import casadi as ca
-
 import numpy as np
 
 from ..core.symbolic import elementwise, is_symbolic

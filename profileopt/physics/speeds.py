@@ -31,8 +31,8 @@ from numpy.typing import ArrayLike
 
 from ..core.symbolic import numpy_evaluator
 from ..errors import InputError
-from .forces import DEFAULT_MODEL, get_model, sbem_tf_crawl_bound_n
 from ..terrain.roughness import check_ri, worst_case_elevation
+from .forces import DEFAULT_MODEL, get_model, sbem_tf_crawl_bound_n
 
 if TYPE_CHECKING:
     from ..core.vehicle import Vehicle

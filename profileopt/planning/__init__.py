@@ -12,7 +12,15 @@ profile meets a cap. :mod:`.planner` holds the orchestration (:func:`plan`);
 from __future__ import annotations
 
 from .bands import BandChoice, choose_bands, greatest_profile
-from .limits import AccelLimit, ForceLimit, JerkLimit, Limit, PlanContext, SpeedLimit, default_limits
+from .limits import (
+    AccelLimit,
+    ForceLimit,
+    JerkLimit,
+    Limit,
+    PlanContext,
+    SpeedLimit,
+    default_limits,
+)
 from .options import SolverOptions
 from .planner import DEFAULT_SMOOTHING, PLAN_BANDS, plan
 

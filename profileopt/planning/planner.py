@@ -23,26 +23,36 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
-from ..defaults import DEFAULT_PATH_TOLERANCE_M, DEFAULT_REFINE, DEFAULT_SMOOTHING, PLAN_BANDS, PLAN_METHODS
+from ..core.binding import binding_labels
+from ..core.kinematics import segment_accel_mps2, segment_time_s
+from ..core.path import SegmentPath, segment_path
+from ..core.profile import Profile
+from ..core.segments import (
+    DEFAULT_ROUGHNESS_WINDOW_M,
+    DEFAULT_SEGMENT_LENGTH_M,
+    Segments,
+    roughness_source,
+    segment_route,
+)
+from ..core.vehicle import PLAUSIBLE_RANGES, vehicle_reference
+from ..defaults import (
+    DEFAULT_PATH_TOLERANCE_M,
+    DEFAULT_REFINE,
+    DEFAULT_SMOOTHING,
+    PLAN_BANDS,
+    PLAN_METHODS,
+)
 from ..errors import InfeasibleError, InputError, PlanningError
 from ..physics.forces import DEFAULT_MODEL, get_model
-from ..core.kinematics import segment_accel_mps2, segment_time_s
-from ..physics.speeds import SpeedBands
-from ..core.vehicle import PLAUSIBLE_RANGES, vehicle_reference
+from ..physics.speeds import SpeedBands, max_force_over_segments
 from .bands import BandChoice, DrivePower, choose_bands, snap_to_band
-from ..core.binding import binding_labels
 from .fallback import fallback_choice
 from .limits import Limit, PlanContext, default_limits
-from ..physics.speeds import max_force_over_segments
+from .nlp.pieces import choose_cuts, cut_scores, solve_pieces
 from .nlp.problem import Scaling, family_rows, objective_s, row_bounds
 from .nlp.solve import solve_nlp
-from ..core.path import SegmentPath, segment_path
 from .options import SolverOptions
-from .nlp.pieces import choose_cuts, cut_scores, solve_pieces
-from ..core.profile import Profile
 from .refine import REFINE_AT_CAP, refined_segments
-from ..core.segments import (DEFAULT_ROUGHNESS_WINDOW_M, DEFAULT_SEGMENT_LENGTH_M, Segments, roughness_source,
-                             segment_route)
 
 if TYPE_CHECKING:
     from ..core.route import Route

@@ -21,11 +21,11 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
-from .limits.base import Limit, PlanContext
 from ..core.segments import MIN_SAMPLES_PER_SEGMENT, Segments, segments_at
 from ..core.stations import segment_samples
 from ..errors import InputError
 from ..terrain.roughness import range_extremes
+from .limits.base import Limit, PlanContext
 
 if TYPE_CHECKING:
     from ..core.vehicle import Vehicle

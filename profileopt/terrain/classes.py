@@ -25,9 +25,14 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import InputError
 from ..core.checks import finite_positive
-from .synthetic import ISO8608_GD0_M3, ISO8608_N0_CPM, ISO8608_N_MAX_CPM, ISO8608_N_MIN_CPM
+from ..errors import InputError
+from .synthetic import (
+    ISO8608_GD0_M3,
+    ISO8608_N0_CPM,
+    ISO8608_N_MAX_CPM,
+    ISO8608_N_MIN_CPM,
+)
 
 __all__ = ["detrending_gain", "iso8608_expected_variance_m2", "iso8608_expected_rms_m", "iso8608_ri",
            "iso8608_class_key"]
@@ -121,7 +126,9 @@ def iso8608_expected_variance_m2(road_class: str, *, window_m: float, n_min_cpm:
     InputError
         An unknown class, a window that is not > 0 or a bad band.
     """
-    from scipy import integrate  # only when a class's RI is derived: reading a route needs no SciPy
+    from scipy import (
+        integrate,  # only when a class's RI is derived: reading a route needs no SciPy
+    )
 
     gd0 = ISO8608_GD0_M3[iso8608_class_key(road_class)]
     width = finite_positive("window_m", window_m)

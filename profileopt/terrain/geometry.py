@@ -21,9 +21,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..core.route import Route
 from ..defaults import DEFAULT_PATH_TOLERANCE_M  # why 0.1 m: see its comment there
 from ..errors import InputError
-from ..core.route import Route
 from .window_sums import batched_window_moments
 
 if TYPE_CHECKING:

@@ -39,10 +39,16 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..defaults import (DEFAULT_CORRIDOR_M, DEFAULT_MAX_GAP_M, DEFAULT_TRACK_SPACING_M, MAX_ROUGHNESS_CORRIDOR_M,
-                       MAX_ROUGHNESS_SPACING_M, MIN_POINTS_PER_BIN)
-from ..errors import InputError
 from ..core.route import Route, path_distance_m
+from ..defaults import (
+    DEFAULT_CORRIDOR_M,
+    DEFAULT_MAX_GAP_M,
+    DEFAULT_TRACK_SPACING_M,
+    MAX_ROUGHNESS_CORRIDOR_M,
+    MAX_ROUGHNESS_SPACING_M,
+    MIN_POINTS_PER_BIN,
+)
+from ..errors import InputError
 
 if TYPE_CHECKING:
     from ..io.tracks import Track

@@ -18,7 +18,10 @@ from numpy.typing import ArrayLike
 
 from ..core.symbolic import elementwise, is_symbolic
 from ..errors import InputError
-from .window_sums import batched_window_moments, window_line_moments  # window_line_moments: re-exported
+from .window_sums import (  # window_line_moments: re-exported
+    batched_window_moments,
+    window_line_moments,
+)
 
 if TYPE_CHECKING:
     from ..core.vehicle import Vehicle

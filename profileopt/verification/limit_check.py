@@ -26,11 +26,16 @@ from ..defaults import DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M, LIM
 from ..errors import InputError
 from ..physics.forces import get_model
 from ..physics.motion import STANDARD_GRAVITY_MPS2 as G
-from ..physics.motion import (friction_radius_mps2, lateral_limit_mps2, lateral_speed_cap_mps, plans_on_grades,
-                              tyre_accel_mps2)
-from ..physics.steps import step_speed_cap_mps
+from ..physics.motion import (
+    friction_radius_mps2,
+    lateral_limit_mps2,
+    lateral_speed_cap_mps,
+    plans_on_grades,
+    tyre_accel_mps2,
+)
 from ..physics.rows import ROW_FAMILIES, exact_row_values
 from ..physics.speeds import max_force_over_segments, speed_bands
+from ..physics.steps import step_speed_cap_mps
 from ..terrain.roughness import RoughnessWindows
 
 if TYPE_CHECKING:
@@ -326,7 +331,9 @@ def check_limits(
         )
     jerk_bound, jerk_name = _jerk_bound_mps3(profile, vehicle)
     length = np.diff(s)
-    from ..terrain.geometry import route_geometry  # scipy: only when a profile is checked
+    from ..terrain.geometry import (
+        route_geometry,  # scipy: only when a profile is checked
+    )
 
     tolerance = _setting_m(profile, "path_tolerance_m", DEFAULT_PATH_TOLERANCE_M)
     path = segment_path(route, segments, route_geometry(route, tolerance_m=tolerance,

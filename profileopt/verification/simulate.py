@@ -77,12 +77,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import InputError
 from ..core.kinematics import segment_accel_mps2, segment_time_s
-from ..physics.quarter_car import hermite_extremum, knot_jumps, respond, transition
 from ..core.stations import segment_index, segment_samples
-from ..terrain.roughness import segment_line_fit
+from ..errors import InputError
+from ..physics.quarter_car import hermite_extremum, knot_jumps, respond, transition
 from ..physics.wheel import WheelPath, wheel_path
+from ..terrain.roughness import segment_line_fit
 
 if TYPE_CHECKING:
     from ..core.vehicle import Vehicle

@@ -28,11 +28,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..core.stations import segment_index
 from ..io.atomic import atomic_write
 from ..physics.forces import get_model
 from .limit_check import LimitBreach, LimitCheck, check_limits, route_as_planned
 from .simulate import QuarterCarRun, simulate_quarter_car
-from ..core.stations import segment_index
 from .window_check import UNDERPREDICTION_TOLERANCE, WindowCheck, check_windows
 
 if TYPE_CHECKING:

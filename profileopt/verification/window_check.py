@@ -42,15 +42,21 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..physics.forces import force_peak_ratio, get_model
 from ..core.stations import segment_index, segment_samples
-from ..terrain.roughness import (RoughnessWindows, range_extremes, segment_line_fit, step_width, window_line_moments,
-                      worst_case_elevation)
+from ..physics.forces import force_peak_ratio, get_model
+from ..terrain.roughness import (
+    RoughnessWindows,
+    range_extremes,
+    segment_line_fit,
+    step_width,
+    window_line_moments,
+    worst_case_elevation,
+)
 
 if TYPE_CHECKING:
     from ..core.route import Route
-    from .simulate import QuarterCarRun
     from ..core.vehicle import Vehicle
+    from .simulate import QuarterCarRun
 
 __all__ = ["WindowCheck", "check_windows", "window_speed_range_mps", "window_predicted_force_n",
            "BLOCK_ROWS", "UNDERPREDICTION_TOLERANCE"]

@@ -22,12 +22,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..physics.forces import MODELS
-from ..io.atomic import OutputSet, atomic_path, atomic_write
-from ..physics.speeds import allowable_speed
-from ..terrain.synthetic import washboard
-from ..terrain.roughness import roughness_index
 from ..core.vehicle import Vehicle, load_vehicle
+from ..io.atomic import OutputSet, atomic_path, atomic_write
+from ..physics.forces import MODELS
+from ..physics.speeds import allowable_speed
+from ..terrain.roughness import roughness_index
+from ..terrain.synthetic import washboard
 
 __all__ = [
     "Curve",

@@ -17,8 +17,8 @@ from ..io.atomic import atomic_path
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from ..terrain.ground_track import TrackRoute
     from ..core.profile import Profile
+    from ..terrain.ground_track import TrackRoute
 
 __all__ = ["route_map_figure", "plot_route_map", "plan_map_figure", "plot_plan_map"]
 

@@ -13,13 +13,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..physics.forces import get_model
-from ..io.atomic import atomic_path
 from ..core.stations import segment_index
+from ..io.atomic import atomic_path
+from ..physics.forces import get_model
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
-
 
     from ..core.profile import Profile
     from ..verification.verify import Verification

@@ -22,9 +22,8 @@ package.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import math
+from typing import TYPE_CHECKING
 
 from ...physics.motion import lateral_limit_mps2, plans_on_grades
 from .accel import AccelLimit

@@ -33,16 +33,16 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..nlp.problem import family_rows
 from ...core.path import SegmentPath, flat_path
+from ..nlp.problem import family_rows
 
 if TYPE_CHECKING:
-    from ...core.route import Route
-    from ...physics.speeds import SpeedBands
-    from ...core.vehicle import Vehicle
-    from ..bands import DrivePower
     from ...core.profile import Profile
+    from ...core.route import Route
     from ...core.segments import Segments
+    from ...core.vehicle import Vehicle
+    from ...physics.speeds import SpeedBands
+    from ..bands import DrivePower
 
 __all__ = ["PlanContext", "Limit", "RowLimit", "worst_ratio"]
 

@@ -23,8 +23,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ...physics.motion import friction_radius_mps2, lateral_accel_mps2, lateral_speed_cap_mps, tyre_accel_mps2
 from ...core.path import SegmentPath
+from ...physics.motion import (
+    friction_radius_mps2,
+    lateral_accel_mps2,
+    lateral_speed_cap_mps,
+    tyre_accel_mps2,
+)
 from .base import PlanContext, RowLimit, worst_ratio
 
 if TYPE_CHECKING:

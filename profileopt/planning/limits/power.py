@@ -15,9 +15,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ...core.path import SegmentPath
 from ...physics.motion import tyre_accel_mps2
 from ..bands import DrivePower
-from ...core.path import SegmentPath
 from .base import PlanContext, RowLimit, worst_ratio
 
 if TYPE_CHECKING:

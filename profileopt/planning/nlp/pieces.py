@@ -45,8 +45,8 @@ from .solve import solve_nlp
 
 if TYPE_CHECKING:
     from ..bands import BandChoice
-    from .problem import Scaling
     from ..options import SolverOptions
+    from .problem import Scaling
 
 __all__ = ["CUT_REACH", "choose_cuts", "cut_multipliers", "cut_scores", "piece_bounds", "replace_cuts",
            "wrong_cuts", "solve_pieces"]

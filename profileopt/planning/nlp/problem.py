@@ -35,7 +35,12 @@ from typing import Any, Mapping
 import casadi as ca
 import numpy as np
 
-from ...core.kinematics import boundary_jerk_mps3, jerk_squared_time, segment_accel_mps2, segment_time_s
+from ...core.kinematics import (
+    boundary_jerk_mps3,
+    jerk_squared_time,
+    segment_accel_mps2,
+    segment_time_s,
+)
 from ...core.symbolic import mx_replay
 from ...physics.rows import ROW_FAMILIES, exact_row_values, row_values
 from ..options import DEFAULT_IPOPT_OPTIONS, SolverOptions

@@ -15,14 +15,13 @@ import dataclasses
 import math
 import time
 
+import casadi as ca
 import numpy as np
 
+from ..options import DEFAULT_IPOPT_OPTIONS, SolverOptions
 from . import banded_ipm
 from .banded_ipm import cached_banded_oracle
-import casadi as ca
-
 from .problem import NlpResult, cached_nlp
-from ..options import DEFAULT_IPOPT_OPTIONS, SolverOptions
 
 __all__ = ["solve_nlp", "solve_ipopt", "CROSS_CHECK_MAX_SEGMENTS", "CRAWL_RATIO", "CROSS_CHECK_RTOL"]
 
