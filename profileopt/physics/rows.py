@@ -12,14 +12,17 @@ acceleration and its per-segment data, and serves every caller alike: the planne
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, Callable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import numpy as np
 
 from ..core.kinematics import segment_accel_mps2
 from .motion import drive_power_w, friction_usage
 
-__all__ = ["RowFamily", "ROW_FAMILIES", "row_values", "exact_row_values"]
+if TYPE_CHECKING:
+    from ..core.path import SegmentPath
+
+__all__ = ["RowFamily", "ROW_FAMILIES", "row_values", "exact_row_values", "friction_data", "power_data"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -131,3 +134,44 @@ def exact_row_values(family: str, b: np.ndarray, length_m: np.ndarray, data: np.
     cols = [data[:, k] for k in range(data.shape[1])]
     rows = row_values(family, speeds, (b[:-1], b[1:]), length_m, cols)
     return np.array([np.asarray(r, dtype=float).ravel() for r in rows])
+
+
+def friction_data(path: "SegmentPath", friction_coefficient: float) -> np.ndarray:
+    """The ``friction`` family's data of each segment: its largest |curvature| (1/m), its grade
+    range (rad) and mu (-), shape (N, 4).
+
+    Parameters
+    ----------
+    path : SegmentPath
+        Each segment's turns and slopes.
+    friction_coefficient : float
+        mu (-).
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    n = path.curvature_max_1pm.size
+    return np.column_stack([path.curvature_max_1pm, path.grade_lo_rad, path.grade_hi_rad,
+                            np.full(n, friction_coefficient)])
+
+
+def power_data(path: "SegmentPath", mass_kg: float, max_power_w: float) -> np.ndarray:
+    """The ``power`` family's data of each segment: its steepest grade (rad), the mass (kg) and
+    the drive power (W), shape (N, 3).
+
+    Parameters
+    ----------
+    path : SegmentPath
+        Each segment's turns and slopes.
+    mass_kg : float
+        Mass of the whole vehicle (kg).
+    max_power_w : float
+        Largest drive power at the wheels (W).
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    n = path.grade_hi_rad.size
+    return np.column_stack([path.grade_hi_rad, np.full(n, mass_kg), np.full(n, max_power_w)])

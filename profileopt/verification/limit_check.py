@@ -33,7 +33,7 @@ from ..physics.motion import (
     plans_on_grades,
     tyre_accel_mps2,
 )
-from ..physics.rows import ROW_FAMILIES, exact_row_values
+from ..physics.rows import ROW_FAMILIES, exact_row_values, friction_data, power_data
 from ..physics.speeds import max_force_over_segments, speed_bands
 from ..physics.steps import step_speed_cap_mps
 from ..terrain.roughness import RoughnessWindows
@@ -439,13 +439,10 @@ def _row_data(vehicle: "Vehicle", path: "SegmentPath", accel_mps2: np.ndarray) -
     """The row families (:data:`profileopt.physics.rows.ROW_FAMILIES`) that can bind, with
     their data per segment: the friction circle where the route turns (on a straight the
     acceleration bounds keep it), the drive power where the bounds allow any drive force."""
-    n = path.grade_lo_rad.size
     out = []
     if vehicle.friction_coefficient is not None and np.any(path.curvature_max_1pm > 0):
-        out.append(("friction", np.column_stack([path.curvature_max_1pm, path.grade_lo_rad, path.grade_hi_rad,
-                                                 np.full(n, vehicle.friction_coefficient)])))
+        out.append(("friction", friction_data(path, vehicle.friction_coefficient)))
     if vehicle.max_power_w is not None and vehicle.mass_kg is not None:
         if np.any(tyre_accel_mps2(accel_mps2, path.grade_hi_rad) > 0):
-            out.append(("power", np.column_stack([path.grade_hi_rad, np.full(n, vehicle.mass_kg),
-                                                  np.full(n, vehicle.max_power_w)])))
+            out.append(("power", power_data(path, vehicle.mass_kg, vehicle.max_power_w)))
     return out

@@ -30,6 +30,7 @@ from ...physics.motion import (
     lateral_speed_cap_mps,
     tyre_accel_mps2,
 )
+from ...physics.rows import friction_data
 from .base import PlanContext, RowLimit, worst_ratio
 
 if TYPE_CHECKING:
@@ -102,9 +103,7 @@ class FrictionLimit(RowLimit):
         -------
         numpy.ndarray
         """
-        n = path.curvature_max_1pm.size
-        return np.column_stack([path.curvature_max_1pm, path.grade_lo_rad, path.grade_hi_rad,
-                                np.full(n, self.friction_coefficient)])
+        return friction_data(path, self.friction_coefficient)
 
     def _needs_rows(self, context: PlanContext, cap_mps: np.ndarray, decel_mps2: np.ndarray,
                     accel_mps2: np.ndarray) -> np.ndarray:

@@ -17,6 +17,7 @@ import numpy as np
 
 from ...core.path import SegmentPath
 from ...physics.motion import tyre_accel_mps2
+from ...physics.rows import power_data
 from ..bands import DrivePower
 from .base import PlanContext, RowLimit, worst_ratio
 
@@ -70,8 +71,7 @@ class PowerLimit(RowLimit):
         -------
         numpy.ndarray
         """
-        n = path.grade_hi_rad.size
-        return np.column_stack([path.grade_hi_rad, np.full(n, self.mass_kg), np.full(n, self.max_power_w)])
+        return power_data(path, self.mass_kg, self.max_power_w)
 
     def nlp_rows(self, context: PlanContext, cap_mps: np.ndarray, decel_mps2: np.ndarray,
                  accel_mps2: np.ndarray) -> tuple[str, np.ndarray] | None:
