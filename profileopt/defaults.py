@@ -17,11 +17,11 @@ MODEL_KEYS = ("prev_bem", "iecm", "sbem_ef", "sbem_tf")
 DEFAULT_MODEL = "sbem_tf"
 #: Weight of the jerk term: objective = time + w * integral (jerk / (1 m/s^3))^2 dt, both in s.
 DEFAULT_SMOOTHING = 0.01
-#: Segment length (m) when none is given: the planning resolution (README, "Segment length").
+#: Segment length (m) when none is given: the planning resolution (docs: guide/planning.md, "Choosing --segment-length").
 DEFAULT_SEGMENT_LENGTH_M = 5.0
 #: Whether a plan refines its segments when not told (:func:`profileopt.planning.plan`,
 #: ``refine``): cut where the plan meets the force's speed cap and the roughness changes, so
-#: that the travel time does not depend on the segment length (README, "Choosing
+#: that the travel time does not depend on the segment length (docs: guide/planning.md, "Choosing
 #: --segment-length": refined, 1 m and 0.5 m agree within 0.1 % on every bundled route,
 #: unrefined within 2.3 %).
 DEFAULT_REFINE = True
@@ -34,7 +34,7 @@ DEFAULT_ROUGHNESS_WINDOW_M = 5.0
 #: path surveyed by RTK-GNSS or LiDAR (1 cm standard deviation, about 4 cm at most over
 #: thousands of samples), well inside the path-tracking error of an off-road vehicle
 #: (decimetres), so the smoothed path is one the vehicle can follow. A consumer GPS track
-#: (metres of noise) needs a tolerance of its own noise (README, "Turns and hills").
+#: (metres of noise) needs a tolerance of its own noise (docs: guide/turns-and-hills.md).
 DEFAULT_PATH_TOLERANCE_M = 0.1
 #: Spacing (m) of the route samples taken along a track over a terrain map
 #: (:func:`profileopt.terrain.ground_track.route_from_track`): half the 0.1 m wheel radius of the

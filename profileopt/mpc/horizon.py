@@ -258,7 +258,7 @@ def step_speed_envelope(
     ``casadi.Function`` of s.
 
     The planner keeps, beside Eq. (13), a cap wherever the rigid wheel meets a step or lands
-    after a drop (README, "Steps and drops"): each ramp of the wheel's path that starts or
+    after a drop (docs: guide/steps.md, "Steps and drops"): each ramp of the wheel's path that starts or
     ends in a kink (:func:`profileopt.physics.steps.wheel_ramps`) caps every speed driven while the
     vehicle is on it at :func:`profileopt.physics.steps.ramp_speed_cap_mps`
     (:func:`profileopt.physics.steps.step_caps`, the planner's very caps). The requirement at

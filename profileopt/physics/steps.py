@@ -167,7 +167,7 @@ def impulse_response_peak_s(vehicle: "Vehicle") -> float:
 def ramp_force_n(speed_mps: Any, rise_m: Any, slope: Any, vehicle: "Vehicle") -> Any:
     """Bound on |F_T| while a rigid wheel runs a steep ramp of its path from rest, in N.
 
-    The step limit of SBEM:TF (README, "Steps and drops"). Where the wheel's path (the base
+    The step limit of SBEM:TF (docs: guide/steps.md, "Steps and drops"). Where the wheel's path (the base
     input y) runs at slope s for a height d and starts or ends with a kink (it climbs a step
     met ahead; it lands after a drop), y' = V s for the t_r = d / (V s) seconds of the ramp,
     too short for the body to follow at speed. From rest, the relative displacement is

@@ -163,7 +163,7 @@ def plan(
         segments, and solve once.
         A segment is held to every window that shares a point with it, so without this the
         travel time converges only to first order in ``segment_length_m``; with it, it hardly
-        depends on it (README, "Choosing --segment-length"), for more segments. False plans
+        depends on it (docs: guide/planning.md, "Choosing --segment-length"), for more segments. False plans
         on the uniform segments asked for (one band choice; the profile has exactly their
         boundaries).
 
