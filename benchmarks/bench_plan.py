@@ -14,7 +14,7 @@ same process and interleaved repeat by repeat, times:
 
 ``full``
     ``read_route`` -> ``plan`` (SBEM:TF, acceleration, jerk, default smoothing, vehicle
-    ``atv``) -> ``Profile.to_csv``: the command's work, in process. Also the same problem
+    ``atv``) -> ``write_profile``: the command's work, in process. Also the same problem
     through the real command line (``python -m profileopt plan ... -o``) in a fresh
     process, which adds interpreter start-up, imports and the printed summary.
 ``convex``
@@ -45,7 +45,7 @@ x_{i+1} = x_i + 2 ds_i u_i are the planner's b_{i+1} = b_i + 2 ds_i a_i, and its
 time sum 2 ds_i / (sdot_i + sdot_{i+1}) is the planner's, so the two optima coincide and
 any difference is the solver's. Its end-to-end time runs the same pipeline as the
 planner's (read the CSV, segment, speed bands, solve, write the profile CSV through the
-same ``Profile.to_csv``); only the solver differs. COPP's TOPP2-RA is set up the same way
+same ``write_profile``); only the solver differs. COPP's TOPP2-RA is set up the same way
 (:func:`solve_copp_topp2`) and solves the same discrete problem.
 
 COPP's TOPP3-LP (:func:`solve_copp_topp3`) gets the same stations, caps, acceleration
@@ -323,7 +323,7 @@ class Run:
 
 
 def run_plan(route_path: Path, out_path: Path, vehicle, **options) -> Run:
-    """read_route -> plan -> to_csv, as ``profileopt plan route.csv -o out.csv`` does."""
+    """read_route -> plan -> write_profile, as ``profileopt plan route.csv -o out.csv`` does."""
     start = time.perf_counter()
     profile = plan(read_route(route_path), vehicle, segment_length_m=SEGMENT_LENGTH_M, model=MODEL, **options)
     write_profile(profile, out_path)
@@ -907,7 +907,7 @@ def main(argv: list[str] | None = None) -> int:
         f"{SEGMENT_LENGTH_M:g} m segments, route samples every {args.spacing:g} m, seed {args.seed}.",
     ])
     text = (header + "\n\n" + markdown_table(rows) + "\n\nWhere the time of each in-process `plan` run goes "
-            "(medians, s; `read + write` is everything outside `plan`, i.e. `read_route` and `to_csv`):\n\n"
+            "(medians, s; `read + write` is everything outside `plan`, i.e. `read_route` and `write_profile`):\n\n"
             + stages_table(rows) + "\n" + ("\n" + scaling.line() + "\n" if scaling is not None else ""))
     print(text)
     if args.out is not None:

@@ -2,11 +2,11 @@
 
 Issue 10: with roughness windows the segment length is only the planning resolution, so
 the travel time must converge as it shrinks. This prints a markdown table (run by hand;
-the numbers in README.md's "Segment length" section come from it):
+the numbers in docs/guide/planning.md's "Choosing `--segment-length`" come from it):
 
     python benchmarks/bench_spacing.py
 
-Each route is planned with its README vehicle, default options (smoothing 0.01, the
+Each route is planned with its usual vehicle, default options (smoothing 0.01, the
 vehicle's jerk bound) and pure minimum time (smoothing 0, no jerk bound: the exact
 forward-backward optimum), the default 5 m roughness window, each on uniform segments
 (``refine=False``, ``--no-refine``) and refined (``refine=True``, the default: segments cut

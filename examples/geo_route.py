@@ -1,4 +1,4 @@
-"""From a GPS track and a LiDAR cloud to a verified plan, in Python (the README's walk-through).
+"""From a GPS track and a LiDAR cloud to a verified plan, in Python (the walk-through of docs/guide/data-sources.md).
 
 Run:  python examples/geo_route.py [--track GPX] [--terrain LAZ] [--road-class C]
                                    [--vehicle atv-low-range] [--out PNG]

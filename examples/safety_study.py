@@ -105,7 +105,7 @@ def run_study(*, refine: bool = DEFAULT_REFINE) -> SafetyStudy:
 
 
 def report(study: SafetyStudy) -> str:
-    """The Markdown for the README: the pooled table, then where the exceedances are."""
+    """The Markdown for the docs (docs/guide/verify.md): the pooled table, then where the exceedances are."""
     shifts = ", ".join(f"{f:g}" for f in SHIFT_FRACTIONS)
     return "\n".join([
         f"`{COMMAND}{'' if study.refine else ' --no-refine'}`: {len(study.pairs())} route-vehicle pairs "
@@ -171,7 +171,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", type=Path, help="also write the Markdown to this file (default: print it only)")
     parser.add_argument("--refine", action=argparse.BooleanOptionalAction, default=DEFAULT_REFINE,
-                        help="plan with refined segments, as 'profileopt plan' does (default; the README's figures); "
+                        help="plan with refined segments, as 'profileopt plan' does (default; the figures of docs/guide/verify.md); "
                              "--no-refine: uniform segments")
     args = parser.parse_args(argv)
     started = time.perf_counter()

@@ -297,7 +297,7 @@ def krc_course(real: Path, nominal_in: int) -> BundledRoute:
         f"Source: Project Chrono, https://github.com/projectchrono/chrono, {source}",
         "(CRG calculated from KRC data), BSD-3-Clause licence, Copyright (c) 2016 Project Chrono",
         "Development Team; see the LICENSE of data/real/krc-rms-courses/.",
-        f"Converted by `{COMMAND}` from data/real/ with profileopt.realdata.read_opencrg",
+        f"Converted by `{COMMAND}` from data/real/ with profileopt.io.read_opencrg",
         "(the middle of the 3 identical lateral tracks). RMS elevation of 100-404.8 m:",
         f"{1000 * z[rough].std():.1f} mm (nominal {nominal_in} in = {25.4 * nominal_in:.1f} mm).",
         "Units: s = distance along the reference line (m), z = elevation (m); a sample every 0.05 m.",
@@ -316,7 +316,7 @@ def iri_road(real: Path) -> BundledRoute:
         "Source: michalsorel/iri, https://github.com/michalsorel/iri, profile_1.txt, MIT licence,",
         "Copyright (c) 2023 Michal Sorel, Filip Sroubek; see the LICENSE of",
         "data/real/iri-road-profile/.",
-        f"Converted by `{COMMAND}` from data/real/ with profileopt.realdata.read_xy_profile;",
+        f"Converted by `{COMMAND}` from data/real/ with profileopt.io.read_xy_profile;",
         f"distance shifted by -{offset:g} m so that the route starts at s = 0.",
         "Units: s = distance along the path (m), z = elevation (m); a sample every 0.25 m.",
     ]

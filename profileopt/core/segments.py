@@ -200,7 +200,7 @@ def route_roughness_windows(route: "Route", vehicle: "Vehicle", *, window_m: flo
 
 
 def roughness_source(route: "Route", windows: RoughnessWindows) -> dict:
-    """Where a plan's roughness comes from, for :meth:`profileopt.planning.Profile.summary`.
+    """Where a plan's roughness comes from, for :meth:`profileopt.core.profile.Profile.summary`.
 
     Parameters
     ----------

@@ -239,7 +239,7 @@ def _bundled_dirs() -> list:
         dirs.append(resources.files("profileopt.models"))
     except ModuleNotFoundError:  # pragma: no cover - only when the package is broken
         pass
-    checkout = Path(__file__).resolve().parent.parent / "models"
+    checkout = Path(__file__).resolve().parents[2] / "models"  # the top-level models/ of a checkout
     if checkout.is_dir():
         dirs.append(checkout)
     return dirs

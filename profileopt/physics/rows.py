@@ -17,12 +17,19 @@ from typing import TYPE_CHECKING, Any, Callable, Sequence
 import numpy as np
 
 from ..core.kinematics import segment_accel_mps2
-from .motion import drive_power_w, friction_usage
+from .motion import (
+    drive_power_w,
+    friction_radius_mps2,
+    friction_usage,
+    lateral_accel_mps2,
+    tyre_accel_mps2,
+)
 
 if TYPE_CHECKING:
     from ..core.path import SegmentPath
 
-__all__ = ["RowFamily", "ROW_FAMILIES", "row_values", "exact_row_values", "friction_data", "power_data"]
+__all__ = ["RowFamily", "ROW_FAMILIES", "row_values", "exact_row_values", "friction_data", "power_data",
+           "friction_rows_needed", "power_rows_needed"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -175,3 +182,67 @@ def power_data(path: "SegmentPath", mass_kg: float, max_power_w: float) -> np.nd
     """
     n = path.grade_hi_rad.size
     return np.column_stack([path.grade_hi_rad, np.full(n, mass_kg), np.full(n, max_power_w)])
+
+
+def friction_rows_needed(path: "SegmentPath", friction_coefficient: float, cap_mps: np.ndarray,
+                         decel_mps2: np.ndarray, accel_mps2: np.ndarray) -> np.ndarray:
+    """The segments whose caps and acceleration bounds do not keep the friction usage within
+    the circle on their own, so that they need the ``friction`` rows, shape (N,) of bool.
+
+    The largest usage a segment allows is at its cap (lateral part) with its largest drive or
+    braking force at either grade extreme; an uncapped segment counts as capped at 1e6 m/s.
+    A straight segment never needs the rows: its acceleration bounds keep the circle.
+
+    Parameters
+    ----------
+    path : SegmentPath
+        Each segment's turns and slopes.
+    friction_coefficient : float
+        mu (-).
+    cap_mps : numpy.ndarray, shape (N,)
+        The lowest speed cap of each segment (m/s); inf where none.
+    decel_mps2, accel_mps2 : numpy.ndarray, shape (N,)
+        The tightest deceleration (positive) and acceleration bounds of each segment (m/s^2).
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (N,)
+    """
+    top = np.minimum(cap_mps, 1e6)  # an uncapped segment is capped by some limit in practice
+    lateral = lateral_accel_mps2(top, path.curvature_max_1pm)
+    usage = np.zeros(path.curvature_max_1pm.size)
+    for a in (accel_mps2, -decel_mps2):
+        for theta in (path.grade_lo_rad, path.grade_hi_rad):
+            along = tyre_accel_mps2(a, theta)
+            radius = friction_radius_mps2(friction_coefficient, theta)
+            usage = np.maximum(usage, (along**2 + lateral**2) / radius**2)
+    return (usage > 1.0 + 1e-12) & (path.curvature_max_1pm > 0)
+
+
+def power_rows_needed(path: "SegmentPath", mass_kg: float, max_power_w: float, cap_mps: np.ndarray,
+                      accel_mps2: np.ndarray) -> bool:
+    """Whether any segment can reach the drive power, so that the ``power`` rows are needed:
+    the fastest speed its caps allow times the most drive force per unit mass its bounds
+    allow, (a_max + g sin theta_hi) v_cap, exceeds P / m somewhere.
+
+    Parameters
+    ----------
+    path : SegmentPath
+        Each segment's turns and slopes.
+    mass_kg : float
+        Mass of the whole vehicle (kg).
+    max_power_w : float
+        Largest drive power at the wheels (W).
+    cap_mps : numpy.ndarray, shape (N,)
+        The lowest speed cap of each segment (m/s); inf where none.
+    accel_mps2 : numpy.ndarray, shape (N,)
+        The tightest acceleration bound of each segment (m/s^2).
+
+    Returns
+    -------
+    bool
+    """
+    drive = tyre_accel_mps2(accel_mps2, path.grade_hi_rad)
+    with np.errstate(invalid="ignore"):  # no drive force at no cap: 0 * inf, never reaching P
+        reach = np.maximum(drive, 0.0) * cap_mps
+        return bool(np.any(reach * mass_kg > max_power_w * (1 - 1e-12)))

@@ -193,7 +193,7 @@ def refine_segments(segments: Segments, positions_m: np.ndarray, vehicle: "Vehic
     Parameters
     ----------
     segments : Segments
-        The route's segments (:func:`segment_route`).
+        The route's segments (:func:`profileopt.core.segments.segment_route`).
     positions_m : numpy.ndarray, shape (M,)
         The route's sample positions s (m), those ``segments`` was cut from.
     vehicle : Vehicle

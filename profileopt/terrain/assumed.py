@@ -5,7 +5,7 @@ not the wheel-scale roughness. The user then gives an ISO 8608 class or an RI
 (:class:`AssumedRoughness`, carried by :attr:`profileopt.core.route.Route.assumed_roughness` and
 by a route file's ``# roughness_class = C`` or ``# roughness_ri = 0.05`` line). The planner
 gives every roughness window of such a route the assumed RI
-(:func:`profileopt.planning.route_roughness_windows`), and ``verify`` drives the route's
+(:func:`profileopt.core.segments.route_roughness_windows`), and ``verify`` drives the route's
 elevation plus a seeded realisation of that roughness (:meth:`AssumedRoughness.realisation_m`),
 so that the plan is judged on ground like the one it was planned for.
 """

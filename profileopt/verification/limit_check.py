@@ -33,7 +33,14 @@ from ..physics.motion import (
     plans_on_grades,
     tyre_accel_mps2,
 )
-from ..physics.rows import ROW_FAMILIES, exact_row_values, friction_data, power_data
+from ..physics.rows import (
+    ROW_FAMILIES,
+    exact_row_values,
+    friction_data,
+    friction_rows_needed,
+    power_data,
+    power_rows_needed,
+)
 from ..physics.speeds import max_force_over_segments, speed_bands
 from ..physics.steps import step_speed_cap_mps
 from ..terrain.roughness import RoughnessWindows
@@ -367,7 +374,7 @@ def check_limits(
         breaches.append(_first_breach("deceleration", "the vehicle's deceleration limit" + words.replace(
             "drive", "braking").replace("a + g", "-(a + g").replace("theta))", "theta)))"), -(accel + lift_lo),
             decel_bound - lift_lo, s[:-1], index, "m/s^2"))
-        for family, data in _row_data(vehicle, path, accel_bound):  # the friction circle, the drive power
+        for family, data in _row_data(vehicle, path, decel_bound, accel_bound):  # the friction circle, the drive power
             usage = exact_row_values(family, b, length, data).max(axis=0)
             breaches.append(_first_breach(family, ROW_FAMILIES[family].description, usage, np.array(1.0), s[:-1], index, "of the limit"))
         if n >= 2 and math.isfinite(jerk_bound):
@@ -435,14 +442,18 @@ def _accel_bounds(vehicle: "Vehicle", path: "SegmentPath") -> tuple[np.ndarray, 
     return decel, accel
 
 
-def _row_data(vehicle: "Vehicle", path: "SegmentPath", accel_mps2: np.ndarray) -> list[tuple[str, np.ndarray]]:
+def _row_data(vehicle: "Vehicle", path: "SegmentPath", decel_mps2: np.ndarray, accel_mps2: np.ndarray
+              ) -> list[tuple[str, np.ndarray]]:
     """The row families (:data:`profileopt.physics.rows.ROW_FAMILIES`) that can bind, with
     their data per segment: the friction circle where the route turns (on a straight the
-    acceleration bounds keep it), the drive power where the bounds allow any drive force."""
+    acceleration bounds keep it), the drive power where the bounds allow any drive force: the
+    planner's own tests of where its rows are needed, with no speed cap."""
+    uncapped = np.full(path.curvature_max_1pm.size, np.inf)
     out = []
-    if vehicle.friction_coefficient is not None and np.any(path.curvature_max_1pm > 0):
+    if vehicle.friction_coefficient is not None and np.any(
+            friction_rows_needed(path, vehicle.friction_coefficient, uncapped, decel_mps2, accel_mps2)):
         out.append(("friction", friction_data(path, vehicle.friction_coefficient)))
-    if vehicle.max_power_w is not None and vehicle.mass_kg is not None:
-        if np.any(tyre_accel_mps2(accel_mps2, path.grade_hi_rad) > 0):
-            out.append(("power", power_data(path, vehicle.mass_kg, vehicle.max_power_w)))
+    if vehicle.max_power_w is not None and vehicle.mass_kg is not None and power_rows_needed(
+            path, vehicle.mass_kg, vehicle.max_power_w, uncapped, accel_mps2):
+        out.append(("power", power_data(path, vehicle.mass_kg, vehicle.max_power_w)))
     return out

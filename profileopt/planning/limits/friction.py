@@ -26,11 +26,10 @@ import numpy as np
 from ...core.path import SegmentPath
 from ...physics.motion import (
     friction_radius_mps2,
-    lateral_accel_mps2,
     lateral_speed_cap_mps,
     tyre_accel_mps2,
 )
-from ...physics.rows import friction_data
+from ...physics.rows import friction_data, friction_rows_needed
 from .base import PlanContext, RowLimit, worst_ratio
 
 if TYPE_CHECKING:
@@ -108,16 +107,8 @@ class FrictionLimit(RowLimit):
     def _needs_rows(self, context: PlanContext, cap_mps: np.ndarray, decel_mps2: np.ndarray,
                     accel_mps2: np.ndarray) -> np.ndarray:
         """Segments where the caps and bounds do not keep the usage within the circle, (N,)."""
-        path = context.turns_and_slopes
-        top = np.minimum(cap_mps, 1e6)  # an uncapped segment is capped by some limit in practice
-        lateral = lateral_accel_mps2(top, path.curvature_max_1pm)
-        usage = np.zeros(context.segments.count)
-        for a in (accel_mps2, -decel_mps2):
-            for theta in (path.grade_lo_rad, path.grade_hi_rad):
-                along = tyre_accel_mps2(a, theta)
-                radius = friction_radius_mps2(self.friction_coefficient, theta)
-                usage = np.maximum(usage, (along**2 + lateral**2) / radius**2)
-        return (usage > 1.0 + 1e-12) & (path.curvature_max_1pm > 0)
+        return friction_rows_needed(context.turns_and_slopes, self.friction_coefficient, cap_mps, decel_mps2,
+                                    accel_mps2)
 
     def nlp_rows(self, context: PlanContext, cap_mps: np.ndarray, decel_mps2: np.ndarray,
                  accel_mps2: np.ndarray) -> tuple[str, np.ndarray] | None:

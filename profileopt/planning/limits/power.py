@@ -16,8 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ...core.path import SegmentPath
-from ...physics.motion import tyre_accel_mps2
-from ...physics.rows import power_data
+from ...physics.rows import power_data, power_rows_needed
 from ..bands import DrivePower
 from .base import PlanContext, RowLimit, worst_ratio
 
@@ -92,9 +91,7 @@ class PowerLimit(RowLimit):
         -------
         ("power", data) or None
         """
-        drive = tyre_accel_mps2(accel_mps2, context.turns_and_slopes.grade_hi_rad)
-        reach = np.maximum(drive, 0.0) * cap_mps
-        if not np.any(reach * self.mass_kg > self.max_power_w * (1 - 1e-12)):
+        if not power_rows_needed(context.turns_and_slopes, self.mass_kg, self.max_power_w, cap_mps, accel_mps2):
             return None
         return "power", self.row_data(context.turns_and_slopes)
 
