@@ -1,22 +1,61 @@
 """Shared fixtures and constants of the test suite.
 
+Layout: the tests mirror the package, ``tests/<package>/test_<module>.py`` (``tests/core/``,
+``tests/terrain/``, ``tests/physics/``, ``tests/planning/`` with ``nlp/``,
+``tests/verification/``, ``tests/studies/``, ``tests/mpc/``, ``tests/io/``, ``tests/viz/``),
+``tests/cli/`` the commands as a user runs them (bad input, outputs, the expected outputs
+in ``tests/expected/``), and ``tests/`` itself the whole project (layout, docstrings,
+examples, what a newcomer runs). The folders are not packages, so every test file has a
+basename of its own.
+
+Running (``[tool.pytest.ini_options]`` in pyproject.toml):
+
+* ``python -m pytest -q`` runs the whole suite, on as many worker processes as the machine
+  has cores (pytest-xdist, ``-n auto`` in ``addopts``; ``-n 0`` runs in this process, for a
+  debugger or a single test);
+* ``python -m pytest -m "not slow" -q`` leaves out the long tests: under a minute on 2 cores
+  (the whole suite: about 6.5 minutes, most of it the safety study on one of them);
+* markers, registered with ``--strict-markers``: ``slow``, ``geo`` (needs the ``geo``
+  extra), ``mpc`` (do-mpc and rockit), ``cc`` (compiles generated C); ``-m "not geo"`` and
+  so on leave a group out.
+
+Hypothesis profiles: ``dev`` (the default: few examples, quick), ``ci`` (as many, the same
+examples every run, no example database) and ``thorough`` (2000 examples per property, a
+long hunt), chosen with the option of hypothesis's pytest plugin, e.g.
+``python -m pytest --hypothesis-profile thorough tests/planning/test_planner_properties.py``.
+A test's own ``@settings`` sets only what the test needs (a deadline, a health check),
+never the number of examples, so the profile decides it.
+
 Paths: everything the tests read is inside the repository (``data/real/`` holds the measured
 terrain, ``examples/routes/`` the bundled routes), so a fresh clone runs every test with
-nothing beside it. Test modules that need a path at import time (in a ``parametrize`` list,
-say) import the constant (``from conftest import ROUTES``); tests use the fixtures.
+nothing beside it, wherever it is. Test modules that need a path at import time (in a
+``parametrize`` list, say) import the constant (``from conftest import ROUTES``; the
+``pythonpath`` option puts ``tests/`` on the path); tests use the fixtures. No test depends
+on the clone's path or the terminal's width: children that print help get ``COLUMNS`` from
+:data:`WIDE_TERMINAL`.
 """
 
 from __future__ import annotations
 
 import math
+import re
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, settings
 
 from profileopt import force_n, load_vehicle
 from profileopt.core.vehicle import OPTIONAL_KEYS
+
+# Hypothesis profiles (see the module's docstring); ``--hypothesis-profile NAME`` loads
+# another after this file is read. No deadline: a plan's time depends on the machine.
+_PATIENT = {"deadline": None, "suppress_health_check": [HealthCheck.too_slow]}
+settings.register_profile("dev", max_examples=30, **_PATIENT)
+settings.register_profile("ci", max_examples=30, derandomize=True, database=None, print_blob=True, **_PATIENT)
+settings.register_profile("thorough", max_examples=2000, **_PATIENT)
+settings.load_profile("dev")
 
 #: the repository (this file is tests/conftest.py)
 ROOT = Path(__file__).resolve().parents[1]
@@ -28,6 +67,65 @@ REAL_DATA = ROOT / "data" / "real"
 #: the ``profileopt`` command, run by the interpreter that runs the tests (``python -m
 #: profileopt`` is the console script's entry point, profileopt.cli:main)
 PROFILEOPT = (sys.executable, "-m", "profileopt")
+
+#: the documentation's sources (Markdown pages; the README is the front door)
+DOCS = ROOT / "docs"
+
+
+def markdown_pages() -> list[Path]:
+    """The Markdown a user reads: README.md and the documentation's pages, not its build
+    output (folders whose names start with ``_`` or ``.``, ``build``, generated API pages)."""
+    skip = ("build", "generated")
+    pages = [p for p in sorted(DOCS.rglob("*.md"))
+             if not any(part.startswith(("_", ".")) or part in skip for part in p.relative_to(DOCS).parent.parts)]
+    return [ROOT / "README.md", *pages]
+
+
+def markdown_section(page: str, title: str) -> str:
+    """The section of a Markdown page (``page``: its path from the repository's top, e.g.
+    ``"docs/guide/mpc.md"``) whose heading starts with ``title``: its heading and everything
+    up to the next heading of the same level or above. Lines inside code fences are never
+    headings (a shell comment ``# ...``). Fails naming the page when no heading matches, so a
+    test that reads a snippet says where it looked when the text has moved."""
+    lines = (ROOT / page).read_text(encoding="utf-8").splitlines(keepends=True)
+    fence = False
+    start = level = None
+    for i, line in enumerate(lines):
+        if line.lstrip().startswith(("```", "~~~")):
+            fence = not fence
+            continue
+        heading = None if fence else re.match(r"(#+) (.*)", line)
+        if heading is None:
+            continue
+        if start is None and heading.group(2).startswith(title):
+            start, level = i, len(heading.group(1))
+        elif start is not None and len(heading.group(1)) <= level:
+            return "".join(lines[start:i])
+    if start is None:
+        raise AssertionError(f"no heading starting {title!r} in {page}: has the text moved to another page?")
+    return "".join(lines[start:])
+
+
+#: the environment entries that make a child's terminal wide: argparse then wraps no help
+#: line (a default may be a long absolute path, the clone's folder), so a test reads the
+#: same help wherever the clone is and however wide the terminal it runs in
+WIDE_TERMINAL = {"COLUMNS": "10000"}
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """The longest tests first: the files that hold a test marked ``slow(seconds=N)`` (about N
+    seconds on one core) come first, the longest first, each file's tests together and in
+    their order (so a module's fixture is still made once), then every other file as
+    collected. With several workers the safety study (minutes) then starts at once while the
+    others share the rest, rather than starting last and running alone at the end."""
+    def seconds(item: pytest.Item) -> float:
+        mark = item.get_closest_marker("slow")
+        return float(mark.kwargs.get("seconds", 0)) if mark else 0.0
+
+    longest: dict[Path, float] = {}
+    for item in items:
+        longest[item.path] = max(longest.get(item.path, 0.0), seconds(item))
+    items.sort(key=lambda item: -longest[item.path])  # stable: the rest keep their order
 
 
 @pytest.fixture(scope="session")
@@ -137,7 +235,7 @@ def check_turns_and_hills(profile, route, vehicle, accel: np.ndarray, rtol: floa
     """Acceleration bounds (on grades, for a vehicle that gives any key of turns and hills),
     lateral acceleration, friction circle and drive power, at every speed and grade of every
     segment: the grade recomputed by :func:`grade_direct` over twice the roughness window, the
-    curvature the plan's own (its estimate is tested in tests/test_geometry.py)."""
+    curvature the plan's own (its estimate is tested in tests/terrain/test_geometry.py)."""
     s, v = profile.s_m, profile.speed_mps
     on_grades = any(getattr(vehicle, key) is not None for key in OPTIONAL_KEYS)  # any key of turns and hills
     n = s.size - 1

@@ -28,7 +28,7 @@ from profileopt.mpc.constraints import add_force_constraints, force_limit_n, for
 from profileopt.io import read_route
 from profileopt.terrain.roughness import roughness_windows
 
-from conftest import ROOT
+from conftest import ROOT, markdown_section
 
 EXAMPLES = ROOT / "examples"
 ROUTES = EXAMPLES / "routes"
@@ -87,6 +87,8 @@ def _check_log(path: Path, route_name: str, vehicle_name: str, stdout: str) -> f
     return sampled
 
 
+@pytest.mark.slow
+@pytest.mark.mpc
 @needs_mpc_extra
 @pytest.mark.parametrize("vehicle", ["atv", "atv-resonant"])
 def test_dompc_example_keeps_every_window_within_the_limit(tmp_path: Path, vehicle: str) -> None:
@@ -98,6 +100,8 @@ def test_dompc_example_keeps_every_window_within_the_limit(tmp_path: Path, vehic
     assert sampled > 0.999  # the limit bound somewhere: the run tested something
 
 
+@pytest.mark.slow
+@pytest.mark.mpc
 @needs_mpc_extra
 @pytest.mark.parametrize("vehicle", ["atv", "atv-resonant"])
 def test_rockit_example_keeps_every_window_within_the_limit(tmp_path: Path, vehicle: str) -> None:
@@ -109,6 +113,8 @@ def test_rockit_example_keeps_every_window_within_the_limit(tmp_path: Path, vehi
     assert float(re.search(r"minimum time: ([0-9.]+) s", run.stdout).group(1)) > 0
 
 
+@pytest.mark.slow
+@pytest.mark.mpc
 @needs_mpc_extra
 def test_the_examples_check_finds_the_pointwise_constraint_unsafe(tmp_path: Path) -> None:
     """The constraint issue 10 found unsafe (the force at the grid points only, on the terrain
@@ -135,6 +141,7 @@ def test_without_the_extra_an_example_says_which_to_install(tmp_path: Path) -> N
         assert run.stderr.strip().count("\n") == 0 and "pip install 'profileopt[mpc]'" in run.stderr, run.stderr
 
 
+@pytest.mark.slow(seconds=20)
 @pytest.mark.parametrize(
     "route, vehicle, options",
     [
@@ -164,11 +171,11 @@ def test_preview_example_keeps_every_window_within_the_limit(tmp_path: Path, rou
     assert sampled > 0.999
 
 
-def test_readme_between_the_grid_points_snippet_runs_and_prints_its_answer() -> None:
-    """The README's second MPC snippet, run as written from the repository's top folder: it
-    ends in the washboard's upper band (examples/routes/washboard.csv: [0.53, 3.4] m/s)."""
-    readme = (ROOT / "README.md").read_text(encoding="utf-8")
-    section = readme[readme.index("### Between the grid points"):]
+def test_mpc_guide_between_the_grid_points_snippet_runs_and_prints_its_answer() -> None:
+    """The MPC guide's second snippet (once the README's), run as written from the
+    repository's top folder: it ends in the washboard's upper band
+    (examples/routes/washboard.csv: [0.53, 3.4] m/s)."""
+    section = markdown_section("docs/guide/mpc.md", "Between the grid points")
     code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])))
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd=ROOT, env=env)
@@ -176,6 +183,8 @@ def test_readme_between_the_grid_points_snippet_runs_and_prints_its_answer() -> 
     assert run.stdout.strip() == "3.37" and "3.37" in code
 
 
+@pytest.mark.slow
+@pytest.mark.mpc
 @needs_mpc_extra
 def test_add_force_constraints_works_on_a_rockit_ocp() -> None:
     """add_force_constraints takes any problem with subject_to: a rockit Ocp, minimum time

@@ -16,24 +16,20 @@ import numpy as np
 import pytest
 
 import profileopt
-from conftest import PROFILEOPT, ROOT, ROUTES
+from conftest import PROFILEOPT, ROOT, ROUTES, WIDE_TERMINAL, markdown_pages, markdown_section
 from profileopt import load_vehicle, plan, read_route
 
 CC = shutil.which("cc") or shutil.which("gcc") or shutil.which("clang")
 needs_cc = pytest.mark.skipif(CC is None, reason="no C compiler (cc, gcc or clang) on PATH")
-README = (ROOT / "README.md").read_text(encoding="utf-8")
+#: where the MPC walk-through lives (it was the README's section of that name)
+MPC_PAGE, MPC_TITLE = "docs/guide/mpc.md", "Use the force limits in your own MPC"
 
 
 def _env() -> dict[str, str]:
-    """The environment of a child process: this checkout first on the path, no display."""
+    """The environment of a child process: this checkout first on the path, no display, a
+    terminal too wide for argparse to wrap a help line (a default path holds the clone's)."""
     path = os.pathsep.join([str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])])
-    return {**os.environ, "PYTHONPATH": path, "MPLBACKEND": "Agg"}
-
-
-def _readme_section(title: str) -> str:
-    start = README.index(f"## {title}\n")
-    end = README.find("\n## ", start + 1)
-    return README[start:end if end >= 0 else None]
+    return {**os.environ, "PYTHONPATH": path, "MPLBACKEND": "Agg", **WIDE_TERMINAL}
 
 
 # --- --version ------------------------------------------------------------------------
@@ -58,9 +54,13 @@ EXAMPLES = {
     "examples/routes/make_routes.py": ["beside this script"],
     "examples/geo_route.py": ["hexbin-track.gpx", "atv-low-range", "geo_route.png"],
 }
+#: the examples that import do-mpc or rockit before reading their options (the mpc extra)
+MPC_EXAMPLES = {"examples/mpc_dompc.py", "examples/mpc_rockit.py"}
+SCRIPTS = [pytest.param(script, marks=pytest.mark.mpc) if script in MPC_EXAMPLES else script for script in sorted(EXAMPLES)]
 
 
-@pytest.mark.parametrize("script", sorted(EXAMPLES))
+@pytest.mark.slow
+@pytest.mark.parametrize("script", SCRIPTS)
 def test_example_help_shows_defaults_and_writes_nothing(tmp_path: Path, script: str) -> None:
     result = subprocess.run([sys.executable, str(ROOT / script), "--help"], capture_output=True, text=True,
                             timeout=120, cwd=tmp_path, env=_env())
@@ -73,7 +73,8 @@ def test_example_help_shows_defaults_and_writes_nothing(tmp_path: Path, script: 
     assert list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.parametrize("script", sorted(EXAMPLES))
+@pytest.mark.slow
+@pytest.mark.parametrize("script", SCRIPTS)
 def test_example_refuses_an_unknown_option_and_writes_nothing(tmp_path: Path, script: str) -> None:
     result = subprocess.run([sys.executable, str(ROOT / script), "--no-such-option"], capture_output=True,
                             text=True, timeout=120, cwd=tmp_path, env=_env())
@@ -85,6 +86,8 @@ def test_example_refuses_an_unknown_option_and_writes_nothing(tmp_path: Path, sc
 # --- generated C -----------------------------------------------------------------------
 
 
+@pytest.mark.slow
+@pytest.mark.cc
 @needs_cc
 @pytest.mark.parametrize("vehicle, n_stages", [("atv", 1), ("atv-resonant", 3)])
 def test_generated_c_compiles_without_warnings(tmp_path: Path, vehicle: str, n_stages: int) -> None:
@@ -98,14 +101,16 @@ def test_generated_c_compiles_without_warnings(tmp_path: Path, vehicle: str, n_s
         assert result.returncode == 0, result.stderr[:3000]
 
 
+@pytest.mark.cc
 @needs_cc
-def test_readme_cc_line_works_from_the_repository_folder(tmp_path: Path) -> None:
-    """The README's export and build commands, run as written from a copy's top folder."""
-    section = _readme_section("Use the force limits in your own MPC")
+def test_mpc_guide_cc_line_works_from_the_repository_folder(tmp_path: Path) -> None:
+    """The MPC guide's export and build commands (once the README's), run as written from a
+    copy's top folder."""
+    section = markdown_section(MPC_PAGE, MPC_TITLE)
     export = re.search(r"`(profileopt export-c [^`]*)`", section).group(1)
     build = re.search(r"`((?:cd \S+ && )?cc [^`]*)`", section).group(1)
     binary = re.search(r"-o (\S+)", build)
-    assert binary, f"the README's cc line names no binary: {build}"
+    assert binary, f"the cc line of {MPC_PAGE} names no binary: {build}"
     result = subprocess.run([*PROFILEOPT, *shlex.split(export)[1:]], cwd=tmp_path, capture_output=True,
                             text=True, timeout=300, env=_env())
     assert result.returncode == 0, result.stderr
@@ -171,13 +176,15 @@ def test_function_docs_hold_no_absolute_path(atv, tmp_path: Path) -> None:
             assert Path(vehicle.name).stem in fn.__doc__
 
 
-# --- files the README's commands write ----------------------------------------------------
+# --- files the documented commands write --------------------------------------------------
 
 
-def _readme_outputs() -> set[str]:
-    """Output paths named in the README's commands (-o, --plot, --map, --out), placeholders aside."""
+def _documented_outputs() -> set[str]:
+    """Output paths named in the commands of the README and the documentation's pages (-o,
+    --plot, --map, --out), placeholders aside."""
     names = set()
-    for line in README.splitlines():
+    lines = [line for page in markdown_pages() for line in page.read_text(encoding="utf-8").splitlines()]
+    for line in lines:
         folder = re.search(r"\bcd (\S+) &&", line)  # a command run inside a folder writes there
         for match in re.finditer(r"(?:-o|--plot|--map|--out)\s+([\w./-]+)", line):
             name = match.group(1)
@@ -187,16 +194,16 @@ def _readme_outputs() -> set[str]:
     return names
 
 
-def test_gitignore_covers_what_the_readme_commands_write() -> None:
+def test_gitignore_covers_what_the_documented_commands_write() -> None:
     if not (ROOT / ".git").exists():
         pytest.skip("not a git checkout")
-    names = _readme_outputs() | {"mpc_out/"}  # mpc_terrain_preview.py's default folder
+    names = _documented_outputs() | {"mpc_out/"}  # mpc_terrain_preview.py's default folder
     assert {"profile.csv", "verify.csv", "verify.png", "forces_c/"} <= names, names
     for name in sorted(names):
         folder = name.endswith("/") or "." not in Path(name).name  # --out figures: a folder
         probe = name.rstrip("/") + "/x.c" if folder else name
         result = subprocess.run(["git", "check-ignore", "-q", "--no-index", probe], cwd=ROOT)
-        assert result.returncode == 0, f"{name} is written by a README command and not in .gitignore"
+        assert result.returncode == 0, f"{name} is written by a documented command and not in .gitignore"
 
 
 def test_bench_plan_does_not_overwrite_the_committed_results_by_default(tmp_path: Path, monkeypatch,
@@ -215,11 +222,11 @@ def test_bench_plan_does_not_overwrite_the_committed_results_by_default(tmp_path
     assert "| method" in capsys.readouterr().out
 
 
-# --- the README's MPC snippet ----------------------------------------------------------------
+# --- the MPC guide's first snippet (once the README's) ----------------------------------------
 
 
-def test_readme_mpc_snippet_prints_only_its_answer(tmp_path: Path) -> None:
-    section = _readme_section("Use the force limits in your own MPC")
+def test_mpc_guide_snippet_prints_only_its_answer(tmp_path: Path) -> None:
+    section = markdown_section(MPC_PAGE, MPC_TITLE)
     code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
                             cwd=tmp_path, env=_env())

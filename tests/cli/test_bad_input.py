@@ -348,6 +348,13 @@ def _run_case(case: Case, folder: Path) -> Outcome:
     return Outcome(folder, before, run_cli(folder, *case.argv))
 
 
+#: The cases the Python API is also tried on (test_python_api_raises_input_error_with_the_same_message,
+#: below). Their command-line runs are quick: ``-m "not slow"`` keeps them, the rest are slow.
+API_CASES = ["route-non-numeric-cell", "route-s-duplicated", "route-elevation-step-1km", "vehicle-unknown-key",
+             "vehicle-confidence-one", "v0-cannot-stop-in-time", "segment-length-longer-than-route",
+             "impassable-segment", "profile-non-numeric"]
+
+
 @pytest.fixture(scope="module")
 def outcomes(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> dict[str, Outcome]:
     """The selected cases, each run once in its own folder, two subprocesses at a time (the
@@ -364,7 +371,9 @@ def outcomes(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFa
         return {key: future.result() for key, future in futures.items()}
 
 
-@pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])
+@pytest.mark.xdist_group("bad_input_outcomes")  # one worker runs the cases' subprocesses, once
+@pytest.mark.parametrize("case", [pytest.param(c, id=c.id, marks=() if c.id in API_CASES else pytest.mark.slow)
+                                  for c in CASES])
 def test_bad_input_is_one_line_exit_2_and_writes_nothing(case: Case, outcomes: dict[str, Outcome]) -> None:
     outcome = outcomes[case.id]
     assert_one_clean_line(outcome.done, case.argv[0], case.fragments)
@@ -373,6 +382,7 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(case: Case, outcomes: d
     assert sorted(p.name for p in outcome.folder.iterdir()) == outcome.before  # no stray temporary files
 
 
+@pytest.mark.slow
 def test_a_failed_run_keeps_a_good_earlier_output(tmp_path: Path) -> None:
     (tmp_path / "route.csv").write_text(SHORT_ROUTE)
     good = run_cli(tmp_path, "plan", "route.csv", "-o", "out.csv")
@@ -394,11 +404,8 @@ def test_a_bad_plot_path_writes_no_csv(tmp_path: Path) -> None:
 
 
 # --------------------------------------------------------------------------------------
-# The Python API raises InputError (a ValueError) with the command line's message.
-
-API_CASES = ["route-non-numeric-cell", "route-s-duplicated", "route-elevation-step-1km", "vehicle-unknown-key",
-             "vehicle-confidence-one", "v0-cannot-stop-in-time", "segment-length-longer-than-route",
-             "impassable-segment", "profile-non-numeric"]
+# The Python API raises InputError (a ValueError) with the command line's message (the cases
+# of API_CASES, above).
 
 
 def options_of(argv: list[str]) -> dict[str, str]:
@@ -419,6 +426,7 @@ def _api(case: Case) -> None:
          vend_mps=float(options.get("--vend", 0.0)))
 
 
+@pytest.mark.xdist_group("bad_input_outcomes")
 @pytest.mark.parametrize("case_id", API_CASES)
 def test_python_api_raises_input_error_with_the_same_message(case_id: str, tmp_path: Path,
                                                              monkeypatch: pytest.MonkeyPatch,
@@ -494,6 +502,7 @@ def _write(writer: str, folder: Path) -> None:
         raise AssertionError(writer)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("writer", WRITERS)
 def test_every_output_goes_through_a_temporary_file(writer: str, tmp_path: Path,
                                                     monkeypatch: pytest.MonkeyPatch) -> None:
@@ -574,6 +583,7 @@ def read_route_text(folder: Path, text: str):  # noqa: ANN201
 # Determinism: the same input and options give the same output bytes.
 
 
+@pytest.mark.slow
 def test_plan_twice_gives_the_same_bytes(tmp_path: Path) -> None:
     (tmp_path / "route.csv").write_text(route_text(length_m=60.0))
     runs = []
@@ -591,6 +601,7 @@ def test_plan_twice_gives_the_same_bytes(tmp_path: Path) -> None:
     assert runs[0][2] == runs[1][2]
 
 
+@pytest.mark.slow
 def test_a_reader_that_stops_early_ends_the_command_with_the_pipes_status() -> None:
     # `profileopt plan ... -o - | head -2`: the reader closes the pipe after a few bytes; the
     # command stops quietly with 128 + SIGPIPE (13) = 141, a shell's status for a program its

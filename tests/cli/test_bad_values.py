@@ -60,6 +60,7 @@ ABSURD = [
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("key, value, unit", ABSURD, ids=[a[0] for a in ABSURD])
 @pytest.mark.parametrize("command", ["plan", "compare", "export-c", "figures"])
 def test_absurd_vehicle_values_are_one_line_in_every_command(tmp_path, command, key, value, unit):
@@ -134,6 +135,7 @@ def _route_file(tmp_path: Path, s: np.ndarray, z: np.ndarray, limit: np.ndarray 
     return path
 
 
+@pytest.mark.slow
 def test_a_speed_limit_slower_than_any_vehicle_names_itself(tmp_path):
     s = np.round(np.arange(0.0, 50.05, 0.1), 6)
     limit = np.full(s.size, 8.0)
@@ -143,6 +145,7 @@ def test_a_speed_limit_slower_than_any_vehicle_names_itself(tmp_path):
     assert "shorter segments" not in line
 
 
+@pytest.mark.slow
 def test_distances_beyond_double_precision_are_named_as_such(tmp_path):
     s = 1e15 + np.arange(0.0, 50.0, 0.1)  # 1e15 keeps steps of 0.125 m only: rows repeat
     path = _route_file(tmp_path, s, 0.01 * np.sin(np.arange(s.size)))

@@ -10,7 +10,7 @@ before the package was reorganised (commit "tests: hold every bundled route's pr
 When a change is *meant* to change results (a new definition, a better solver), rewrite
 them deliberately and say why in the commit::
 
-    PROFILEOPT_UPDATE_EXPECTED=1 python -m pytest tests/test_expected_outputs.py
+    PROFILEOPT_UPDATE_EXPECTED=1 python -m pytest tests/cli/test_expected_outputs.py
 
 The commands run as a user runs them (a subprocess of the installed entry point), so the
 comparison includes the CLI's own settings (one OpenBLAS thread) and its formatting.
@@ -32,9 +32,9 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
-EXPECTED = Path(__file__).resolve().parent / "expected"
-ROUTES = ROOT / "examples" / "routes"
+from conftest import ROOT
+
+EXPECTED = ROOT / "tests" / "expected"
 UPDATE = os.environ.get("PROFILEOPT_UPDATE_EXPECTED") == "1"
 
 BUNDLED_ROUTES = ("trail", "washboard", "curb", "krc_rms_1in", "krc_rms_2in", "krc_rms_4in", "iri_road")
@@ -106,18 +106,25 @@ def plan_bytes(tmp_path: Path, route: str, vehicle: str, options: list[str]) -> 
     return out.read_bytes()
 
 
-@pytest.mark.parametrize("vehicle", VEHICLES)
-@pytest.mark.parametrize("route", BUNDLED_ROUTES)
+#: the one plan ``-m "not slow"`` keeps: a quick check that results are still the same bytes
+QUICK_PAIR = ("curb", "atv")
+
+
+@pytest.mark.parametrize(("route", "vehicle"), [
+    pytest.param(route, vehicle, id=f"{route}-{vehicle}", marks=() if (route, vehicle) == QUICK_PAIR else pytest.mark.slow)
+    for route in BUNDLED_ROUTES for vehicle in VEHICLES])
 def test_bundled_route_profile_is_unchanged(tmp_path, route, vehicle):
     check_bytes(plan_bytes(tmp_path, route, vehicle, []), f"profiles/{route}-{vehicle}.csv")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", sorted(OPTION_CASES))
 def test_profile_with_options_is_unchanged(tmp_path, case):
     route, vehicle, options = OPTION_CASES[case]
     check_bytes(plan_bytes(tmp_path, route, vehicle, options), f"profiles/{case}.csv")
 
 
+@pytest.mark.slow
 def test_paper_figure_tables_are_unchanged(tmp_path):
     result = run_cli("figures", "--out", str(tmp_path))
     assert result.returncode == 0, result.stderr
@@ -127,6 +134,7 @@ def test_paper_figure_tables_are_unchanged(tmp_path):
         check_bytes(table.read_bytes(), f"figures/{table.name}")
 
 
+@pytest.mark.slow(seconds=12)
 @pytest.mark.parametrize("route, vehicle", COMPARE_CASES)
 def test_compare_tables_are_unchanged(route, vehicle):
     for fmt, options in (("md", []), ("json", ["--json"])):

@@ -87,6 +87,7 @@ SAME_AS_INPUT = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("argv", SAME_AS_INPUT.values(), ids=SAME_AS_INPUT.keys())
 def test_an_output_that_is_an_input_is_refused(argv: tuple[str, ...], folder: Path, profile_text: bytes) -> None:
     (folder / "profile.csv").write_bytes(profile_text)
@@ -166,6 +167,7 @@ def test_a_failing_second_output_leaves_the_first_untouched(folder: Path, monkey
 # Outputs that are not regular files are written into, never replaced; '-' is stdout.
 
 
+@pytest.mark.slow
 def test_output_to_standard_output(folder: Path) -> None:
     done = run(folder, "plan", "route.csv", "-o", "-")
     assert done.returncode == 0, done.stderr
@@ -181,6 +183,7 @@ def test_a_png_cannot_go_to_standard_output(folder: Path) -> None:
     assert snapshot(folder) == before
 
 
+@pytest.mark.slow
 def test_a_fifo_output_is_written_into_not_replaced(folder: Path) -> None:
     fifo = folder / "pipe"
     os.mkfifo(fifo)
@@ -204,6 +207,7 @@ def test_a_fifo_output_is_written_into_not_replaced(folder: Path) -> None:
     assert received == [(folder / "file.csv").read_bytes()]
 
 
+@pytest.mark.slow
 def test_a_symlink_to_standard_output_is_written_through(folder: Path) -> None:
     os.symlink("/proc/self/fd/1", folder / "out")
     done = run(folder, "plan", "route.csv", "-o", "out")
@@ -212,6 +216,7 @@ def test_a_symlink_to_standard_output_is_written_through(folder: Path) -> None:
     assert done.stdout.startswith("# profileopt profile:")
 
 
+@pytest.mark.slow
 def test_dev_null_is_written_into_not_replaced(folder: Path) -> None:
     before = os.stat(os.devnull)
     assert stat.S_ISCHR(before.st_mode)
@@ -234,6 +239,7 @@ EMPTY = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("argv", EMPTY.values(), ids=EMPTY.keys())
 def test_an_empty_output_path_is_refused(argv: tuple[str, ...], folder: Path, profile_text: bytes) -> None:
     (folder / "profile.csv").write_bytes(profile_text)
@@ -242,6 +248,7 @@ def test_an_empty_output_path_is_refused(argv: tuple[str, ...], folder: Path, pr
     assert snapshot(folder) == before
 
 
+@pytest.mark.slow
 def test_the_longest_legal_names_are_written(folder: Path) -> None:
     csv, png = "c" * 251 + ".csv", "p" * 251 + ".png"  # 255 bytes each, the limit
     done = run(folder, "plan", "route.csv", "-o", csv, "--plot", png)
@@ -314,6 +321,7 @@ NOT_REGULAR = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("argv,name", NOT_REGULAR.values(), ids=NOT_REGULAR.keys())
 def test_an_input_that_is_not_a_regular_file_is_refused(argv: tuple[str, ...], name: str, folder: Path) -> None:
     os.mkfifo(folder / "fifo")  # no writer: reading it would block for ever

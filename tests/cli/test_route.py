@@ -2,13 +2,14 @@
 input (issue 12).
 
 Reference values: the KRC course's own profile (profileopt.io.read_opencrg, tested against
-the file's header in tests/test_synthetic.py), the data README's densities, and plans of the
+the file's header in tests/io/test_elevation.py), the data README's densities, and plans of the
 same route read back from its file.
 """
 
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -19,9 +20,10 @@ import pytest
 from profileopt.cli import main
 from profileopt.io import read_opencrg, read_route
 
-from conftest import PROFILEOPT, REAL_DATA, ROOT
+from conftest import PROFILEOPT, REAL_DATA, ROOT, markdown_section
 from geo_data import cloud_points, track_utm_m, write_geotiff, write_gpx, write_laz
 
+pytestmark = pytest.mark.geo  # every test here reads or writes geographic files
 pytest.importorskip("laspy")
 pytest.importorskip("rasterio")
 
@@ -58,6 +60,7 @@ def test_the_laz_is_the_las_compressed() -> None:
         np.testing.assert_array_equal(getattr(las, name), getattr(laz, name))
 
 
+@pytest.mark.slow
 def test_airborne_lidar_is_refused_for_roughness_then_planned_with_a_class(tmp_path: Path,
                                                                           capsys: pytest.CaptureFixture) -> None:
     out = tmp_path / "route.csv"
@@ -84,6 +87,7 @@ def test_airborne_lidar_is_refused_for_roughness_then_planned_with_a_class(tmp_p
     assert plans[0] == plans[1]
 
 
+@pytest.mark.slow
 def test_a_real_gpx_track_alone_gives_a_route_with_an_assumed_class(tmp_path: Path,
                                                                     capsys: pytest.CaptureFixture) -> None:
     out = tmp_path / "mojstrovka.csv"
@@ -107,7 +111,7 @@ def test_a_gpx_file_of_two_drives_needs_track_index(tmp_path: Path, capsys: pyte
     status, _, err = _run(["route", str(GPX / "korita-zbevnica.gpx"), "-o", str(out), "--roughness-class", "C",
                            "--track-index", "1", "--spacing", "0.5"], capsys)
     assert status == 0, err
-    assert read_route(out).length_m > 8000  # track 1: an 8.6 km loop (tests/test_geo_readers.py)
+    assert read_route(out).length_m > 8000  # track 1: an 8.6 km loop (tests/io/test_geo_readers.py)
 
 
 def test_a_track_along_a_krc_course_reads_its_profile(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
@@ -186,6 +190,7 @@ def test_bad_input_is_one_line_exit_2_and_nothing_written(tmp_path: Path, synthe
     assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []  # no temporary file left
 
 
+@pytest.mark.slow
 def test_the_command_runs_as_a_program(tmp_path: Path, synthetic: dict) -> None:
     out = tmp_path / "route.csv"
     done = subprocess.run([*PROFILEOPT, "route", str(synthetic["gpx"]), "--terrain", str(synthetic["laz"]),
@@ -194,20 +199,22 @@ def test_the_command_runs_as_a_program(tmp_path: Path, synthetic: dict) -> None:
     assert "roughness  measured" in done.stdout and out.exists()
 
 
-# ------------------------------------------------------------------ the README's walk-through
+# ------------------------------------------------------------------ the documented walk-through
+
+#: where the walk-through lives (it was a paragraph of the README)
+WALKTHROUGH = ("docs/guide/data-sources.md", "Walk-through: a GPX track and a LAZ cloud to a verified plan")
 
 
 def _walkthrough_commands() -> list[str]:
-    """The walk-through's commands as the README gives them (continuation lines joined)."""
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
-    start = text.index("**Walk-through: a GPX track and a LAZ cloud to a verified plan.**")
-    section = text[start:text.index("\n## ", start)].replace("\\\n", " ")
+    """The walk-through's commands as the page gives them (continuation lines joined)."""
+    section = markdown_section(*WALKTHROUGH).replace("\\\n", " ")
     return [" ".join(line.split()).removeprefix("$ ") for line in section.splitlines()
             if line.strip().removeprefix("$ ").startswith("profileopt ")
             and not line.split()[1 + line.strip().startswith("$")].endswith(":")]  # not its output
 
 
-def test_the_readme_walkthrough_runs_as_written(tmp_path: Path) -> None:
+@pytest.mark.slow(seconds=12)
+def test_the_documented_walkthrough_runs_as_written(tmp_path: Path) -> None:
     import shlex
 
     commands = _walkthrough_commands()
@@ -218,11 +225,12 @@ def test_the_readme_walkthrough_runs_as_written(tmp_path: Path) -> None:
         done = subprocess.run([*PROFILEOPT, *args], capture_output=True, text=True, cwd=tmp_path, timeout=600)
         outputs.append(done)
     refused, made, planned, verified = outputs
-    # the README quotes the refusal, the plan and the verdict
+    # the page quotes the refusal, the plan and the verdict
     assert refused.returncode == 2 and "0.979 ground points (class 2) per m^2" in refused.stderr
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
-    quoted = text[text.index("    profileopt route: error:"):]
-    quoted = " ".join(quoted[:quoted.index("\n\n")].split())  # the README's quote, its lines joined
+    section = markdown_section(*WALKTHROUGH)
+    quoted = section[section.index("profileopt route: error:"):]
+    # the page's quote, to the end of its block (a blank line or a code fence), its lines joined
+    quoted = " ".join(re.split(r"\n\s*\n|\n```", quoted)[0].split())
     assert quoted == " ".join(refused.stderr.replace(f"{ROOT}/", "").split())
     assert made.returncode == 0 and (tmp_path / "hexbin.csv").exists() and (tmp_path / "hexbin-route.png").exists()
     assert planned.returncode == 0 and "279.3 m" in planned.stdout and "travel time  39.43 s" in planned.stdout
@@ -250,6 +258,7 @@ def test_the_review_cases_through_the_command(tmp_path: Path, synthetic: dict, c
     _one_line_error(status, err, "curb.csv", "--spacing apply to a track")
 
 
+@pytest.mark.slow
 def test_verify_uses_the_roughness_the_profile_was_planned_with(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     # a route file without a roughness line, planned with --roughness-class: verify judges by that class
     route = tmp_path / "route.csv"
@@ -268,12 +277,13 @@ def test_verify_uses_the_roughness_the_profile_was_planned_with(tmp_path: Path, 
     assert "planned with the assumed roughness ISO 8608 class C" in out + err
 
 
+@pytest.mark.slow
 def test_the_geo_example_runs(tmp_path: Path) -> None:
     done = subprocess.run([sys.executable, str(ROOT / "examples" / "geo_route.py"), "--out", str(tmp_path / "m.png")],
                           capture_output=True, text=True, cwd=tmp_path, timeout=600,
                           env={**os.environ, "MPLBACKEND": "Agg"})
     assert done.returncode == 0, done.stderr
-    # the same plan and check as the README's commands (test_the_readme_walkthrough_runs_as_written)
+    # the same plan and check as the walk-through's commands (test_the_documented_walkthrough_runs_as_written)
     assert "plan: 39.43 s; simulated: 0 of 10972 roughness windows over the force limit" in done.stdout
     assert (tmp_path / "m.png").stat().st_size > 10_000
 

@@ -22,14 +22,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import ROUTES
+from conftest import ROUTES, WIDE_TERMINAL
 
 KRC_1IN = ROUTES / "krc_rms_1in.csv"
 CURB = ROUTES / "curb.csv"
 
 
 def run(command: list[str], *args: str | Path, cwd: Path | None = None) -> subprocess.CompletedProcess:
-    env = dict(os.environ, MPLBACKEND="Agg")
+    env = dict(os.environ, MPLBACKEND="Agg", **WIDE_TERMINAL)  # --help: no wrapping, whatever the terminal
     return subprocess.run([*command, *map(str, args)], capture_output=True, text=True, timeout=300,
                           env=env, cwd=cwd)
 
@@ -80,6 +80,7 @@ def verdict_line(stdout: str) -> str:
     return stdout.splitlines()[1]
 
 
+@pytest.mark.slow
 def test_a_planned_profile_passes_with_exit_0(profileopt_command, planned) -> None:
     done = run(profileopt_command, "verify", KRC_1IN, planned["krc"])
     assert done.returncode == 0, done.stdout + done.stderr
@@ -108,6 +109,7 @@ def test_a_profile_without_its_first_row_is_refused_with_one_line(profileopt_com
     assert "start" in done.stderr and "5 m" in done.stderr
 
 
+@pytest.mark.slow
 def test_speeds_raised_by_hand_break_the_vehicles_limits_exit_3(profileopt_command, planned, tmp_path) -> None:
     # 1.6 times the SBEM:TF plan on the KRC 1-inch course. Before: "1.225 times the limit in
     # simulation", exit 0. Exit 3, not 4: the plan breaks the vehicle's own limits on paper
@@ -132,6 +134,7 @@ def test_speeds_raised_by_hand_break_the_vehicles_limits_exit_3(profileopt_comma
     assert table(out)["predicted_force_n"].max() > 5000.0
 
 
+@pytest.mark.slow
 def test_a_profile_at_100_mps_for_a_20_mps_vehicle_breaks_the_top_speed(profileopt_command, planned,
                                                                            tmp_path) -> None:
     # Before: "0 of 40 over the limit", exit 0 (from rest to 100 m/s in 5 m is 1000 m/s^2)
@@ -144,6 +147,7 @@ def test_a_profile_at_100_mps_for_a_20_mps_vehicle_breaks_the_top_speed(profileo
     assert "1000 m/s^2" in done.stdout
 
 
+@pytest.mark.slow
 def test_a_stale_force_column_is_recomputed_and_noted(profileopt_command, planned, tmp_path) -> None:
     # the file's force_n says 1 N everywhere; the speeds are the plan's
     stale = edited(planned["krc"], tmp_path / "stale.csv", column="force_n", value=1.0)
@@ -173,6 +177,7 @@ def test_speeds_of_1e155_break_the_top_speed_without_a_crash(profileopt_command,
     assert "not simulated" in done.stdout
 
 
+@pytest.mark.slow
 def test_a_plan_that_keeps_its_limits_but_not_in_simulation_exits_4(profileopt_command, planned) -> None:
     # Prev:BEM's plan keeps Prev:BEM's own prediction within the limit, but the simulated
     # excitation exceeds it in hundreds of the 9996 roughness windows (738 measured) and on 7

@@ -29,6 +29,7 @@ from profileopt.io.tracks import JOIN_GAP_M
 
 from conftest import REAL_DATA, ROOT
 
+pytestmark = pytest.mark.geo  # every test here reads or writes geographic files
 laspy = pytest.importorskip("laspy")
 rasterio = pytest.importorskip("rasterio")
 pyproj = pytest.importorskip("pyproj")

@@ -36,6 +36,7 @@ H_M = 0.1  # ground clearance of the Table 1 ATV (models/atv.toml)
 # --------------------------------------------------------------- the two PDAL LAS files
 
 
+@pytest.mark.geo
 @pytest.mark.parametrize("path, count", [(HEXBIN, 38367), (CROP_4_6, 23875)])  # counts: data README
 def test_point_count_matches_header_readme_and_file_size(path: Path, count: int) -> None:
     cloud = read_las(path)
@@ -46,6 +47,7 @@ def test_point_count_matches_header_readme_and_file_size(path: Path, count: int)
     assert (path.stat().st_size - offset) == count * cloud.header.record_length_bytes
 
 
+@pytest.mark.geo
 @pytest.mark.parametrize("path", [HEXBIN, CROP_4_6])
 def test_coordinate_range_equals_header_bounds(path: Path) -> None:
     cloud = read_las(path)
@@ -59,6 +61,7 @@ def test_coordinate_range_equals_header_bounds(path: Path) -> None:
         assert values.max() == pytest.approx(high[axis], abs=half_step_m[axis])
 
 
+@pytest.mark.geo
 def test_hexbin_is_metres_utm_and_92_percent_ground() -> None:
     cloud = read_las(HEXBIN)
     assert cloud.header.version == (1, 2) and cloud.header.point_format == 1
@@ -72,6 +75,7 @@ def test_hexbin_is_metres_utm_and_92_percent_ground() -> None:
     assert np.ptp(cloud.y_m) == pytest.approx(201, abs=0.5)
 
 
+@pytest.mark.geo
 def test_4_6_crop_is_converted_from_us_survey_feet() -> None:
     cloud = read_las(CROP_4_6)
     assert cloud.header.point_format == 3
@@ -97,6 +101,7 @@ def _real_patch() -> np.ndarray:
     return ground[inside]
 
 
+@pytest.mark.geo
 def test_ri_of_a_real_patch_against_a_plane_fit() -> None:
     patch = _real_patch()
     assert len(patch) >= 30
@@ -110,6 +115,7 @@ def test_ri_of_a_real_patch_against_a_plane_fit() -> None:
     assert expected > 0.1  # real ground is not a plane: the check is not 0 == 0
 
 
+@pytest.mark.geo
 def test_ri_of_a_real_patch_ignores_a_tilt() -> None:
     patch = _real_patch()
     before = roughness_index(patch, H_M)
@@ -121,6 +127,8 @@ def test_ri_of_a_real_patch_ignores_a_tilt() -> None:
     assert roughness_index(tilted, H_M, detrend=False) > 2 * before
 
 
+@pytest.mark.geo
+@pytest.mark.slow
 def test_example_runs(tmp_path: Path) -> None:
     out = tmp_path / "map.png"
     start = time.perf_counter()
@@ -134,6 +142,7 @@ def test_example_runs(tmp_path: Path) -> None:
     assert elapsed < 30  # about 1.5 s; generous for 2 busy cores
 
 
+@pytest.mark.slow
 def test_example_without_data_says_so_in_one_line(tmp_path: Path) -> None:
     missing = tmp_path / "nowhere.las"
     run = subprocess.run([sys.executable, str(EXAMPLE), str(missing), "--out", str(tmp_path / "x.png")],
@@ -204,6 +213,7 @@ FEET = (("LASF_Projection", 34735, _geokeys((1024, 0, 1, 1), (3072, 0, 1, 2903),
                                             (4099, 0, 1, 9003))),)
 
 
+@pytest.mark.geo
 def test_hand_built_las_12_in_us_survey_feet(tmp_path: Path) -> None:
     path = tmp_path / "feet.las"
     _write_las(path, COUNTS, [2, 1, 2, 31], vlrs=FEET, extra_bytes=3)
@@ -216,6 +226,7 @@ def test_hand_built_las_12_in_us_survey_feet(tmp_path: Path) -> None:
     np.testing.assert_allclose(cloud.xyz_m(LAS_GROUND)[:, 2], feet[[0, 2], 2] * US_SURVEY_FOOT_M)
 
 
+@pytest.mark.geo
 def test_class_byte_flags_are_not_part_of_the_class(tmp_path: Path) -> None:
     # Format 0: bit 5 synthetic, 6 key-point, 7 withheld (LAS 1.2 Table 5).
     path = tmp_path / "flags.las"
@@ -223,6 +234,7 @@ def test_class_byte_flags_are_not_part_of_the_class(tmp_path: Path) -> None:
     assert read_las(path).classification.tolist() == [2, 2, 1, 6]
 
 
+@pytest.mark.geo
 def test_hand_built_las_14_format_6_with_wkt(tmp_path: Path) -> None:
     wkt = ('COMPD_CS["test",PROJCS["NAD83 / UTM zone 13N",GEOGCS["NAD83",DATUM["x",SPHEROID["GRS 1980",6378137,'
            '298.257222101]],UNIT["degree",0.0174532925199433]],PROJECTION["Transverse_Mercator"],UNIT["metre",1]],'
@@ -238,6 +250,7 @@ def test_hand_built_las_14_format_6_with_wkt(tmp_path: Path) -> None:
     np.testing.assert_allclose(cloud.z_m, expected[:, 2] * 0.304800609601219, rtol=1e-15)  # US survey feet
 
 
+@pytest.mark.geo
 @pytest.mark.parametrize(
     "options, words",
     [
@@ -260,6 +273,7 @@ def test_bad_files_raise_one_line_naming_the_file(tmp_path: Path, options: dict,
     assert message.startswith(f"{path}: ") and "\n" not in message and words in message
 
 
+@pytest.mark.geo
 def test_unsupported_version_and_format_and_missing_file(tmp_path: Path) -> None:
     path = tmp_path / "v.las"
     _write_las(path, COUNTS, [2, 2, 2, 2], vlrs=FEET)
@@ -276,6 +290,7 @@ def test_unsupported_version_and_format_and_missing_file(tmp_path: Path) -> None
         read_las(tmp_path / "absent.las")
 
 
+@pytest.mark.geo
 def test_epsg_code_without_unit_key_takes_the_unit_of_that_crs(tmp_path: Path) -> None:
     # laspy's add_crs writes ProjectedCSTypeGeoKey (3072) without ProjLinearUnitsGeoKey (3076):
     # the EPSG CRS defines the unit (EPSG:2903: US survey foot; EPSG:32642: metre).
@@ -288,6 +303,7 @@ def test_epsg_code_without_unit_key_takes_the_unit_of_that_crs(tmp_path: Path) -
         assert cloud.header.crs == f"EPSG:{epsg}" and "3072" in cloud.header.units_source
 
 
+@pytest.mark.geo
 def test_units_m_reads_a_file_without_crs(tmp_path: Path) -> None:
     path = tmp_path / "nocrs.las"
     _write_las(path, COUNTS, [2, 2, 2, 2])

@@ -74,6 +74,8 @@ def _check_library(so: Path, functions, vehicle, n_stages: int, rng: np.random.G
         _close(np.asarray(c.map(64)(s, t)), np.asarray(py.map(64)(s, t)))
 
 
+@pytest.mark.slow
+@pytest.mark.cc
 @needs_cc
 @pytest.mark.parametrize("name", ["atv", "atv-resonant"])
 def test_generated_c_matches_python(tmp_path: Path, name: str) -> None:
@@ -88,6 +90,8 @@ def test_generated_c_matches_python(tmp_path: Path, name: str) -> None:
     _check_library(so, result.functions, vehicle, 1, np.random.default_rng(4))
 
 
+@pytest.mark.slow
+@pytest.mark.cc
 @needs_cc
 def test_command_line_export_with_stages_and_example_program(tmp_path: Path, capsys) -> None:
     out = tmp_path / "export"
@@ -167,6 +171,8 @@ def test_functions_never_call_negative_or_nan_terrain_admissible(name: str) -> N
         _never_admissible(g([1.0, 2.0, 3.0], [-0.2, np.nan, -np.inf]), "constraint")
 
 
+@pytest.mark.slow
+@pytest.mark.cc
 @needs_cc
 @pytest.mark.parametrize("name", ["atv", "atv-resonant"])
 def test_generated_c_never_calls_negative_or_nan_terrain_admissible(tmp_path: Path, name: str) -> None:

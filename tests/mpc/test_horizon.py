@@ -221,6 +221,7 @@ def _brute_worst(v0: float, v1: float, e_lo: float, e_hi: float, vehicle, model:
     return float(np.max(force_n(speeds[:, None], vehicle, e_max_m=elevations[None, :], model=model))) / limit - 1
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("vehicle", [ATV, RESONANT], ids=["atv", "atv-resonant"])
 @pytest.mark.parametrize("model", ["sbem_tf", "iecm", "sbem_ef"])
 def test_interval_rows_bound_every_speed_and_elevation_below(vehicle, model: str) -> None:
@@ -287,6 +288,7 @@ def _stages_on_the_route(vehicle, s, z, env, ds: float, rng) -> float:
     return worst
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("vehicle", [ATV, RESONANT], ids=["atv", "atv-resonant"])
 def test_composition_a_stage_is_safe_under_the_envelope_and_the_rows(vehicle) -> None:
     """With env = terrain_envelope(..., reach_m=ds), the rows of (v_k, v_k1, env(s_k)) bound

@@ -25,6 +25,7 @@ def vehicle(request):
     return profileopt.load_vehicle(request.param)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("zeta", [0.05, 0.1, 0.5, 0.999, 1.0, 1.001, 2.0, 8.0])
 def test_impulse_response_peak_matches_scipy(zeta):
     # Reference: scipy.signal.impulse of 1 / (s^2 + 2 zeta wn s + wn^2), the relative
@@ -269,6 +270,7 @@ def test_a_segment_a_steps_cap_held_is_also_cut_where_the_roughness_changes(segm
 
 # ------------------------------------------------------- the step limit in your own MPC
 
+@pytest.mark.slow
 @pytest.mark.parametrize("reach", [0.0, 1.3])
 @pytest.mark.parametrize("name, vehicle_name", [("curb.csv", "atv-resonant"), ("curb.csv", "atv"),
                                                 ("krc_rms_1in.csv", "atv-resonant")])

@@ -120,6 +120,7 @@ def test_a_step_taller_than_the_wheel_sampled_every_5_cm_is_a_ramp_of_slope_3(do
     assert abs(ramp) == pytest.approx(3.0, rel=1e-12)
 
 
+@pytest.mark.slow
 def test_the_path_is_the_definition_at_any_point_of_rough_irregular_ground() -> None:
     r = 0.1
     rng = np.random.default_rng(3)
@@ -180,8 +181,8 @@ def test_bad_input_is_refused() -> None:
 
 
 def test_a_straight_vertex_leaves_no_gap_between_the_offset_lines() -> None:
-    # Found by tests/test_properties.py (the step limit builds the path of a route's first
-    # metres): two samples, r = 0.4 m. The chord continued beyond the first sample is
+    # Found by tests/planning/test_planner_properties.py (the step limit builds the path of
+    # a route's first metres): two samples, r = 0.4 m. The chord continued beyond the first sample is
     # straight, but its offset line and the first segment's were computed with shifts an
     # ulp apart, and a slope comparison called the vertex concave: a 1-ulp interval with no
     # piece, and an IndexError. A vertex carries an arc wherever the spans leave a gap.

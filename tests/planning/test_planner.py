@@ -88,6 +88,7 @@ def test_greatest_profile_is_the_lp_optimum():
     np.testing.assert_allclose(greatest_profile(np.zeros(n + 1), upper, ds, a, d), lp.x, atol=1e-7)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name,vehicle_name", [("trail.csv", "atv"), ("krc_rms_2in.csv", "atv"),
                                                ("washboard.csv", "atv-resonant")])
 def test_pure_minimum_time_nlp_matches_the_exact_optimum(check_profile, name, vehicle_name):
@@ -104,6 +105,7 @@ def test_pure_minimum_time_nlp_matches_the_exact_optimum(check_profile, name, ve
         check_profile(profile, route, vehicle, jerk=math.inf)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name,vehicle_name", [("trail.csv", "atv"), ("curb.csv", "atv"),
                                                ("krc_rms_4in.csv", "atv"), ("iri_road.csv", "atv")])
 def test_full_problem_keeps_every_limit(check_profile, name, vehicle_name):
@@ -117,6 +119,7 @@ def test_full_problem_keeps_every_limit(check_profile, name, vehicle_name):
     assert exact.travel_time_s <= profile.travel_time_s <= 1.15 * exact.travel_time_s
 
 
+@pytest.mark.slow
 def test_resonant_washboard_is_crossed_above_resonance(check_profile, atv_resonant):
     route = read_route(ROUTES / "washboard.csv")
     fast = plan(route, atv_resonant)
@@ -162,6 +165,7 @@ def test_band_choice_near_a_stop(check_profile, atv_resonant, end_m, above):
         assert on_washboard.max() < 0.33
 
 
+@pytest.mark.slow
 def test_fallback_keeps_every_limit_when_ipopt_fails(check_profile, monkeypatch, atv):
     route = read_route(ROUTES / "trail.csv")
 
@@ -214,6 +218,7 @@ def run_cli(*args, cwd=None):
     return subprocess.run([*PROFILEOPT, *args], capture_output=True, text=True, cwd=cwd)
 
 
+@pytest.mark.slow
 def test_cli_plan_end_to_end(check_profile, tmp_path):
     out, png = tmp_path / "profile.csv", tmp_path / "profile.png"
     done = run_cli("plan", str(ROUTES / "washboard.csv"), "--vehicle", "atv-resonant", "-o", str(out),
@@ -232,6 +237,7 @@ def test_cli_plan_end_to_end(check_profile, tmp_path):
     assert summary["distance_m"] == pytest.approx(200.0)
 
 
+@pytest.mark.slow
 def test_bands_first_still_reports_the_largest_allowable_speed(atv_resonant):
     # "first" restricts the plan, not the report: the washboard's upper band stays visible
     route = read_route(ROUTES / "washboard.csv")

@@ -21,15 +21,16 @@ When the planner says the problem is infeasible, the message must name an option
 segment; and with v0 = vend = 0 it may say so only when some segment forbids standing still
 (force at rest above the limit), since otherwise "stay at rest" keeps every limit.
 
-Each example plans a route of 50-500 m (up to ~150 segments); ~25 examples per property keep
-the file within a few tens of seconds.
+Each example plans a route of 50-500 m (up to ~150 segments); the ``dev`` and ``ci``
+Hypothesis profiles' 30 examples per property keep the file within a few tens of seconds
+(the properties that plan are marked ``slow``); ``--hypothesis-profile thorough`` runs 2000
+(tests/conftest.py).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-import os
 import re
 
 import numpy as np
@@ -50,10 +51,9 @@ from conftest import G, check_turns_and_hills, grade_direct, window_ri, window_s
 from profileopt.core.vehicle import Vehicle, load_vehicle
 
 RTOL = 1e-6
-# PROFILEOPT_EXAMPLES=2000 for a long hunt; the suite runs 30 per property (a few seconds)
-EXAMPLES = int(os.environ.get("PROFILEOPT_EXAMPLES", "30"))
-FAST = settings(max_examples=EXAMPLES, deadline=None,
-                suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+# The number of examples is the Hypothesis profile's (tests/conftest.py): 30 per property
+# by default, ``--hypothesis-profile thorough`` (2000) for a long hunt.
+PLANS = settings(deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 BASES = {name: load_vehicle(name) for name in ("atv", "atv-resonant")}
 
 # ------------------------------------------------------------------------------ strategies
@@ -253,7 +253,8 @@ def check_plan(profile, route: Route, vehicle: Vehicle, options: dict) -> None:
 NAMES_THE_CAUSE = re.compile(r"v0_mps|vend_mps|segment \d+|s = [-0-9.e+]+( to [-0-9.e+]+)? m")
 
 
-@FAST
+@pytest.mark.slow(seconds=12)
+@PLANS
 @given(problem=problems())
 def test_every_plan_keeps_every_limit(problem: dict) -> None:
     route, vehicle, options = problem["route"], problem["vehicle"], problem["options"]
@@ -296,7 +297,8 @@ def test_every_plan_keeps_every_limit(problem: dict) -> None:
     check_plan(profile, route, vehicle, options)
 
 
-@FAST
+@pytest.mark.slow
+@PLANS
 @given(problem=problems(), fraction=st.floats(0.2, 1.0))
 def test_braking_further_than_the_route_is_always_infeasible(problem: dict, fraction: float) -> None:
     """The obvious case: from v0 the vehicle needs v0^2 / (2 d) to stop. On the first stretch
@@ -324,7 +326,7 @@ def test_braking_further_than_the_route_is_always_infeasible(problem: dict, frac
 # ------------------------------------------------------------------------------ RI
 
 
-@settings(max_examples=40, deadline=None)
+@settings(deadline=None)
 @given(
     seed=st.integers(0, 2**16),
     spacing=st.sampled_from([0.05, 0.1, 0.25]),
@@ -335,10 +337,10 @@ def test_braking_further_than_the_route_is_always_infeasible(problem: dict, frac
 )
 def test_segment_ri_ignores_offset_and_grade_and_is_linear_in_amplitude(seed, spacing, n_segments, offset, grade,
                                                                         scale):
-    """The per-segment RI the planner uses (test_terrain.py checks the one-segment function):
-    adding a constant and a constant grade to the whole route changes no segment's RI, and
-    scaling the elevations by c scales every RI by c (Eq. 1 is a standard deviation of the
-    detrended elevations over h)."""
+    """The per-segment RI the planner uses (tests/terrain/test_roughness.py checks the
+    one-segment function): adding a constant and a constant grade to the whole route changes
+    no segment's RI, and scaling the elevations by c scales every RI by c (Eq. 1 is a
+    standard deviation of the detrended elevations over h)."""
     s, z = synthetic.iso8608_profile("C", 10.0 * n_segments, spacing, seed, n_max_cpm=min(4.0, 0.45 / spacing))
     starts = np.searchsorted(s, 10.0 * np.arange(n_segments))
     h = 0.1
@@ -351,6 +353,7 @@ def test_segment_ri_ignores_offset_and_grade_and_is_linear_in_amplitude(seed, sp
 # ------------------------------------------------------------------------------ the check itself
 
 
+@pytest.mark.slow
 def test_the_independent_check_catches_broken_plans() -> None:
     """check_plan must be able to fail: a good plan passes; the same plan checked against a
     vehicle with lower limits, or with one speed raised, does not."""

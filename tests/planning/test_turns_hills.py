@@ -22,7 +22,7 @@ from profileopt.io import read_profile
 from profileopt.core.binding import BINDING_NAMES
 from profileopt.core.profile import PROFILE_COLUMNS
 from profileopt.core.route import Route
-from conftest import ROOT, ROUTES
+from conftest import ROOT, ROUTES, markdown_section
 
 G = 9.80665  # standard gravity (m/s^2), ISO 80000-3
 EXACT = dict(smoothing=0.0, max_jerk_mps3=math.inf)  # minimum time: the forward-backward optimum
@@ -87,6 +87,7 @@ def test_arc_is_driven_at_the_lateral_limit_and_never_faster(atv):
     assert profile.speed_mps.max() > 1.2 * v_arc
 
 
+@pytest.mark.slow
 def test_friction_holds_the_arc_when_grip_is_scarce_and_ipopt_keeps_the_circle(atv):
     radius, straight = 25.0, 50.0
     route = arc_route(radius, straight)
@@ -105,8 +106,8 @@ def test_friction_holds_the_arc_when_grip_is_scarce_and_ipopt_keeps_the_circle(a
     top = np.maximum(profile.speed_mps[:-1], profile.speed_mps[1:])
     usage = (profile.accel_mps2[:-1] ** 2 + (top**2 * seg_kappa) ** 2) / (0.3 * G) ** 2
     # the smoothed path the vehicle drives cuts the corner (within the 0.1 m tolerance): its
-    # radius is up to 1.5 % larger than R mid-arc (tests/test_geometry.py), so on the true
-    # arc the lateral part is up to 1.5 % larger: usage <= 1.015^2 = 1.03
+    # radius is up to 1.5 % larger than R mid-arc (tests/terrain/test_geometry.py), so on
+    # the true arc the lateral part is up to 1.5 % larger: usage <= 1.015^2 = 1.03
     assert usage.max() <= 1.03
     # on the path the plan drives (its own curvature), the circle holds to IPOPT's tolerance
     own = (profile.accel_mps2[:-1] ** 2 + (top**2 * profile.path.curvature_max_1pm) ** 2) / (0.3 * G) ** 2
@@ -114,6 +115,7 @@ def test_friction_holds_the_arc_when_grip_is_scarce_and_ipopt_keeps_the_circle(a
     assert "friction" in profile.summary()["binding"]
 
 
+@pytest.mark.slow
 def test_a_noisy_straight_reaches_top_speed(atv):
     # 300 m sampled every 5 cm with 1 cm of noise on x and y (issue 11): the default path
     # tolerance must not read the noise as turns
@@ -174,6 +176,7 @@ def test_a_long_climb_settles_at_the_power_speed():
         assert profile.summary()["margins"]["power"]["ratio"] == pytest.approx(1.0, abs=1e-6)
 
 
+@pytest.mark.slow
 def test_power_limited_run_up_follows_the_ode_from_below():
     # From rest up a 5 % grade: v dv/ds = min(a_max, P / (m v)) - g sin(theta) (Newton's second
     # law with drive force min(m a_max, P / v)), integrated by scipy's solve_ivp. Constant
@@ -198,6 +201,7 @@ def test_power_limited_run_up_follows_the_ode_from_below():
     assert errors[2] < errors[1] < errors[0] and errors[2] < 0.01
 
 
+@pytest.mark.slow
 def test_ipopt_agrees_with_the_exact_pass_on_caps_grades_and_power(atv):
     route = arc_route(25.0, 50.0, ds_m=0.05)
     hilly = Route(s_m=route.s_m, z_m=0.08 * 10 * np.sin(route.s_m / 10), x_m=route.x_m, y_m=route.y_m, source="hilly")
@@ -215,6 +219,7 @@ def test_a_descent_steeper_than_the_brakes_is_named():
         plan(steep, load_vehicle("atv"), **EXACT)
 
 
+@pytest.mark.slow
 def test_a_vehicle_without_the_keys_keeps_them_off_and_says_so(atv):
     bare = atv.replace(max_lateral_accel_mps2=None, track_width_m=None, cg_height_m=None, friction_coefficient=None,
                        mass_kg=None, max_power_w=None)
@@ -226,6 +231,7 @@ def test_a_vehicle_without_the_keys_keeps_them_off_and_says_so(atv):
     assert not plan(route, atv, segment_length_m=1.0, **EXACT).summary()["limits_off"]
 
 
+@pytest.mark.slow
 def test_cli_writes_the_new_columns_and_binding_shares(tmp_path, atv):
     route = arc_route(ds_m=0.1)
     path = tmp_path / "arc.csv"
@@ -242,6 +248,7 @@ def test_cli_writes_the_new_columns_and_binding_shares(tmp_path, atv):
     assert np.abs(profile.curvature_1pm).max() == pytest.approx(1 / 25.0, rel=0.05)
 
 
+@pytest.mark.slow
 def test_a_bad_path_tolerance_is_one_line(tmp_path, atv):
     with pytest.raises(InputError, match="tolerance"):
         plan(arc_route(), atv, path_tolerance_m=0.0)
@@ -284,14 +291,14 @@ def test_a_climb_steeper_than_the_drive_is_named_where_the_vehicle_stalls():
     assert plan(steep, load_vehicle("atv-low-range"), **EXACT).status == "exact"
 
 
-def test_readme_turns_and_hills_mpc_snippet_reaches_the_lateral_limit():
-    """The README's snippet, run as written: from rest up a 15 % climb into a 25 m bend, the
-    speeds rise as the drive allows and settle at sqrt(a_lat R) = sqrt(4 * 25) = 10 m/s."""
+def test_mpc_guide_turns_and_hills_snippet_reaches_the_lateral_limit():
+    """The MPC guide's snippet (once the README's), run as written: from rest up a 15 % climb
+    into a 25 m bend, the speeds rise as the drive allows and settle at sqrt(a_lat R) =
+    sqrt(4 * 25) = 10 m/s."""
     import os
     import re
 
-    readme = (ROOT / "README.md").read_text(encoding="utf-8")
-    section = readme[readme.index("### Turns and hills in your own MPC"):]
+    section = markdown_section("docs/guide/mpc.md", "Turns and hills in your own MPC")
     code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])))
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, cwd=ROOT, env=env)
@@ -315,6 +322,7 @@ def test_a_power_limited_climb_too_coarse_for_the_segments_says_which_length_pla
     np.testing.assert_allclose(profile.speed_mps[climb], 1000.0 / (450.0 * G * math.sin(math.atan(0.2))), rtol=1e-3)
 
 
+@pytest.mark.slow
 def test_verify_finds_no_breach_in_plans_on_steep_grades_and_slow_power_climbs():
     # the planner's own profiles, where a grade makes an acceleration bound negative (a 30 %
     # climb for atv: 2.5 - g sin(atan 0.3) = -0.32 m/s^2; a 50 % descent: 4 - 4.39 < 0) and where
@@ -349,6 +357,7 @@ def test_verify_finds_no_breach_in_plans_on_steep_grades_and_slow_power_climbs()
     assert [b.quantity for b in found.breaches] == ["power"]
 
 
+@pytest.mark.slow
 def test_without_smoothing_or_jerk_bound_every_row_names_a_real_limit():
     # the exact optimum is held everywhere by a bound, a row or an end: never by "jerk"; in
     # particular where the power holds a slowing climb (entering faster than P / (m g sin theta))

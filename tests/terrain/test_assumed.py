@@ -79,6 +79,7 @@ def test_without_detrending_power_the_integral_is_the_band_variance() -> None:
         pytest.approx(whole, rel=1e-2)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("spacing_m", [0.05, 0.1])
 def test_mean_window_variance_of_realisations_matches_the_expectation(spacing_m: float) -> None:
     # 24 independent seeded class C profiles of 2 km; each profile's mean of sigma^2 over its
@@ -284,6 +285,7 @@ def test_verify_of_a_measured_route_is_unchanged_by_the_seed(atv) -> None:
     assert not any("roughness assumed" in n for n in a.notes)
 
 
+@pytest.mark.slow
 def test_verify_command_reports_the_synthetic_roughness(tmp_path) -> None:
     route = write_route(tmp_path, "# from a DEM\n" + route_metadata_lines(AssumedRoughness(road_class="D"))[0] + "\n")
     profile = tmp_path / "profile.csv"

@@ -47,6 +47,7 @@ def arc_between_straights(radius_m: float, straight_m: float, noise_m: float,
             straight_m, straight_m + arc_m)
 
 
+@pytest.mark.slow
 def test_noisy_straight_line_leaves_the_lateral_limit_inactive() -> None:
     # 200 m every 5 cm, 1 cm Gaussian noise on x and y: the samples' own second differences
     # read curvatures of order 0.01 * 2 / 0.05^2 = 8 1/m; the fit must read a straight line.
@@ -126,7 +127,8 @@ def wavy_paths(draw: st.DrawFn) -> tuple[np.ndarray, np.ndarray, float]:
     return x, y, tolerance
 
 
-@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@pytest.mark.slow
+@settings(deadline=None, suppress_health_check=[HealthCheck.too_slow])  # examples: the profile's
 @given(wavy_paths())
 def test_the_deviation_never_exceeds_the_tolerance(case: tuple[np.ndarray, np.ndarray, float]) -> None:
     x, y, tolerance = case
@@ -177,6 +179,7 @@ def test_a_kink_moves_the_grade_over_the_scale() -> None:
     assert np.all(np.diff(across) > 0)  # and it rises steadily between
 
 
+@pytest.mark.slow
 def test_route_geometry() -> None:
     s, x, y, start, end = arc_between_straights(25.0, 50.0, 0.0)
     z = 0.1 * s

@@ -20,6 +20,7 @@ from conftest import window_ri
 from geo_data import (ARC_ANGLE_RAD, ARC_RADIUS_M, cloud_points, surface_m, track_utm_m, write_geotiff,
                       write_gpx, write_laz)
 
+pytestmark = pytest.mark.geo  # every test here reads or writes geographic files
 pytest.importorskip("laspy")
 pytest.importorskip("rasterio")
 
@@ -221,6 +222,7 @@ def test_a_sliver_at_the_end_moves_the_last_sample_and_huge_counts_are_refused()
         resample_polyline(np.array([0.0, 60.0]), np.zeros(2), 1e-6)
 
 
+@pytest.mark.slow
 def test_roughness_is_measured_only_at_wheel_scale(ground: dict) -> None:
     from profileopt.terrain.assumed import AssumedRoughness
 

@@ -175,7 +175,7 @@ def test_step_width_eq2_and_saturation():
 finite = st.one_of(st.just(0.0), st.floats(1e-6, 1.0), st.floats(-1.0, -1e-6))
 
 
-@settings(max_examples=60, deadline=None)
+@settings(deadline=None)  # examples: the profile's (tests/conftest.py)
 @given(
     z=arrays(np.float64, st.integers(3, 60), elements=finite),
     spacing=st.floats(0.05, 2.0),

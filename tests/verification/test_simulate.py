@@ -1,5 +1,6 @@
-"""Checks of the quarter-car simulation against closed forms (tests/test_simulate_exact.py
-holds the check against an independent integrator on the exact wheel path).
+"""Checks of the quarter-car simulation against closed forms
+(tests/verification/test_simulate_exact.py holds the check against an independent
+integrator on the exact wheel path).
 
 References
 ----------

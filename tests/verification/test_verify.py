@@ -75,7 +75,7 @@ def test_the_models_own_force_is_simulated_and_set_against_the_limit(model: str,
     assert v.quantity == ("transmitted" if model == "sbem_tf" else "excitation")
     # 5e-3: the ground is the polyline through samples 2 cm apart, whose slope steps add up
     # to c v A k^2 h / 2 = 0.12 N (0.44 %) to either force, and the rigid wheel a second
-    # harmonic of 0.03 % (tests/test_simulate.py); measured +0.32 % and +0.34 %
+    # harmonic of 0.03 % (tests/verification/test_simulate.py); measured +0.32 % and +0.34 %
     assert np.allclose(v.simulated_n[settled], closed_form, rtol=5e-3)
     assert np.allclose(v.ratio[settled], 1 / 0.999, rtol=5e-3)
     assert np.all(v.over[settled])
@@ -172,6 +172,7 @@ def test_csv_is_complete_reproducible_and_atomic(tmp_path: Path) -> None:
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.csv", "b.csv"]
 
 
+@pytest.mark.slow
 def test_plot_is_a_png(tmp_path: Path) -> None:
     v = verify(sinusoid_route(), constant_speed_profile(100.0, 5000.0, "sbem_tf"), ATV)
     out = tmp_path / "v.png"
@@ -190,6 +191,7 @@ def _run(*args: str, cwd: Path = ROOT) -> "subprocess.CompletedProcess[str]":
                           capture_output=True, text=True, timeout=120)
 
 
+@pytest.mark.slow
 def test_verify_command_end_to_end(tmp_path: Path) -> None:
     profile_csv = tmp_path / "profile.csv"
     done = _run("plan", str(KRC_1IN), "--vehicle", "atv", "--model", "prev_bem", "-o", str(profile_csv))
@@ -223,6 +225,7 @@ def test_verify_command_end_to_end(tmp_path: Path) -> None:
     assert f"{windows['over_count']} of 9996 roughness windows" in done.stdout.splitlines()[1]
 
 
+@pytest.mark.slow
 def test_verify_command_bad_input_fails_cleanly(tmp_path: Path) -> None:
     out = tmp_path / "v.csv"
     done = _run("verify", str(KRC_1IN), str(tmp_path / "missing.csv"), "-o", str(out))
@@ -238,6 +241,7 @@ def test_verify_command_bad_input_fails_cleanly(tmp_path: Path) -> None:
     assert not out.exists()
 
 
+@pytest.mark.slow(seconds=15)
 def test_compare_is_reproducible_and_sbem_keeps_the_limit_on_krc_1in() -> None:
     first = _run("compare", str(KRC_1IN.relative_to(ROOT)), "--vehicle", "atv")
     second = _run("compare", str(KRC_1IN.relative_to(ROOT)), "--vehicle", "atv")
@@ -262,6 +266,7 @@ def test_compare_is_reproducible_and_sbem_keeps_the_limit_on_krc_1in() -> None:
     assert by_model["prev_bem"]["travel_time_s"] < by_model["iecm"]["travel_time_s"] < by_model["sbem_tf"]["travel_time_s"]
 
 
+@pytest.mark.slow
 def test_verify_takes_the_vehicle_the_profile_was_planned_for(tmp_path: Path) -> None:
     route = ROUTES / "washboard.csv"
     profile = tmp_path / "p.csv"
@@ -276,6 +281,7 @@ def test_verify_takes_the_vehicle_the_profile_was_planned_for(tmp_path: Path) ->
     assert "planned for vehicle 'atv-resonant' but --vehicle is 'atv'" in done.stderr
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("window", ["-1", "nan", "0"])
 def test_compare_refuses_a_bad_roughness_window_in_one_line(window: str) -> None:
     done = _run("compare", str(ROUTES / "curb.csv"), "--roughness-window", window)

@@ -116,6 +116,7 @@ def brute_force(route: Route, profile, vehicle, result, detrend: bool = True) ->
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("route_name, vehicle_name, model, detrend", [
     ("kerb", "atv-resonant", "sbem_tf", True),
     ("rough", "atv-resonant", "sbem_tf", True),
@@ -167,6 +168,7 @@ def test_the_resonance_peak_is_where_the_transmitted_force_turns() -> None:
         np.testing.assert_allclose([] if r_phi is None else [r_phi], turns, rtol=1e-5)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("vehicle", [ATV, RESONANT], ids=["atv", "atv-resonant"])
 def test_a_kerb_on_a_segment_boundary_is_seen(vehicle) -> None:
     # 200 m of flat ground, the kerb at 100 m (the boundary of the 20th and 21st 5 m segment)

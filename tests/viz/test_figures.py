@@ -44,6 +44,7 @@ def check_outputs(out: Path) -> None:
         np.testing.assert_allclose(table[:, 0], np.linspace(0.0, 0.1, 100), rtol=1e-15)
 
 
+@pytest.mark.slow
 def test_cli_writes_three_pngs_and_three_csvs(profileopt_command, tmp_path):
     out = tmp_path / "new" / "figs"  # created, parents too
     result = subprocess.run(
@@ -85,6 +86,7 @@ def test_cli_out_is_a_file(profileopt_command, tmp_path):
     assert "not a folder" in result.stderr and result.stderr.count("\n") == 1
 
 
+@pytest.mark.slow
 def test_example_script_runs(tmp_path):
     out = tmp_path / "example"
     result = subprocess.run(

@@ -3,7 +3,7 @@
 References, each independent of the solver:
 
 * its derivatives: the whole NLP written as one SX expression and differentiated by CasADi
-  (``reference_functions`` of tests/test_nlp_build.py);
+  (``reference_functions`` of tests/planning/nlp/test_problem.py);
 * its optima: IPOPT on that reference NLP, the exact forward-backward profile where the NLP
   is convex (no jerk bound, no smoothing: issue 3's exact optimum), and a one-segment
   problem solved by hand.
@@ -28,10 +28,11 @@ from profileopt.planning.options import DEFAULT_IPOPT_OPTIONS
 from profileopt.terrain.synthetic import iso8608_sections
 
 from conftest import ROUTES
-from test_nlp_build import dense, random_point, random_problem, reference_functions, reference_nlp
+from test_problem import dense, random_point, random_problem, reference_functions, reference_nlp
 
 # These tests compare the solvers on the uniform segments their sizes name; refining (the
-# default, which cuts segments where the plan meets the force's cap) is tested in test_windows.py.
+# default, which cuts segments where the plan meets the force's cap) is tested in
+# tests/planning/test_refine.py.
 plan = functools.partial(profileopt.plan, refine=False)
 
 IPOPT = SolverOptions(nlp_solver="ipopt")
@@ -181,6 +182,7 @@ def test_a_step_onto_a_bound_near_the_end_is_not_halved(monkeypatch) -> None:
     assert ipopt.objective * (1 - 1e-6) <= banded.objective <= ipopt.objective * (1 + 1e-9)
 
 
+@pytest.mark.slow
 def test_turns_and_hills_rows_are_solved_by_the_banded_solver() -> None:
     """The friction and power row families (winding 6 % hills, scarce grip and power): the
     banded solver converges on its own, to IPOPT's optimum or below."""
@@ -277,6 +279,7 @@ def test_pieces_that_ipopt_took_over_are_named_in_a_note(monkeypatch) -> None:
     assert notes == [f"IPOPT solved the NLP (the banded solver stopped on {stopped} of {taken_over.pieces} pieces)"]
 
 
+@pytest.mark.slow
 def test_a_short_route_or_a_crawl_keeps_the_lower_of_the_two_solvers_optima(monkeypatch) -> None:
     """The NLP is not convex: on krc_rms_1in.csv at 0.5 m segments (1,010 segments, jerk
     bound, smoothing 0) the banded solver alone crawls through a rough spot at 0.4 m/s, about

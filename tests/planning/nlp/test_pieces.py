@@ -23,7 +23,8 @@ from profileopt.terrain.synthetic import iso8608_sections
 from conftest import ROUTES
 
 # These tests compare the solvers on the uniform segments their sizes name; refining (the
-# default, which cuts segments where the plan meets the force's cap) is tested in test_windows.py.
+# default, which cuts segments where the plan meets the force's cap) is tested in
+# tests/planning/test_refine.py.
 plan = functools.partial(profileopt.plan, refine=False)
 
 
@@ -57,6 +58,7 @@ def assert_same_optimum(split, whole) -> None:
 # as the default 4,000 does on long routes (28 pieces on the 100,000-segment benchmark).
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name, vehicle_name, piece_segments, options", [
     ("iso", "atv", 300, {}),
     ("iso", "atv", 300, {"max_jerk_mps3": float("inf")}),  # smoothing only: no jerk rows
@@ -128,6 +130,7 @@ def test_cut_check_reproduces_ipopts_bound_multipliers(monkeypatch, iso_route, a
         assert max(window) > 1e-3 * np.abs(expected).max()
 
 
+@pytest.mark.slow
 def test_joined_multipliers_of_the_pieces_match_the_whole_solve(monkeypatch, iso_route, atv):
     """The cut check of a split solve (the pieces' multipliers, each rescaled from its own
     T_ref) gives the bound multipliers IPOPT finds at those pairs solving the route whole.
@@ -155,6 +158,7 @@ def test_joined_multipliers_of_the_pieces_match_the_whole_solve(monkeypatch, iso
 # cut forced into 240..298 (where the greedy choice looks for the first cut) must be
 # rejected by the check and replaced. (At 150 segments a piece the roughness windows' cap
 # plateaus leave too few good candidates: see the note in the test above.)
+@pytest.mark.slow
 @pytest.mark.parametrize("first, end", [(240, 299)])
 def test_a_wrong_cut_is_found_and_replaced(check_profile, monkeypatch, iso_route, atv, first, end):
     """Force a cut onto a segment the optimum does not drive at its cap: the check must
@@ -186,6 +190,7 @@ def test_a_wrong_cut_is_found_and_replaced(check_profile, monkeypatch, iso_route
     check_profile(split, iso_route, atv)
 
 
+@pytest.mark.slow
 def test_when_no_cut_checks_out_the_route_is_solved_whole(monkeypatch, iso_route, atv):
     whole = solve(monkeypatch, iso_route, atv, 10**9)
     v, cap = whole.speed_mps, whole.band_upper_mps
@@ -228,6 +233,7 @@ def test_choose_cuts_keeps_pieces_within_size():
     assert _pieces.choose_cuts(score, w).size == 0
 
 
+@pytest.mark.slow
 def test_summary_and_command_report_the_pieces(monkeypatch, capsys):
     from profileopt import cli
 
@@ -288,6 +294,7 @@ def winding_hilly_route() -> Route:
                  source="winding")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("options", [{}, {"smoothing": 0.0, "max_jerk_mps3": float("inf")}])
 def test_pieces_carry_the_friction_and_power_rows(check_profile, monkeypatch, options):
     route = winding_hilly_route()
@@ -304,6 +311,7 @@ def test_pieces_carry_the_friction_and_power_rows(check_profile, monkeypatch, op
     check_profile(split, route, vehicle, jerk=options.get("max_jerk_mps3"))
 
 
+@pytest.mark.slow
 def test_cut_check_reproduces_ipopts_multipliers_with_friction_and_power_rows(monkeypatch):
     """lam_x = -(grad f + J^T lam_g) holds at every variable of a KKT point, so cut_multipliers,
     given the whole solve's multipliers of every row (friction and power included), gives
