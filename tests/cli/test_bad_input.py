@@ -371,7 +371,6 @@ def outcomes(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFa
         return {key: future.result() for key, future in futures.items()}
 
 
-@pytest.mark.xdist_group("bad_input_outcomes")  # one worker runs the cases' subprocesses, once
 @pytest.mark.parametrize("case", [pytest.param(c, id=c.id, marks=() if c.id in API_CASES else pytest.mark.slow)
                                   for c in CASES])
 def test_bad_input_is_one_line_exit_2_and_writes_nothing(case: Case, outcomes: dict[str, Outcome]) -> None:
@@ -426,7 +425,6 @@ def _api(case: Case) -> None:
          vend_mps=float(options.get("--vend", 0.0)))
 
 
-@pytest.mark.xdist_group("bad_input_outcomes")
 @pytest.mark.parametrize("case_id", API_CASES)
 def test_python_api_raises_input_error_with_the_same_message(case_id: str, tmp_path: Path,
                                                              monkeypatch: pytest.MonkeyPatch,

@@ -70,7 +70,6 @@ def test_the_route_set_has_kerbs_on_and_off_the_grid_and_shifted_copies(example)
 
 
 @pytest.mark.slow(seconds=270)
-@pytest.mark.xdist_group("safety_study")  # the study is made once, on one worker
 def test_sbem_tf_keeps_every_window_within_the_limit_in_simulation(example, study: SafetyStudy) -> None:
     # Issue 10 ("Done when") asks for 0 windows over the limit in simulation. Measured with
     # `python examples/safety_study.py` (2026-11-26, refined segments and the step limit, the
@@ -99,7 +98,6 @@ def test_sbem_tf_keeps_every_window_within_the_limit_in_simulation(example, stud
 
 
 @pytest.mark.slow
-@pytest.mark.xdist_group("safety_study")
 def test_the_paper_claim_holds_on_the_pooled_set(study: SafetyStudy) -> None:
     fraction = {t.model: t.window_over_fraction for t in study.totals}
     # Prev:BEM is the most aggressive, then IECM, then SBEM:EF (the paper's Figs. 5 and 6)
@@ -118,7 +116,6 @@ def test_the_paper_claim_holds_on_the_pooled_set(study: SafetyStudy) -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.xdist_group("safety_study")
 def test_totals_are_the_sums_of_the_runs(study: SafetyStudy) -> None:
     assert len(study.pairs()) == 112 and len(study.runs) == 112 * 4
     for total in study.totals:
@@ -151,7 +148,6 @@ def test_totals_are_the_sums_of_the_runs(study: SafetyStudy) -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.xdist_group("safety_study")
 def test_infeasible_exactly_where_a_window_is_over_the_limit_at_standstill(example, study: SafetyStudy) -> None:
     # IECM and SBEM:EF predict k e_max > 0 even at speed 0 (Eq. 11 at V = 0), so a window
     # with k * 4.7534 * RI * h above the limit cannot be driven through at any speed;
@@ -172,7 +168,6 @@ def test_infeasible_exactly_where_a_window_is_over_the_limit_at_standstill(examp
 
 
 @pytest.mark.slow
-@pytest.mark.xdist_group("safety_study")
 def test_exceedances_on_the_curb_and_the_kerbs_are_at_the_edges(example, study: SafetyStudy) -> None:
     # curb.csv (examples/routes/make_routes.py): 0.15 m up at s = 102.5 m, down at 152.5 m;
     # the kerbs: 0.05 m at 50, 100, 152.5 and 202.5 m. Where a plan exceeds the limit there,
@@ -200,7 +195,6 @@ def test_exceedances_on_the_curb_and_the_kerbs_are_at_the_edges(example, study: 
 
 
 @pytest.mark.slow
-@pytest.mark.xdist_group("safety_study")
 def test_example_prints_and_writes_the_same_markdown(example, study, tmp_path, monkeypatch, capsys) -> None:
     monkeypatch.setattr(example, "run_study", lambda *, refine=False: study)  # the study itself ran above
     out = tmp_path / "comparison.md"
