@@ -14,7 +14,7 @@ Running (``[tool.pytest.ini_options]`` in pyproject.toml):
   has cores (pytest-xdist, ``-n auto`` in ``addopts``; ``-n 0`` runs in this process, for a
   debugger or a single test);
 * ``python -m pytest -m "not slow" -q`` leaves out the long tests: under a minute on 2 cores
-  (the whole suite: about 6.5 minutes, most of it the safety study on one of them);
+  (the whole suite: 7 to 9 minutes; the safety study alone takes about 5 of them on one worker);
 * markers, registered with ``--strict-markers``: ``slow``, ``geo`` (needs the ``geo``
   extra), ``mpc`` (do-mpc and rockit), ``cc`` (compiles generated C); ``-m "not geo"`` and
   so on leave a group out.
