@@ -23,6 +23,8 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from ..core.vehicle import OPTIONAL_KEYS
 
 if TYPE_CHECKING:
@@ -30,7 +32,8 @@ if TYPE_CHECKING:
 
 __all__ = ["STANDARD_GRAVITY_MPS2", "lateral_accel_mps2", "rollover_threshold_mps2", "lateral_limit_mps2",
            "tyre_accel_mps2", "friction_radius_mps2", "friction_usage", "drive_power_w", "power_accel_mps2",
-           "lateral_speed_cap_mps", "plans_on_grades"]
+           "lateral_speed_cap_mps", "plans_on_grades",
+           "segment_friction_radius_mps2"]
 
 #: Standard gravity g (m/s^2), ISO 80000-3.
 STANDARD_GRAVITY_MPS2 = 9.80665
@@ -123,6 +126,19 @@ def friction_radius_mps2(friction_coefficient: float, grade_rad: Any) -> Any:
         Grade theta (rad).
     """
     return friction_coefficient * STANDARD_GRAVITY_MPS2 * _cos(grade_rad)
+
+
+def segment_friction_radius_mps2(friction_coefficient: float, grade_lo_rad: Any, grade_hi_rad: Any) -> Any:
+    """The smallest friction circle over a segment's grades, mu g cos(max |theta|) (m/s^2).
+
+    Parameters
+    ----------
+    friction_coefficient : float
+        mu (-).
+    grade_lo_rad, grade_hi_rad : array_like
+        The least and the largest grade of each segment (rad).
+    """
+    return friction_radius_mps2(friction_coefficient, np.maximum(np.abs(grade_lo_rad), np.abs(grade_hi_rad)))
 
 
 def friction_usage(speed_mps: Any, accel_mps2: Any, curvature_1pm: Any, grade_rad: Any,

@@ -27,10 +27,10 @@ from ..errors import InputError
 from ..physics.forces import get_model
 from ..physics.motion import STANDARD_GRAVITY_MPS2 as G
 from ..physics.motion import (
-    friction_radius_mps2,
     lateral_limit_mps2,
     lateral_speed_cap_mps,
     plans_on_grades,
+    segment_friction_radius_mps2,
     tyre_accel_mps2,
 )
 from ..physics.rows import (
@@ -414,15 +414,9 @@ def _speed_caps(route: "Route", vehicle: "Vehicle", segments: Segments, path: "S
     if math.isfinite(lateral):
         caps.append(("the lateral acceleration limit in turns", lateral_speed_cap_mps(lateral, path.curvature_max_1pm)))
     if vehicle.friction_coefficient is not None:
-        caps.append(("the friction limit in turns", lateral_speed_cap_mps(_friction_radius(vehicle, path),
-                                                                         path.curvature_max_1pm)))
+        radius = segment_friction_radius_mps2(vehicle.friction_coefficient, path.grade_lo_rad, path.grade_hi_rad)
+        caps.append(("the friction limit in turns", lateral_speed_cap_mps(radius, path.curvature_max_1pm)))
     return caps
-
-
-def _friction_radius(vehicle: "Vehicle", path: "SegmentPath") -> np.ndarray:
-    """The smallest friction circle of each segment, mu g cos(max |theta|) (m/s^2)."""
-    steepest = np.maximum(np.abs(path.grade_lo_rad), np.abs(path.grade_hi_rad))
-    return friction_radius_mps2(vehicle.friction_coefficient, steepest)
 
 
 def _accel_bounds(vehicle: "Vehicle", path: "SegmentPath") -> tuple[np.ndarray, np.ndarray]:
@@ -436,7 +430,7 @@ def _accel_bounds(vehicle: "Vehicle", path: "SegmentPath") -> tuple[np.ndarray, 
     else:
         decel, accel = np.full(n, vehicle.max_decel_mps2), np.full(n, vehicle.max_accel_mps2)
     if vehicle.friction_coefficient is not None:
-        radius = _friction_radius(vehicle, path)
+        radius = segment_friction_radius_mps2(vehicle.friction_coefficient, path.grade_lo_rad, path.grade_hi_rad)
         decel = np.minimum(decel, tyre_accel_mps2(radius, path.grade_lo_rad))
         accel = np.minimum(accel, -tyre_accel_mps2(-radius, path.grade_hi_rad))
     return decel, accel

@@ -25,8 +25,8 @@ import numpy as np
 
 from ...core.path import SegmentPath
 from ...physics.motion import (
-    friction_radius_mps2,
     lateral_speed_cap_mps,
+    segment_friction_radius_mps2,
     tyre_accel_mps2,
 )
 from ...physics.rows import friction_data, friction_rows_needed
@@ -56,8 +56,7 @@ class FrictionLimit(RowLimit):
     def _radius(self, context: PlanContext) -> np.ndarray:
         """The smallest friction circle of each segment, mu g cos(max |theta|) (m/s^2), (N,)."""
         path = context.turns_and_slopes
-        steepest = np.maximum(np.abs(path.grade_lo_rad), np.abs(path.grade_hi_rad))
-        return friction_radius_mps2(self.friction_coefficient, steepest)
+        return segment_friction_radius_mps2(self.friction_coefficient, path.grade_lo_rad, path.grade_hi_rad)
 
     def speed_cap_mps(self, context: PlanContext) -> np.ndarray:
         """sqrt(mu g cos theta / kappa_max) per segment (m/s): all the grip used sideways.
