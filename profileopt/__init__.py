@@ -26,7 +26,7 @@ _LAZY = {
     "Route": "core.route", "Profile": "core.profile",
     "read_profile": "io.profiles", "write_profile": "io.profiles", "read_route": "io.routes",
     "SolverOptions": "planning.options", "plan": "planning.planner",
-    "QuarterCarRun": "verification.simulate", "simulate_quarter_car": "verification.simulate",
+    "QuarterCarRun": "physics.simulate", "simulate_quarter_car": "physics.simulate",
     "Verification": "verification.verify", "verify": "verification.verify",
     "plot_verification": "viz.plots",
     "ModelRun": "studies.compare", "compare_models": "studies.compare",

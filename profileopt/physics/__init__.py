@@ -6,5 +6,6 @@
 - :mod:`~profileopt.physics.steps`: steps met and drops landed by the wheel, and SBEM:TF's step limit;
 - :mod:`~profileopt.physics.motion`: turns, grades, friction and drive power;
 - :mod:`~profileopt.physics.rows`: the limits that couple speed and acceleration (friction circle, drive power);
-- :mod:`~profileopt.physics.quarter_car`: the exact response of the linear quarter car to a piecewise-linear input.
+- :mod:`~profileopt.physics.quarter_car`: the exact response of the linear quarter car to a piecewise-linear input;
+- :mod:`~profileopt.physics.simulate`: the quarter car driven over a route's own samples at a profile's speeds.
 """

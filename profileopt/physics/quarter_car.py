@@ -1,6 +1,6 @@
 """Exact response of the linear quarter car to a base input given at knots.
 
-The quarter car m x'' = -k (x - y) - c (x' - y') (:mod:`profileopt.verification.simulate`) is driven by
+The quarter car m x'' = -k (x - y) - c (x' - y') (:mod:`profileopt.physics.simulate`) is driven by
 a base input y(t) known exactly at knots t_0 < t_1 < ... < t_n: its value y_j and its
 slope y' from the left and from the right (they differ where the wheel's path has a kink).
 Between two knots the input is taken as the quadratic that starts at y_j with the right

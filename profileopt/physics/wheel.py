@@ -4,7 +4,7 @@ Between samples the route means the straight line from one sample to the next; a
 of radius r rolls on that polyline. :func:`wheel_envelope_m` gives the height of its lowest
 point above each sample (the base input of the quarter car at the samples, for roughness and
 the planner); :func:`wheel_path` the whole path between them, kinks included, as offset lines
-and circular arcs (for the simulator, :mod:`profileopt.verification.simulate`, and the
+and circular arcs (for the simulator, :mod:`profileopt.physics.simulate`, and the
 steps of :mod:`profileopt.physics.steps`). The two agree at the samples.
 
 Between samples the route means the straight line from one sample to the next. A rigid

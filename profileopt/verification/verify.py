@@ -1,6 +1,6 @@
 """Check a plan against a simulated vehicle: the forces it really causes on the route.
 
-:func:`verify` drives the vehicle's quarter car (:mod:`profileopt.verification.simulate`) over the
+:func:`verify` drives the vehicle's quarter car (:mod:`profileopt.physics.simulate`) over the
 route's own elevation samples at the profile's speeds and judges the drive by roughness
 windows (:mod:`profileopt.verification.window_check`): in every window [a, a + W] of the route, the
 simulated peak force while the vehicle is inside it against the window's own prediction
@@ -32,7 +32,7 @@ from ..core.stations import segment_index
 from ..io.atomic import atomic_write
 from ..physics.forces import get_model
 from .limit_check import LimitBreach, LimitCheck, check_limits, route_as_planned
-from .simulate import QuarterCarRun, simulate_quarter_car
+from ..physics.simulate import QuarterCarRun, simulate_quarter_car
 from .window_check import UNDERPREDICTION_TOLERANCE, WindowCheck, check_windows
 
 if TYPE_CHECKING:

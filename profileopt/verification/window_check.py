@@ -5,7 +5,7 @@ A profile keeps the force limit when, for every roughness window [a, a + W] of t
 (:func:`profileopt.terrain.roughness.roughness_windows`: every window that starts or ends at a sample,
 W the profile's ``roughness_window_m``), every speed driven while the vehicle is inside the
 window is admissible for the window's RI. :func:`check_windows` puts each window to the
-simulation (:mod:`profileopt.verification.simulate`):
+simulation (:mod:`profileopt.physics.simulate`):
 
 *predicted*
     The model's largest force over the speeds driven inside the window, at the window's
@@ -56,7 +56,7 @@ from ..terrain.roughness import (
 if TYPE_CHECKING:
     from ..core.route import Route
     from ..core.vehicle import Vehicle
-    from .simulate import QuarterCarRun
+    from ..physics.simulate import QuarterCarRun
 
 __all__ = ["WindowCheck", "check_windows", "window_speed_range_mps", "window_predicted_force_n",
            "BLOCK_ROWS", "UNDERPREDICTION_TOLERANCE"]
@@ -374,7 +374,7 @@ def _excitation_terms(route: "Route", run: "QuarterCarRun", k_spring: float, c_d
     Returns A = k (y - y0) + c y' and B = k (s - s0) + c v at the rows, y at the samples,
     y0 and s0: a window with line y ~ level + m (s - s_mean) has F = A - C - m B with
     C = k (level - y0) - k m (s_mean - s0). A is the simulator's F plus its segment datum
-    (:func:`profileopt.verification.simulate.simulate_quarter_car`: the least-squares line of y over each
+    (:func:`profileopt.physics.simulate.simulate_quarter_car`: the least-squares line of y over each
     segment's samples, :func:`profileopt.terrain.roughness.segment_line_fit`).
     """
     s_row, v_row = run.s_m, run.speed_mps
@@ -409,7 +409,7 @@ def check_windows(route: "Route", run: "QuarterCarRun", speed_mps: np.ndarray, v
         The terrain (samples).
     run : QuarterCarRun
         The simulated drive of the profile over ``route``
-        (:func:`profileopt.verification.simulate.simulate_quarter_car`).
+        (:func:`profileopt.physics.simulate.simulate_quarter_car`).
     speed_mps : numpy.ndarray, shape (N+1,)
         The profile's speeds at ``run.boundaries_m`` (m/s).
     vehicle : Vehicle

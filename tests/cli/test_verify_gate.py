@@ -202,7 +202,7 @@ def test_the_exit_statuses_are_documented_in_the_help(profileopt_command) -> Non
 def test_the_simulator_refuses_a_speed_whose_square_overflows(atv) -> None:
     # Before: RuntimeWarnings, then "RuntimeError: a segment holds no time step"
     from profileopt.errors import InputError
-    from profileopt.verification.simulate import simulate_quarter_car
+    from profileopt.physics.simulate import simulate_quarter_car
 
     s = np.linspace(0.0, 10.0, 201)
     with pytest.raises(InputError, match="1e\\+155 m/s, is too large to simulate"):

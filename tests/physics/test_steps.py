@@ -14,7 +14,7 @@ from profileopt.mpc.constraints import step_speed_envelope
 from profileopt.planning.limits import StepLimit, default_limits
 from profileopt.physics.steps import step_speed_cap_mps
 from profileopt.physics.steps import wheel_ramps
-from profileopt.verification.simulate import simulate_quarter_car
+from profileopt.physics.simulate import simulate_quarter_car
 from profileopt.physics.wheel import wheel_path
 
 from conftest import ROUTES

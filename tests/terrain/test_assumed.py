@@ -29,7 +29,7 @@ from profileopt.io import read_profile
 from profileopt.core.segments import segment_route
 from profileopt.planning import plan
 from profileopt.core.route import Route
-from profileopt.verification.simulate import simulate_quarter_car
+from profileopt.physics.simulate import simulate_quarter_car
 from profileopt.verification.verify import verify
 
 from conftest import PROFILEOPT

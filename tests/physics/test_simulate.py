@@ -39,7 +39,7 @@ import pytest
 
 from profileopt.errors import InputError
 from profileopt.physics.forces import sbem_ef_force_n, sbem_tf_force_n
-from profileopt.verification.simulate import boundary_times_s, position_at_time, simulate_quarter_car
+from profileopt.physics.simulate import boundary_times_s, position_at_time, simulate_quarter_car
 from profileopt.physics.wheel import wheel_envelope_m
 from profileopt.terrain.roughness import step_width
 from profileopt.core.vehicle import load_vehicle

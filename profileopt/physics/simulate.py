@@ -80,8 +80,8 @@ import numpy as np
 from ..core.kinematics import segment_accel_mps2, segment_time_s
 from ..core.stations import segment_index, segment_samples
 from ..errors import InputError
-from ..physics.quarter_car import hermite_extremum, knot_jumps, respond, transition
-from ..physics.wheel import WheelPath, wheel_path
+from .quarter_car import hermite_extremum, knot_jumps, respond, transition
+from .wheel import WheelPath, wheel_path
 from ..terrain.roughness import segment_line_fit
 
 if TYPE_CHECKING:

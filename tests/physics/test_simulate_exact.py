@@ -1,7 +1,7 @@
 """The simulator against a from-scratch simulation of the same wheel, and its convergence.
 
 The reference is written here from the definitions alone, sharing no code with
-profileopt.verification.simulate or profileopt.physics.wheel:
+profileopt.physics.simulate or profileopt.physics.wheel:
 
 * the wheel's path, pointwise: the centre of a wheel of radius r above s stands on the
   highest of the circles of radius r about the points of the polyline within r of s. On
@@ -27,7 +27,7 @@ import pytest
 import scipy.integrate
 
 from profileopt.io import read_route
-from profileopt.verification.simulate import MAX_ARC_STEP_RAD, simulate_quarter_car
+from profileopt.physics.simulate import MAX_ARC_STEP_RAD, simulate_quarter_car
 from profileopt.core.vehicle import load_vehicle
 
 from conftest import ROUTES
