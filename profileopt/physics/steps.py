@@ -3,16 +3,24 @@ the step limit of SBEM:TF.
 
 A rigid wheel's path y(s) (:mod:`profileopt.physics.wheel`) kinks where its contact jumps from
 one piece of the ground to another, and there its slope always rises (the path is an upper
-envelope). Two kinds of kink start or end a ramp that the quarter car meets suddenly:
+envelope). A step sits on ground of some grade g, the trend it interrupts: the median
+slope of the path within :data:`TREND_HALF_WIDTH_M` of the kink (:func:`trend_slope`). On a
+steady grade the body follows the ground without moving on its suspension, and the quarter
+car is linear, so what loads the suspension is the path measured against that trend,
+y - g s. Two kinds of kink start or end a ramp that the quarter car meets suddenly:
 
-* a **landing**: the path runs down at slope -s and the kink takes at least half of that
-  slope away at once (the wheel lands after a drop). The ramp runs from the path's last
-  highest point before the kink down to the kink;
-* a **climb**: the kink gives the path at least half of its following slope +s at once
-  (the wheel meets a step ahead, or the foot of a steep ramp). The ramp runs from the kink
-  up to the path's next highest point.
+* a **landing**: against the trend, the path runs down at slope -s and the kink takes at
+  least half of that slope away at once (the wheel lands after a drop). The ramp runs from
+  where the path's slope last was the trend's (walking back from the kink, at most
+  :data:`MAX_RAMP_M`) down to the kink;
+* a **climb**: against the trend, the kink gives the path at least half of its following
+  slope +s at once (the wheel meets a step ahead, or the foot of a steep ramp). The ramp
+  runs from the kink up to where the path's slope returns to the trend's.
 
-The rise d of a ramp is the height between its kink and that highest point. The step limit
+So a kerb on a climb is a ramp of the kerb's height, not of the rest of the hill, and a
+drop on a descent one of the drop's, never reaching to the next hilltop.
+
+The rise d of a ramp is the height of y - g s between its two ends. The step limit
 of SBEM:TF bounds the force on each ramp with :func:`ramp_force_n` and
 caps the speed of every segment that shares a point with it.
 
@@ -39,7 +47,8 @@ from .wheel import WheelPath, wheel_path
 if TYPE_CHECKING:
     from ..core.vehicle import Vehicle
 
-__all__ = ["WheelRamps", "wheel_ramps", "SUDDEN_SHARE", "impulse_response_peak_s", "ramp_force_n",
+__all__ = ["WheelRamps", "wheel_ramps", "trend_slope", "SUDDEN_SHARE", "TREND_HALF_WIDTH_M", "TREND_STEP_M",
+           "MAX_RAMP_M", "SLOPE_TOLERANCE", "gentlest_capping_slope", "impulse_response_peak_s", "ramp_force_n",
            "ramp_speed_cap_mps", "StepCaps", "step_caps", "MAX_STRETCHES", "segment_step_caps_mps",
            "step_speed_cap_mps"]
 
@@ -60,9 +69,10 @@ class WheelRamps:
     kink_m : numpy.ndarray, shape (R,)
         Where its kink is (m): ``end_m`` for a landing, ``start_m`` for a climb.
     slope : numpy.ndarray, shape (R,)
-        |dy/ds| of the path next to the kink on the ramp's side (dimensionless), > 0.
+        |dy/ds - g| of the path next to the kink on the ramp's side, against the trend g
+        (:func:`trend_slope`) (dimensionless), > 0.
     rise_m : numpy.ndarray, shape (R,)
-        Height between the kink and the ramp's highest end (m), >= 0.
+        Height of y - g s between the kink and the ramp's other end (m), >= 0.
     landing : numpy.ndarray of bool, shape (R,)
         True for a landing, False for a climb.
     """
@@ -80,23 +90,114 @@ class WheelRamps:
         return int(self.slope.size)
 
 
-def _landings(path: WheelPath) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Kink position, slope, rise and top position of every landing of ``path``."""
+#: Half-width (m) of the stretch around a kink whose median path slope is the grade it
+#: interrupts: long beside a step or a pothole (a kerb's ramp is a few centimetres, a block or
+#: a pit a fraction of a metre), so the median is the ground's grade, not the step's.
+TREND_HALF_WIDTH_M = 2.5
+#: Spacing (m) of the path's slopes whose median is the trend: the median needs the typical
+#: slope of a few metres of path, not its detail.
+TREND_STEP_M = 0.1
+#: Longest a ramp reaches from its kink (m): where the path departs from the trend for longer,
+#: the departure is a hill of its own, not a step.
+MAX_RAMP_M = 5.0
+#: A path slope within this of the trend (dimensionless) is the trend: rounding, not a ramp.
+SLOPE_TOLERANCE = 1e-9
+
+
+def trend_slope(path: WheelPath, at_m: np.ndarray) -> np.ndarray:
+    """The grade a kink interrupts: the median slope of the path within
+    :data:`TREND_HALF_WIDTH_M` of each position (dimensionless).
+
+    The median over arc length (the path's slope every :data:`TREND_STEP_M`, clipped to the
+    path's ends) is the slope of the ground the step
+    sits on: a kerb, a block or a pothole occupies a small share of the stretch and moves it
+    not at all, a steady grade is all of it.
+
+    Parameters
+    ----------
+    path : WheelPath
+        The path of the wheel's lowest point.
+    at_m : numpy.ndarray, shape (K,)
+        Positions (m).
+
+    Returns
+    -------
+    numpy.ndarray, shape (K,)
+    """
+    at = np.asarray(at_m, dtype=float)
+    h = TREND_STEP_M
+    half = int(math.ceil(TREND_HALF_WIDTH_M / h))
+    out = np.empty(at.size)
+    first, last = float(path.breaks_m[0]), float(path.breaks_m[-1])
+    offsets = h * np.arange(-half, half + 1)
+    for chunk in range(0, at.size, 4096):  # bounded memory: 4096 x (2 half + 1) slopes at a time
+        where = np.clip(at[chunk:chunk + 4096, None] + offsets[None, :], first, last)
+        out[chunk:chunk + 4096] = np.median(path.evaluate(where.ravel())[1].reshape(where.shape), axis=1)
+    return out
+
+
+def _ramp_tops(path: WheelPath, kink_m: np.ndarray, trend: np.ndarray, gentle: float) -> np.ndarray:
+    """Where each landing's ramp starts: walking back from its kink, the first position
+    where the path's slope is back at the trend, or the end of the first line of the path
+    whose slope is within ``gentle`` of it (at most :data:`MAX_RAMP_M` back).
+
+    Along the path the slope is constant on a line, falls along an arc (the wheel rolling
+    over a vertex) and jumps up at a kink, so walking back it never falls inside a piece:
+    the walk stops in the first piece whose slope at its start reaches the trend, at its
+    end if its slope there does, else inside the arc where the slope equals the trend g
+    (d = -g r / sqrt(1 + g^2) from its vertex). It also stops at the end of a line whose
+    slope is within ``gentle`` of the trend: the ground's own gentle slopes (the wall of a
+    dip, a vertical curve) are not part of the sudden ramp, while the arcs where the wheel
+    rolls over an edge are, all of them. There the path detrended by the trend,
+    y - g s, has its last highest point before the kink.
+    """
+    r = path.wheel_radius_m
+    breaks = path.breaks_m
+    start_slope = path.evaluate(breaks[:-1], np.arange(path.pieces))[1]
+    end_slope = path.evaluate(breaks[1:], np.arange(path.pieces))[1]
+    floor = kink_m - MAX_RAMP_M
+    piece = path.piece_index(kink_m, side="left")
+    top = np.maximum(floor, breaks[0])
+    active = np.arange(kink_m.size)
+    while active.size:
+        p, g = piece[active], trend[active] - SLOPE_TOLERANCE
+        at_end = (end_slope[p] >= g) | (~path.is_arc[p] & (end_slope[p] >= g - gentle))
+        inside = ~at_end & (start_slope[p] >= g)  # an arc whose slope passes the trend
+        done = at_end | inside
+        stop = np.where(at_end, breaks[p + 1], 0.0)
+        if inside.any():
+            gi = trend[active[inside]]  # the crossing of the trend itself
+            stop[inside] = np.clip(path.x_ref_m[p[inside]] - gi * r / np.sqrt(1.0 + gi * gi),
+                                   breaks[p[inside]], breaks[p[inside] + 1])
+        top[active[done]] = np.maximum(stop[done], floor[active[done]])
+        # the rest walk back one piece, unless the walk has reached its floor or the path's start
+        on = ~done & (breaks[p] > floor[active]) & (p > 0)
+        piece[active[on]] -= 1
+        active = active[on]
+    return np.minimum(top, kink_m)
+
+
+def _landings(path: WheelPath, min_slope: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Kink position, slope, rise and top position of every landing of ``path`` whose slope
+    exceeds ``min_slope``, all measured against the grade the kink interrupts
+    (:func:`trend_slope`); the ramp ends where the path's slope is back at that grade, or at
+    a line of the path within :data:`SUDDEN_SHARE` ``min_slope`` of it (a gentler slope is
+    not sudden: a ramp of it could cap no speed, and the body follows it)."""
     inner = path.breaks_m[1:-1]
     piece = np.arange(path.pieces - 1)
     y_kink, before, _ = path.evaluate(inner, piece)
     after = path.evaluate(inner, piece + 1)[1]
-    land = (before < 0) & (after - before >= -SUDDEN_SHARE * before)
-    # the path's highest points: its breaks and the tops of its arcs are where it can turn
-    s = np.unique(np.clip(np.concatenate([path.breaks_m, path.x_ref_m[path.is_arc]]),
-                          path.breaks_m[0], path.breaks_m[-1]))
-    y = path.evaluate(s)[0]
-    top = np.concatenate([[True], (y[1:-1] >= y[:-2]) & (y[1:-1] >= y[2:]), [True]])
-    last_top = np.maximum.accumulate(np.where(top, np.arange(s.size), 0))
-    # the last highest point strictly before each kink
-    at = np.searchsorted(s, inner[land], side="left") - 1
-    j = last_top[np.maximum(at, 0)]
-    return inner[land], -before[land], np.maximum(y[j] - y_kink[land], 0.0), s[j]
+    # a landing of slope > min_slope takes at least SUDDEN_SHARE of it away at once
+    near = np.flatnonzero(after - before > max(SUDDEN_SHARE * min_slope, 0.0))
+    trend = trend_slope(path, inner[near])
+    fall, rise_after = before[near] - trend, after[near] - trend
+    land = (fall < -min_slope) & (rise_after - fall >= -SUDDEN_SHARE * fall)
+    at, g = near[land], trend[land]
+    kink = inner[at]
+    top = _ramp_tops(path, kink, g, SUDDEN_SHARE * min_slope)
+    y_top = path.evaluate(top, path.piece_index(top, side="left"))[0]
+    rise = np.maximum((y_top - g * top) - (y_kink[at] - g * kink), 0.0)
+    return kink, -fall[land], rise, top
 
 
 def _mirrored(path: WheelPath) -> WheelPath:
@@ -107,7 +208,7 @@ def _mirrored(path: WheelPath) -> WheelPath:
                      is_arc=path.is_arc[::-1].copy(), wheel_radius_m=path.wheel_radius_m)
 
 
-def wheel_ramps(path: WheelPath) -> WheelRamps:
+def wheel_ramps(path: WheelPath, *, min_slope: float = 0.0) -> WheelRamps:
     """Every landing and climb of a wheel's path (:class:`WheelRamps`), sorted by start.
 
     A climb is a landing of the path driven the other way, so both are found by one rule.
@@ -116,14 +217,19 @@ def wheel_ramps(path: WheelPath) -> WheelRamps:
     ----------
     path : WheelPath
         The path of the wheel's lowest point (:func:`profileopt.physics.wheel.wheel_path`).
+    min_slope : float, default 0
+        Only ramps steeper than this, against the trend (dimensionless), each ending at the
+        trend or at a line of the path within :data:`SUDDEN_SHARE` ``min_slope`` of it: a
+        ramp's force bound is at most V s (k phi_max + c), so :func:`step_caps` needs no
+        gentler ones (and the walk back to the trend stops on the wall of a dip).
 
     Returns
     -------
     WheelRamps
     """
     total = path.breaks_m[0] + path.breaks_m[-1]
-    kink_l, slope_l, rise_l, top_l = _landings(path)
-    kink_c, slope_c, rise_c, top_c = _landings(_mirrored(path))
+    kink_l, slope_l, rise_l, top_l = _landings(path, min_slope)
+    kink_c, slope_c, rise_c, top_c = _landings(_mirrored(path), min_slope)
     kink_c, top_c = total - kink_c, total - top_c
     start = np.concatenate([top_l, kink_c])
     order = np.argsort(start, kind="stable")
@@ -272,11 +378,8 @@ def step_caps(s_m: np.ndarray, z_m: np.ndarray, vehicle: "Vehicle") -> StepCaps:
     """The step limit's caps on a route: every ramp of the wheel's path
     (:func:`profileopt.physics.steps.wheel_ramps`) whose cap is below the top speed.
 
-    The wheel's path is built only around slopes of the route that could need a cap: the
-    bound is at most V s (k phi_max + c), and the path's slopes never exceed the route's (its
-    pieces are the route's lines, offset, and arcs between them), so a ramp can cap a speed the
-    vehicle can drive only next to a slope above F / (V_top (k phi_max + c)); on a route
-    without one no path is built at all.
+    The wheel's path is built only around the stretches of the route that could need a cap
+    (:func:`_steep_stretches`); on a route without one no path is built at all.
 
     Parameters
     ----------
@@ -291,46 +394,71 @@ def step_caps(s_m: np.ndarray, z_m: np.ndarray, vehicle: "Vehicle") -> StepCaps:
     StepCaps
     """
     parts = []
+    gentlest = gentlest_capping_slope(vehicle)
+    m, r = s_m.size, vehicle.wheel_radius_m
     for lo, hi in _steep_stretches(s_m, z_m, vehicle):
-        ramps = wheel_ramps(wheel_path(s_m[lo:hi], z_m[lo:hi], vehicle.wheel_radius_m))
+        ramps = wheel_ramps(wheel_path(s_m[lo:hi], z_m[lo:hi], r), min_slope=gentlest)
         cap = ramp_speed_cap_mps(ramps.rise_m, ramps.slope, vehicle, vehicle.max_transmitted_force_n)
-        binds = cap < vehicle.max_speed_mps
+        # within r of a cut end the stretch's path is not the route's: no kink of a ramp that
+        # can cap lies there (each lies within r of a steep slope, far inside the stretch)
+        inside = ((lo == 0) | (ramps.kink_m > s_m[lo] + r)) & ((hi == m) | (ramps.kink_m < s_m[hi - 1] - r))
+        binds = (cap < vehicle.max_speed_mps) & inside
         parts.append((ramps.start_m[binds], ramps.end_m[binds], cap[binds]))
     if not parts:
         return StepCaps(start_m=np.empty(0), end_m=np.empty(0), cap_mps=np.empty(0))
     return StepCaps(*(np.concatenate(column) for column in zip(*parts)))
 
 
+def gentlest_capping_slope(vehicle: "Vehicle") -> float:
+    """G = F / (V_top (k phi_max + c)): a ramp no steeper than this (against the trend) caps
+    no speed the vehicle can drive, its force bound being at most V s (k phi_max + c).
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Supplies the quarter car, ``max_transmitted_force_n`` (N) and the top speed (m/s).
+
+    Returns
+    -------
+    float
+        G (dimensionless).
+    """
+    return vehicle.max_transmitted_force_n / (
+        vehicle.max_speed_mps * (vehicle.spring_n_per_m * impulse_response_peak_s(vehicle) + vehicle.damping_ns_per_m))
+
+
 def _steep_stretches(s_m: np.ndarray, z_m: np.ndarray, vehicle: "Vehicle") -> list[tuple[int, int]]:
     """Sample ranges [lo, hi) whose wheel path holds every ramp that could cap a speed.
 
-    Only a slope above F / (V_top (k phi_max + c)) can (:func:`step_caps`). A ramp runs from
-    its kink, next to such a slope, to the path's highest point beside it, which lies within
-    r of a highest sample of the route (rolling a wheel over a falling polyline gives a
-    falling path); each steep slope's stretch reaches from the highest sample before it to
-    the one after it, and r and two samples beyond, so that the path there is the whole
-    route's. Overlapping stretches are merged; more than :data:`MAX_STRETCHES` of them are
-    one, the whole route (building the path is vectorised over its pieces, so one long call
-    costs less than many short ones).
+    A ramp caps a speed only if its slope against the trend exceeds the gentlest capping
+    slope G (:func:`gentlest_capping_slope`), and then its kink raises the path's slope by
+    more than :data:`SUDDEN_SHARE` G at once. The path's slopes on either side of a kink at s
+    are slopes of the route's segments within r of s, or lie between two of them (the arcs),
+    so that kink lies within r of a segment whose neighbours within r differ from it in
+    slope by more than SUDDEN_SHARE G. Each such segment's stretch reaches
+    max(:data:`MAX_RAMP_M`, :data:`TREND_HALF_WIDTH_M`) + r and two samples beyond it on
+    either side, so that the ramp's walk and its trend see the whole route's path.
+    Overlapping stretches are merged; more than :data:`MAX_STRETCHES` of them are one, the
+    whole route (building the path is vectorised over its pieces, so one long call costs
+    less than many short ones).
     """
-    if s_m.size < 2:
-        return []
-    limit = vehicle.max_transmitted_force_n
-    gentlest = limit / (vehicle.max_speed_mps * (vehicle.spring_n_per_m * impulse_response_peak_s(vehicle)
-                                                 + vehicle.damping_ns_per_m))
-    steep = np.flatnonzero(np.abs(np.diff(z_m)) > gentlest * np.diff(s_m))
+    from ..terrain.roughness import range_extremes
+
+    m = s_m.size
+    if m < 3:
+        return [(0, m)] if m == 2 else []
+    r = vehicle.wheel_radius_m
+    slope = np.diff(z_m) / np.diff(s_m)
+    # the segments within r of each segment (those whose span meets [s_i - r, s_i+1 + r])
+    first = np.maximum(np.searchsorted(s_m, s_m[:-1] - r, side="left") - 1, 0)
+    stop = np.minimum(np.searchsorted(s_m, s_m[1:] + r, side="right"), m - 1)
+    least, largest = range_extremes(slope, first, np.maximum(stop, first + 1))
+    steep = np.flatnonzero(largest - least > SUDDEN_SHARE * gentlest_capping_slope(vehicle))
     if steep.size == 0:
         return []
-    m = s_m.size
-    index = np.arange(m)
-    top = np.ones(m, dtype=bool)
-    top[1:-1] = (z_m[1:-1] >= z_m[:-2]) & (z_m[1:-1] >= z_m[2:])
-    before = np.maximum.accumulate(np.where(top, index, 0))[steep]  # the highest sample at or before
-    after = np.minimum.accumulate(np.where(top, index, m - 1)[::-1])[::-1][steep + 1]  # at or after
-    reach = vehicle.wheel_radius_m
-    lo = np.searchsorted(s_m, s_m[before] - reach, side="left") - 2
-    hi = np.searchsorted(s_m, s_m[after] + reach, side="right") + 2
-    lo, hi = np.clip(lo, 0, m), np.clip(hi, 0, m)
+    reach = max(MAX_RAMP_M, TREND_HALF_WIDTH_M) + r
+    lo = np.clip(np.searchsorted(s_m, s_m[steep] - reach, side="left") - 2, 0, m)
+    hi = np.clip(np.searchsorted(s_m, s_m[steep + 1] + reach, side="right") + 2, 0, m)
     stretches: list[tuple[int, int]] = []
     for a, b in zip(lo.tolist(), np.maximum.accumulate(hi).tolist()):
         if stretches and a <= stretches[-1][1]:

@@ -131,13 +131,24 @@ def test_curb_drop_is_driven_within_the_limit():
     assert result.windows.worst_ratio < 1.0
 
 
+def _capping_ramps(route, vehicle):
+    """The ramps of the wheel's path over the whole route that could cap a speed: steeper
+    than G = F / (V_top (k phi_max + c)) against the trend (a gentler ramp's bound, at most
+    V s (k phi_max + c), stays below F at every speed the vehicle can drive)."""
+    k, c = vehicle.spring_n_per_m, vehicle.damping_ns_per_m
+    gentlest = vehicle.max_transmitted_force_n / (vehicle.max_speed_mps * (k * impulse_response_peak_s(vehicle) + c))
+    return wheel_ramps(wheel_path(route.s_m, route.z_m, vehicle.wheel_radius_m), min_slope=gentlest)
+
+
 @pytest.mark.parametrize("name", ["curb.csv", "krc_rms_1in.csv", "krc_rms_4in.csv"])
 def test_caps_from_stretches_equal_caps_from_the_whole_path(vehicle, name):
     # step_speed_cap_mps builds the wheel's path only around steep slopes; the reference
-    # builds it over the whole route and caps every segment a ramp meets, by hand.
+    # builds it over the whole route and caps every segment a ramp meets, by hand. Ramps no
+    # steeper than G = F / (V_top (k phi_max + c)) cap nothing (their bound is at most
+    # V s (k phi_max + c)); the caps ask only for steeper ones.
     route = profileopt.read_route(ROUTES / name)
     boundaries = np.arange(route.s_m[0], route.s_m[-1] + 1e-9, 2.5)
-    ramps = wheel_ramps(wheel_path(route.s_m, route.z_m, vehicle.wheel_radius_m))
+    ramps = _capping_ramps(route, vehicle)
     ramp_cap = ramp_speed_cap_mps(ramps.rise_m, ramps.slope, vehicle, vehicle.max_transmitted_force_n)
     expected = np.full(boundaries.size - 1, np.inf)
     for i in range(boundaries.size - 1):
@@ -281,7 +292,7 @@ def test_step_speed_envelope_is_never_above_the_caps_it_must_keep(name, vehicle_
     vehicle = profileopt.load_vehicle(vehicle_name)
     env = step_speed_envelope(route.s_m, route.z_m, vehicle, reach_m=reach)
     assert env.name_in() == ["s_m"] and env.name_out() == ["speed_cap_mps"]
-    ramps = wheel_ramps(wheel_path(route.s_m, route.z_m, vehicle.wheel_radius_m))
+    ramps = _capping_ramps(route, vehicle)
     cap = ramp_speed_cap_mps(ramps.rise_m, ramps.slope, vehicle, vehicle.max_transmitted_force_n)
     low = np.flatnonzero(cap < vehicle.max_speed_mps)
     assert low.size  # the test looks at routes where the step limit binds
@@ -354,7 +365,7 @@ def test_an_opti_problem_keeps_the_step_limit_over_the_curb_drop():
     opti.set_initial(b, 1.0)
     opti.solver("ipopt", {"print_time": False}, {"print_level": 0, "sb": "yes"})
     speed = np.sqrt(np.asarray(opti.solve().value(b)).ravel())
-    ramps = wheel_ramps(wheel_path(s, z, vehicle.wheel_radius_m))
+    ramps = _capping_ramps(profileopt.Route(s_m=s, z_m=z, source="curb 140-160 m"), vehicle)
     cap = ramp_speed_cap_mps(ramps.rise_m, ramps.slope, vehicle, vehicle.max_transmitted_force_n)
     for k in range(grid.size - 1):
         meets = (ramps.start_m <= grid[k + 1]) & (ramps.end_m >= grid[k])
@@ -378,3 +389,69 @@ def test_the_step_limit_reuses_a_routes_caps_only_for_that_route():
         seg = segment_route(route, vehicle, length)
         got = limit.speed_cap_mps(PlanContext(route=route, vehicle=vehicle, segments=seg))
         np.testing.assert_array_equal(got, step_speed_cap_mps(route.s_m, route.z_m, seg.boundaries_m, vehicle))
+
+
+def _kerb_caps(grade: float, height_m: float, vehicle, shape: str = "grade"):
+    """step_caps of a kerb (height_m > 0) or drop (< 0) at 100 m of 200 m of ground sampled
+    every 0.05 m: on a steady grade, or at the top of a crest or the bottom of a dip whose
+    grade reaches |grade| 50 m away (a road's vertical curve, of radius 50 / |grade| m)."""
+    from profileopt.physics.steps import step_caps
+
+    s = np.round(np.arange(0.0, 200.0001, 0.05), 10)
+    curve = (s - 100.0) ** 2 * abs(grade) / 100.0
+    ground = {"grade": grade * s, "crest": -curve, "dip": curve}
+    return step_caps(s, ground[shape] + height_m * (s >= 100.0), vehicle)
+
+
+@pytest.mark.parametrize(("shape", "grade"), [("grade", -0.15), ("grade", -0.05), ("grade", 0.05), ("grade", 0.15),
+                                              ("crest", 0.05), ("crest", 0.15), ("dip", 0.05), ("dip", 0.15)])
+@pytest.mark.parametrize("height_m", [0.08, -0.08])
+def test_a_kerb_on_a_hill_is_capped_like_the_same_kerb_on_the_flat(vehicle, shape, grade, height_m):
+    # Reference: the same kerb on flat ground. The quarter car is linear and a steady grade
+    # loads its suspension not at all, so the ramp is the kerb measured against the grade it
+    # interrupts: the same height, and a slope that differs from the flat kerb's only by the
+    # wheel path's offset on an incline (r (sqrt(1 + g^2) - 1), 1 mm at 15 %) and the grade's
+    # share of the sampled kerb's slope. Before issue 29 a climb's ramp ran up to the next
+    # hilltop: an 8 cm kerb on a 5 % climb held 185 m of road at 6.5 m/s.
+    flat = _kerb_caps(0.0, height_m, vehicle)
+    caps = _kerb_caps(grade, height_m, vehicle, shape)
+    assert flat.cap_mps.size == 1  # the reference is capped at all (0.05 m sampling)
+    assert caps.cap_mps.size == 1
+    assert caps.cap_mps[0] == pytest.approx(flat.cap_mps[0], rel=0.1)
+    # the cap holds the ramp only: a few centimetres around 100 m, not the hill
+    assert 99.8 <= caps.start_m[0] <= caps.end_m[0] <= 100.2
+
+
+def test_a_trend_is_the_median_slope_of_the_path():
+    # A 20 % grade with a 0.1 m kerb at 50 m: within 2.5 m of any point the kerb's ramp (a
+    # few cm) is far less than half the path, so the median slope is the grade's, 0.2;
+    # on a crest (slopes +0.1 before 50 m, -0.1 after) it is the slope of the longer side.
+    from profileopt.physics.steps import trend_slope
+
+    s = np.round(np.arange(0.0, 100.0001, 0.05), 10)
+    path = wheel_path(s, 0.2 * s + 0.1 * (s >= 50.0), 0.1)
+    np.testing.assert_allclose(trend_slope(path, np.array([10.0, 49.9, 50.0, 50.1, 90.0])), 0.2, atol=1e-12)
+    crest = wheel_path(s, 0.1 * np.minimum(s, 100.0 - s), 0.1)
+    np.testing.assert_allclose(trend_slope(crest, np.array([40.0, 48.0, 52.0, 60.0])), [0.1, 0.1, -0.1, -0.1],
+                               atol=1e-12)
+
+
+@pytest.mark.parametrize("grade", [-0.05, 0.05])
+@pytest.mark.parametrize("height_m", [0.08, -0.08])
+def test_a_kerb_on_a_grade_costs_what_it_costs_on_the_flat(grade, height_m):
+    # Issue 29: an 8 cm kerb on a 5 % climb cost 1.9x the travel time of the climb without
+    # it. Reference: the plan of the same kerb on flat ground, whose cost (its step cap,
+    # 10.3 m/s for atv at this sampling, and the windows' RI around it) the grade should
+    # not multiply; uphill the vehicle regains its speed a little more slowly after the cap.
+    vehicle = profileopt.load_vehicle("atv")
+    s = np.round(np.arange(0.0, 300.0001, 0.05), 10)
+    kerb = height_m * (s >= 100.0)
+
+    def travel_time_s(z):
+        return profileopt.plan(profileopt.Route(s_m=s, z_m=z, source="kerb"), vehicle).travel_time_s
+
+    flat_cost = travel_time_s(kerb) - travel_time_s(0.0 * s)
+    plain = travel_time_s(grade * s)
+    cost = travel_time_s(grade * s + kerb) - plain
+    assert 0 < flat_cost < 0.12 * plain
+    assert cost <= 1.1 * flat_cost
