@@ -29,7 +29,7 @@ __all__ = ["BINDING_NAMES", "binding_labels", "binding_shares"]
 
 #: Every value of the ``binding`` column, in the order the summary lists them.
 BINDING_NAMES = ("force", "speed_limit", "top_speed", "lateral", "friction", "accel", "decel", "power", "jerk",
-                 "boundary", "step")
+                 "boundary", "step", "simulated")
 
 
 def binding_labels(b: np.ndarray, length_m: np.ndarray, *, upper_b: np.ndarray, upper_label: np.ndarray,

@@ -19,7 +19,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from typing import TYPE_CHECKING, Sequence
+from typing import TYPE_CHECKING, Callable, Sequence
 
 import numpy as np
 
@@ -47,7 +47,8 @@ from ..physics.forces import DEFAULT_MODEL, get_model
 from ..physics.speeds import SpeedBands, max_force_over_segments
 from .bands import BandChoice, DrivePower, choose_bands, snap_to_band
 from .fallback import fallback_choice
-from .limits import Limit, PlanContext, default_limits
+from .gate import MAX_GATE_ROUNDS, check_plan, gate_applies, gate_caps, merged_caps
+from .limits import Limit, PlanContext, SimulatedLimit, default_limits
 from .nlp.pieces import choose_cuts, cut_scores, solve_pieces
 from .nlp.problem import Scaling, family_rows, objective_s, row_bounds
 from .nlp.solve import solve_nlp
@@ -57,6 +58,7 @@ from .refine import REFINE_AT_CAP, refined_segments
 if TYPE_CHECKING:
     from ..core.route import Route
     from ..core.vehicle import Vehicle
+    from ..terrain.geometry import RouteGeometry
 
 __all__ = ["plan", "DEFAULT_SMOOTHING", "PLAN_BANDS", "MIN_JERK_MPS3", "REFINE_AT_CAP"]
 
@@ -196,6 +198,60 @@ def plan(
 
     geometry = route_geometry(route, tolerance_m=path_tolerance_m, grade_scale_m=2.0 * seg.roughness_window_m)
     timings["path"] = time.perf_counter() - t
+
+    def once(limits: tuple[Limit, ...]) -> Profile:
+        return _plan_once(route, vehicle, limits, seg=seg, geometry=geometry, options=options, jerk=jerk,
+                          model=model, smoothing=smoothing, v0_mps=v0_mps, vend_mps=vend_mps, method=method,
+                          band=band, refine=refine, segment_length_m=segment_length_m,
+                          roughness_window_m=roughness_window_m, path_tolerance_m=path_tolerance_m,
+                          timings=timings)
+
+    profile = once(limits)
+    if gate_applies(route, model):  # drive it in the exact simulation; cap where it goes over
+        profile = _gate(profile, once, limits, route, vehicle, timings)
+    timings["total"] = time.perf_counter() - t_start
+    return dataclasses.replace(profile, timings_s=dict(timings))
+
+
+def _gate(profile: Profile, once: "Callable[[tuple[Limit, ...]], Profile]", limits: tuple[Limit, ...],
+          route: "Route", vehicle: "Vehicle", timings: dict[str, float]) -> Profile:
+    """Simulate ``profile`` and, while it goes over the force limit, plan again with the
+    gate's caps (:mod:`.gate`); the last profile, with a note when the gate capped anything."""
+    caps = None
+    first_ratio = first_s = None
+    for round_number in range(1, MAX_GATE_ROUNDS + 1):
+        t = time.perf_counter()
+        check = check_plan(route, profile, vehicle)
+        timings["simulate"] = timings.get("simulate", 0.0) + time.perf_counter() - t
+        if check.passes:
+            break
+        if first_ratio is None:
+            first_ratio, first_s = check.worst_ratio, check.worst_s_m
+        caps = merged_caps(caps, gate_caps(check, vehicle, round_number))
+        profile = once((*limits, SimulatedLimit(caps=caps)))
+    else:
+        check = check_plan(route, profile, vehicle)
+        if not check.passes:
+            raise PlanningError(
+                f"{route.source}: after {MAX_GATE_ROUNDS} rounds of lowering the speed, the exact simulation is "
+                f"still over the force limit ({check.worst_ratio:.4g} of it at s = {check.worst_s_m:.6g} m); "
+                "please report this with the route and vehicle")
+    if caps is None:
+        return profile
+    note = (f"simulation gate: the plan went {first_ratio:.4g}x over the force limit in the exact simulation "
+            f"(at s = {first_s:.6g} m); the speed was capped over {caps.cap_mps.size} stretch(es), "
+            f"{float(np.sum(caps.end_m - caps.start_m)):.3g} m in all, until it held "
+            f"({check.worst_ratio:.4g} of the limit)")
+    return dataclasses.replace(profile, notes=(*profile.notes, note))
+
+
+def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *, seg: Segments,
+               geometry: "RouteGeometry", options: SolverOptions, jerk: float, model: str, smoothing: float,
+               v0_mps: float, vend_mps: float, method: str, band: str, refine: bool, segment_length_m: float,
+               roughness_window_m: float, path_tolerance_m: float, timings: dict[str, float]) -> Profile:
+    """One plan with ``limits`` on the segments ``seg`` (refined inside) and the route's
+    ``geometry``: the steps of :func:`plan` after the route was cut and its geometry found;
+    the other arguments as :func:`plan`'s. Adds to ``timings`` (s)."""
     v0_requested, vend_requested = v0_mps, vend_mps
     refine_note = ""
     while True:  # twice with refine: on the segments asked for, then on the refined ones
@@ -335,8 +391,7 @@ def plan(
                 "although every speed was taken from the admissible bands; please report this with the route "
                 "and vehicle"
             )
-    timings["total"] = time.perf_counter() - t_start
-    return dataclasses.replace(profile, timings_s=timings)
+    return profile
 
 
 def _speed_bands(limits: Sequence[Limit], context: PlanContext) -> tuple[SpeedBands, int]:

@@ -137,7 +137,8 @@ def _cap_sources(profile: "Profile") -> list[str]:
 #: A colour per value of the binding column (tab10), so every plan shows each limit alike.
 BINDING_COLOURS = {"force": "tab:red", "speed_limit": "tab:gray", "top_speed": "tab:olive", "lateral": "tab:purple",
                     "friction": "tab:pink", "accel": "tab:green", "decel": "tab:orange", "power": "tab:brown",
-                    "jerk": "tab:cyan", "boundary": "black", "step": "darkred"}
+                    "jerk": "tab:cyan", "boundary": "black", "step": "darkred",
+                   "simulated": "magenta"}
 
 
 def _binding_panel(ax: object, s: np.ndarray, binding: np.ndarray) -> None:

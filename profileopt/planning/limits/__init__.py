@@ -8,7 +8,10 @@
 - :class:`FrictionLimit` (``friction.py``): the friction circle;
 - :class:`AccelLimit` (``accel.py``): acceleration and deceleration bounds, on grades;
 - :class:`PowerLimit` (``power.py``): the drive power;
-- :class:`JerkLimit` (``jerk.py``): the jerk bound.
+- :class:`JerkLimit` (``jerk.py``): the jerk bound;
+- :class:`SimulatedLimit` (``simulated.py``): caps the planner's simulation gate lowers where
+  the exact simulation went over the force limit (:mod:`profileopt.planning.gate`; not in
+  :func:`default_limits`).
 
 The limits of turns and hills (lateral, friction, power) are in a plan only when the vehicle
 file gives their keys (:class:`profileopt.Vehicle`), and the grade enters the acceleration
@@ -33,6 +36,7 @@ from .friction import FrictionLimit
 from .jerk import JerkLimit
 from .lateral import LateralLimit
 from .power import PowerLimit
+from .simulated import SimulatedLimit
 from .speed import SpeedLimit
 from .step import StepLimit
 
@@ -40,7 +44,8 @@ if TYPE_CHECKING:
     from ...core.vehicle import Vehicle
 
 __all__ = ["Limit", "PlanContext", "worst_ratio", "ForceLimit", "SpeedLimit", "AccelLimit", "JerkLimit",
-           "LateralLimit", "FrictionLimit", "PowerLimit", "StepLimit", "default_limits"]
+           "LateralLimit", "FrictionLimit", "PowerLimit", "StepLimit", "SimulatedLimit",
+           "default_limits"]
 
 
 def default_limits(vehicle: "Vehicle", *, model: str, max_jerk_mps3: float) -> tuple[Limit, ...]:

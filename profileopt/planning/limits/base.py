@@ -44,7 +44,7 @@ if TYPE_CHECKING:
     from ...physics.speeds import SpeedBands
     from ..bands import DrivePower
 
-__all__ = ["PlanContext", "Limit", "RowLimit", "worst_ratio"]
+__all__ = ["PlanContext", "Limit", "RowLimit", "worst_ratio", "own_cap_excess"]
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -424,3 +424,28 @@ def worst_ratio(values: np.ndarray, limit: float, where: np.ndarray) -> dict:
         return {"ratio": None, "s_m": None}
     k = int(np.argmax(values))
     return {"ratio": float(values[k] / limit), "s_m": float(where[k])}
+
+
+def own_cap_excess(limit: Limit, profile: "Profile") -> float:
+    """How far a speed in a segment whose cap ``limit`` sets exceeds that cap (relative, 0 if
+    none): the :meth:`Limit.check` of a limit that only caps speeds over stretches.
+
+    Parameters
+    ----------
+    limit : Limit
+        One of ``profile.limits``.
+    profile : Profile
+        The profile about to be returned.
+
+    Returns
+    -------
+    float
+    """
+    mine = [k for k, other in enumerate(profile.limits) if other is limit]
+    if not mine or profile.cap_source is None:
+        return 0.0
+    where = np.flatnonzero(profile.cap_source == mine[0])
+    if where.size == 0:
+        return 0.0
+    top = np.maximum(profile.speed_mps[where], profile.speed_mps[where + 1])
+    return max(float(np.max(top / profile.speed_cap_mps[where])) - 1.0, 0.0)

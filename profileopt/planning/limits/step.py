@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ...physics.steps import StepCaps, segment_step_caps_mps, step_caps
-from .base import Limit, PlanContext
+from .base import Limit, PlanContext, own_cap_excess
 
 if TYPE_CHECKING:
     from ...core.profile import Profile
@@ -90,14 +90,7 @@ class StepLimit(Limit):
         -------
         float
         """
-        mine = [k for k, limit in enumerate(profile.limits) if limit is self]
-        if not mine or profile.cap_source is None:
-            return 0.0
-        where = np.flatnonzero(profile.cap_source == mine[0])
-        if where.size == 0:
-            return 0.0
-        top = np.maximum(profile.speed_mps[where], profile.speed_mps[where + 1])
-        return max(float(np.max(top / profile.speed_cap_mps[where])) - 1.0, 0.0)
+        return own_cap_excess(self, profile)
 
     def cap_reason(self, profile: "Profile", segment: int) -> str:
         """"a step or drop of the ground (the wheel's path runs a steep ramp from a kink)".

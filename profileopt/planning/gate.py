@@ -1,0 +1,195 @@
+"""The planner's own gate: every plan driven in the exact simulation before it is returned.
+
+The force models bound the force from a statistic of the terrain (the RI), and the step
+limit bounds it on one ramp of the wheel's path met with the suspension at rest
+(:mod:`profileopt.physics.steps`). Neither is proven sound everywhere: a block or a pit
+shorter than the suspension's response, a ramp met before it settled from the last one, a
+row of blocks that builds up resonance. ``verify`` judges a plan by the exact simulation of
+the quarter car on the route's own samples (:mod:`profileopt.physics.simulate`); the planner
+runs the same simulation before it returns a plan and, where the force the model limits
+goes over the limit, caps the speed over the stretch that caused it and plans again
+(:class:`~profileopt.planning.limits.simulated.SimulatedLimit`), until the simulation holds.
+So a plan never fails the gate it is judged by.
+
+Where a cap goes. The force at time t is the response to the input before t, and the
+impulse response of the quarter car has its largest value within half a damped period
+(:func:`profileopt.physics.steps.impulse_response_peak_s`) and then decays by
+exp(-zeta wn t). A point over the limit at time t_p is charged to the route driven in the
+``lookback`` before it, [s(t_p - tau), s(t_p)], tau = k 2 pi / wn in round k (one natural
+period in the first round, longer each time the simulation is still over, for resonance
+built over several blocks); overlapping stretches merge.
+
+How low. A stretch's cap is the fastest speed driven in the natural period before its
+worst point times min(:data:`GATE_SHRINK`, (1 - :data:`GATE_MARGIN`) / ratio), ratio the
+largest simulated force over the limit there, so each round lowers the speed that met it: on a ramp the force grows about in proportion to the speed
+(:func:`profileopt.physics.steps.ramp_force_n`), but it is not monotone in speed (a
+resonant suspension), so the gate does not rely on it: it simulates again, and lowers
+again, for at most :data:`MAX_GATE_ROUNDS` rounds. As the speed falls to 0 the force the
+suspension transmits falls to 0 with it, so lowering always ends.
+
+The gate checks the transmitted force F_T (the quantity of SBEM:TF, the default model). The
+excitation force of Prev:BEM, IECM and SBEM:EF, k y + c y', keeps its k y term at any
+speed, so lowering a speed cannot always bring it within its limit; for those models, and
+for a route whose roughness is assumed rather than measured (its own samples do not show
+it), the plan is returned unsimulated, as before.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..physics.forces import get_model
+from ..physics.simulate import QuarterCarRun, simulate_quarter_car
+from ..physics.steps import StepCaps
+
+if TYPE_CHECKING:
+    from ..core.profile import Profile
+    from ..core.route import Route
+    from ..core.vehicle import Vehicle
+
+__all__ = ["GATE_MARGIN", "GATE_SHRINK", "MAX_GATE_ROUNDS", "GateCheck", "gate_applies", "check_plan", "gate_caps",
+           "merged_caps"]
+
+#: A simulated force above (1 - GATE_MARGIN) of the limit sends the plan back; a new cap aims
+#: at that much below the limit, so the profile as written to a file (rounded speeds) and
+#: verified again stays within it (dimensionless).
+GATE_MARGIN = 1e-3
+#: A stretch's new cap is at most this share of the fastest speed driven in it (dimensionless).
+GATE_SHRINK = 0.9
+#: Most rounds of simulating and capping before the planner gives up on a plan.
+MAX_GATE_ROUNDS = 16
+
+
+@dataclasses.dataclass(frozen=True)
+class GateCheck:
+    """The exact simulation of one plan, judged against the force limit.
+
+    Attributes
+    ----------
+    run : QuarterCarRun
+        The simulation of the plan on the route's samples.
+    limit_n : float
+        The force limit (N): the vehicle's ``max_transmitted_force_n``.
+    worst_ratio : float
+        Largest |F_T| / limit anywhere (dimensionless).
+    worst_s_m : float
+        Where it occurs (m).
+    """
+
+    run: QuarterCarRun
+    limit_n: float
+    worst_ratio: float
+    worst_s_m: float
+
+    @property
+    def passes(self) -> bool:
+        """True when |F_T| stays within (1 - :data:`GATE_MARGIN`) of the limit everywhere."""
+        return self.worst_ratio <= 1.0 - GATE_MARGIN
+
+
+def gate_applies(route: "Route", model: str) -> bool:
+    """Whether the gate checks plans of ``model`` on ``route``: the transmitted force, on
+    measured ground (see the module's docstring).
+
+    Parameters
+    ----------
+    route : Route
+        The route planned.
+    model : str
+        Force model key.
+
+    Returns
+    -------
+    bool
+    """
+    return get_model(model).quantity == "transmitted" and route.assumed_roughness is None
+
+
+def check_plan(route: "Route", profile: "Profile", vehicle: "Vehicle") -> GateCheck:
+    """Drive ``profile`` over ``route`` in the exact simulation (the one ``verify`` uses).
+
+    Parameters
+    ----------
+    route : Route
+        The route's samples.
+    profile : Profile
+        The planned profile (boundaries ``s_m`` and speeds ``speed_mps``).
+    vehicle : Vehicle
+        The quarter car and ``max_transmitted_force_n``.
+
+    Returns
+    -------
+    GateCheck
+    """
+    run = simulate_quarter_car(route.s_m, route.z_m, profile.s_m, profile.speed_mps, vehicle)
+    limit = float(vehicle.max_transmitted_force_n)
+    force = np.abs(run.transmitted_n)
+    worst = int(np.argmax(force))
+    return GateCheck(run=run, limit_n=limit, worst_ratio=float(force[worst]) / limit, worst_s_m=float(run.s_m[worst]))
+
+
+def gate_caps(check: GateCheck, vehicle: "Vehicle", round_number: int) -> StepCaps:
+    """The caps that take the plan of ``check`` back within the limit: one per stretch of
+    route charged with a point over it (see the module's docstring).
+
+    Parameters
+    ----------
+    check : GateCheck
+        The simulation of a plan that did not pass.
+    vehicle : Vehicle
+        Supplies wn (rad/s).
+    round_number : int
+        1 for the first round of the gate, 2 for the second, ...: the lookback is that many
+        natural periods.
+
+    Returns
+    -------
+    StepCaps
+        Stretches (m) and caps (m/s), sorted by start; empty when nothing is over.
+    """
+    run = check.run
+    ratio = np.abs(run.transmitted_n) / check.limit_n
+    over = np.flatnonzero(ratio > 1.0 - GATE_MARGIN)
+    if over.size == 0:
+        return StepCaps(start_m=np.empty(0), end_m=np.empty(0), cap_mps=np.empty(0))
+    period_s = 2.0 * math.pi / float(vehicle.natural_frequency_radps)
+    start = np.interp(run.time_s[over] - round_number * period_s, run.time_s, run.s_m)
+    end = run.s_m[over]
+    # merge overlapping stretches (both start and end rise with the point's time)
+    new = np.concatenate([[True], start[1:] > np.maximum.accumulate(end)[:-1]])
+    heads = np.flatnonzero(new)
+    lo = start[new]
+    hi = np.maximum.reduceat(end, heads)
+    # each stretch's worst point, and the fastest speed driven in the period before it
+    worst = np.array([over[a + int(np.argmax(ratio[over[a:b]]))]
+                      for a, b in zip(heads.tolist(), np.append(heads[1:], over.size).tolist())])
+    first = np.searchsorted(run.time_s, run.time_s[worst] - period_s, side="left")
+    fastest = np.array([float(np.max(run.speed_mps[a:b + 1])) for a, b in zip(first.tolist(), worst.tolist())])
+    shrink = np.minimum(GATE_SHRINK, (1.0 - GATE_MARGIN) / ratio[worst])
+    return StepCaps(start_m=lo, end_m=hi, cap_mps=fastest * shrink)
+
+
+def merged_caps(old: StepCaps | None, new: StepCaps) -> StepCaps:
+    """Every stretch of ``old`` and ``new`` (a segment keeps the lowest cap it meets).
+
+    Parameters
+    ----------
+    old : StepCaps or None
+        The caps of the rounds before.
+    new : StepCaps
+        This round's.
+
+    Returns
+    -------
+    StepCaps
+    """
+    if old is None:
+        return new
+    start = np.concatenate([old.start_m, new.start_m])
+    order = np.argsort(start, kind="stable")
+    return StepCaps(start_m=start[order], end_m=np.concatenate([old.end_m, new.end_m])[order],
+                    cap_mps=np.concatenate([old.cap_mps, new.cap_mps])[order])
