@@ -12,7 +12,6 @@ import math
 import struct
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -131,15 +130,12 @@ def test_ri_of_a_real_patch_ignores_a_tilt() -> None:
 @pytest.mark.slow
 def test_example_runs(tmp_path: Path) -> None:
     out = tmp_path / "map.png"
-    start = time.perf_counter()
     run = subprocess.run([sys.executable, str(EXAMPLE), "--out", str(out)], capture_output=True, text=True,
                          cwd=tmp_path, timeout=120)
-    elapsed = time.perf_counter() - start
     assert run.returncode == 0, run.stderr
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "38367 points, 35318 ground" in run.stdout
     assert "of patches below 5 m/s" in run.stdout
-    assert elapsed < 30  # about 1.5 s; generous for 2 busy cores
 
 
 @pytest.mark.slow

@@ -32,7 +32,6 @@ References
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 import pytest
@@ -242,14 +241,14 @@ def test_envelope_bridges_a_narrow_pothole() -> None:
     assert y.min() == pytest.approx(-(0.1 - math.sqrt(0.1**2 - 0.05**2)), abs=1e-12)
 
 
-def test_envelope_is_fast_on_a_long_route() -> None:
+def test_envelope_of_a_long_route_lies_on_or_above_every_sample() -> None:
+    # 2 km at 1 cm (10 neighbours each side; about 0.07 s, a speed for benchmarks, not a
+    # timed test): the wheel never sinks below a sample it stands over.
     rng = np.random.default_rng(1)
-    s = np.arange(200_000) * 0.01  # 2 km at 1 cm: 10 neighbours each side
+    s = np.arange(200_000) * 0.01
     z = np.cumsum(rng.normal(0.0, 0.003, s.size))
-    start = time.perf_counter()
     y = wheel_envelope_m(s, z, 0.1)
-    assert time.perf_counter() - start < 0.5  # about 0.07 s measured
-    assert np.all(y >= z)
+    assert np.all(y >= z) and np.any(y > z)
 
 
 # --------------------------------------------------------------------------- time along s
