@@ -119,7 +119,10 @@ def build_controller(tile_start: float) -> dict:
     opti.subject_to(s[1:] == s[:-1] + v[:-1] * DT + a * DT**2 / 2)  # exact for constant a
     opti.subject_to(v[1:] == v[:-1] + a * DT)
     opti.subject_to(opti.bounded(0, v[1:], v_max))
-    opti.subject_to(opti.bounded(-vehicle.max_decel_mps2, a, vehicle.max_accel_mps2))
+    # 1e-7 inside the actuator's bounds: IPOPT meets bounds only to ~1e-8, and a plan braking
+    # 1e-8 harder than the actuator can leave the next step's problem infeasible (the state
+    # driven is then not the one planned)
+    opti.subject_to(opti.bounded(-vehicle.max_decel_mps2 * (1 - 1e-7), a, vehicle.max_accel_mps2 * (1 - 1e-7)))
     terrain_k = e_ahead.map(N)(s[:-1].T).T  # the largest e_max each interval can meet (m)
     rows = interval_force_constraints(v[:-1], v[1:], terrain_k, vehicle, model=model)
     opti.subject_to(rows.g <= -BACK_OFF)  # every speed of every interval

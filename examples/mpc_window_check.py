@@ -92,7 +92,7 @@ def worst_window(route_s_m, route_z_m, vehicle, time_s, s_m, speed_mps, accel_mp
     windows = roughness_windows(route_s_m, route_z_m, vehicle.ground_clearance_m, window_m=window_m)
     first, stop = windows.overlapping([s[0]], [s[-1]])
     k = np.arange(first[0], stop[0])
-    enter, leave = windows.start_m[k], windows.start_m[k] + window_m
+    enter, leave = windows.start_m[k], windows.stop_m[k]  # the stretch the windows holding its samples cover
     last = s.size - 2  # the last interval
     # entry: the first time s >= a (node 0 if the vehicle starts inside)
     j_in = np.clip(np.searchsorted(s, enter, side="left") - 1, 0, last)

@@ -266,31 +266,71 @@ def check_turns_and_hills(profile, route, vehicle, accel: np.ndarray, rtol: floa
         assert np.all(power <= vehicle.max_power_w * (1 + rtol)), power.max() / vehicle.max_power_w
 
 
-def window_ri(route, window_m: float, clearance_m: float) -> tuple[np.ndarray, np.ndarray]:
-    """Start (m) and RI of every roughness window [a, a + W] that starts or ends at a
-    sample, shapes (K,): Eq. (1) on the residual of each window's own least-squares line,
-    computed directly (two passes over each window's centred samples, numpy.polyfit's
-    normal equations), independent of the prefix sums the package uses."""
-    s, z = route.s_m, route.z_m
+def window_sets(s: np.ndarray, window_m: float) -> tuple[np.ndarray, ...]:
+    """Every distinct set of samples a roughness window [a, a + W] holds, at any offset a in
+    [s_0, s_end - W] (issue 29), found from the offsets directly: the samples held change
+    only where a or a + W passes a sample, so every set is held at one of the offsets a = a
+    sample or a sample less W, or on an open interval between two consecutive ones (at its
+    midpoint). A sample within 1e-9 W of an end counts as inside.
+
+    Returns
+    -------
+    first, stop : numpy.ndarray of int, shape (K,)
+        Each set is the samples ``first <= j < stop``; sorted, each once.
+    a_lo, a_hi : numpy.ndarray, shape (K,)
+        The least and the largest offset (m) holding it, or the ends of the open interval
+        holding it (the windows there reach those ends' windows in the limit).
+    """
     tol = 1e-9 * max(window_m, 1.0)
-    a_start = s[s + window_m <= s[-1] + tol]
-    a_end = s[s - window_m >= s[0] - tol] - window_m
-    starts = np.unique(np.concatenate([a_start, a_end]))
-    first = np.searchsorted(s, starts - tol, side="left")
-    stop = np.searchsorted(s, starts + window_m + tol, side="right")
-    width = int((stop - first).max())
-    idx = np.minimum(first[:, None] + np.arange(width)[None, :], s.size - 1)
-    inside = np.arange(width)[None, :] < (stop - first)[:, None]
-    count = inside.sum(axis=1)
-    xs = np.where(inside, s[idx] - s[first][:, None], 0.0)
-    zs = np.where(inside, z[idx] - z[first][:, None], 0.0)
-    xm = xs.sum(axis=1) / count
-    zm = zs.sum(axis=1) / count
-    dx = np.where(inside, xs - xm[:, None], 0.0)
-    dz = np.where(inside, zs - zm[:, None], 0.0)
-    slope = (dx * dz).sum(axis=1) / (dx * dx).sum(axis=1)
-    residual = np.where(inside, dz - slope[:, None] * dx, 0.0)
-    return starts, np.sqrt((residual**2).sum(axis=1) / count) / clearance_m
+    width = min(window_m, float(s[-1] - s[0]))  # a route shorter than W is one window
+    points = np.unique(np.clip(np.concatenate([s, s - width]), s[0], s[-1] - width))
+    held_at = np.concatenate([points, 0.5 * (points[:-1] + points[1:])])
+    lo = np.concatenate([points, points[:-1]])
+    hi = np.concatenate([points, points[1:]])
+    first = np.searchsorted(s, held_at - tol, side="left")
+    stop = np.searchsorted(s, held_at + width + tol, side="right")
+    keys, which = np.unique(first * (s.size + 1) + stop, return_inverse=True)
+    a_lo, a_hi = np.full(keys.size, np.inf), np.full(keys.size, -np.inf)
+    np.minimum.at(a_lo, which, lo)
+    np.maximum.at(a_hi, which, hi)
+    return keys // (s.size + 1), keys % (s.size + 1), a_lo, a_hi
+
+
+def direct_ri(s: np.ndarray, z: np.ndarray, first: np.ndarray, stop: np.ndarray, clearance_m: float) -> np.ndarray:
+    """Eq. (1) detrended of the samples ``first <= j < stop`` of each window, shape (K,):
+    two passes over each window's centred samples (numpy.polyfit's normal equations),
+    independent of the prefix sums the package uses; in chunks of windows."""
+    out = np.empty(first.size)
+    for c in range(0, first.size, 8192):
+        f, t = first[c:c + 8192], stop[c:c + 8192]
+        width = int((t - f).max())
+        idx = np.minimum(f[:, None] + np.arange(width)[None, :], s.size - 1)
+        inside = np.arange(width)[None, :] < (t - f)[:, None]
+        count = inside.sum(axis=1)
+        xs = np.where(inside, s[idx] - s[f][:, None], 0.0)
+        zs = np.where(inside, z[idx] - z[f][:, None], 0.0)
+        dx = np.where(inside, xs - (xs.sum(axis=1) / count)[:, None], 0.0)
+        dz = np.where(inside, zs - (zs.sum(axis=1) / count)[:, None], 0.0)
+        slope = (dx * dz).sum(axis=1) / (dx * dx).sum(axis=1)
+        residual = np.where(inside, dz - slope[:, None] * dx, 0.0)
+        out[c:c + 8192] = np.sqrt((residual**2).sum(axis=1) / count) / clearance_m
+    return out
+
+
+def window_ri(route, window_m: float, clearance_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """Start (m) and RI of roughness windows [a, a + W] that stand for every window at any
+    offset (issue 29), shapes (K,), sorted by start: each set of :func:`window_sets` as the
+    two windows at the ends a_lo and a_hi of the offsets holding it, both with its RI
+    (:func:`direct_ri`). Every window holding the set lies in [a_lo, a_hi + W], which those
+    two cover (a_hi - a_lo is below a sample spacing, less than W): the speeds driven in
+    them are the speeds driven in the set's windows, to their limits. So a check over these
+    windows is a check over every offset."""
+    s, z = route.s_m, route.z_m
+    first, stop, a_lo, a_hi = window_sets(s, window_m)
+    ri = direct_ri(s, z, first, stop, clearance_m)
+    starts = np.concatenate([a_lo, a_hi])
+    order = np.argsort(starts, kind="stable")
+    return starts[order], np.concatenate([ri, ri])[order]
 
 
 def window_speeds(s: np.ndarray, v: np.ndarray, start_m: np.ndarray, window_m: float) -> tuple[np.ndarray, np.ndarray]:

@@ -55,11 +55,11 @@ def _sampled_worst(route_name: str, vehicle, t, s, v, a) -> float:
     np.testing.assert_allclose(s[:-1] + v[:-1] * np.diff(t) + a * np.diff(t) ** 2 / 2, s[1:], atol=1e-7)
     limit = force_limit_n(vehicle, model="sbem_tf")
     worst = 0.0
-    near = np.flatnonzero((win.start_m <= pos.max()) & (win.start_m + W >= pos.min()))
-    starts, ri = win.start_m[near], win.ri[near]
+    near = np.flatnonzero((win.start_m <= pos.max()) & (win.stop_m >= pos.min()))
+    starts, stops, ri = win.start_m[near], win.stop_m[near], win.ri[near]
     for i in range(0, pos.size, 200):
         p, sp = pos[i:i + 200, None], speed[i:i + 200, None]
-        inside = (starts[None, :] <= p + 1e-9) & (starts[None, :] + W >= p - 1e-9)
+        inside = (starts[None, :] <= p + 1e-9) & (stops[None, :] >= p - 1e-9)
         assert np.all(inside.any(axis=1))
         forces = force_n(np.broadcast_to(sp, inside.shape), vehicle, ri=np.broadcast_to(ri, inside.shape))
         worst = max(worst, float(np.max(np.where(inside, forces, 0.0))) / limit)

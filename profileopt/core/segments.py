@@ -2,11 +2,13 @@
 
 Segment i covers s_i <= s < s_{i+1} (the last one closed); which samples that is, is
 decided in one place, :mod:`profileopt.core.stations`. Segments are the planning resolution
-only: the roughness is measured over sliding *roughness windows* of a fixed length W
-(:func:`profileopt.terrain.roughness.roughness_windows`), wherever the segments fall, and a
-segment's admissible speeds are those admissible for every window that shares a point
-with it. So each segment carries the least and the largest RI (Eq. 1, detrended) of those
-windows, and the worst-case elevation e_max of Eq. (8) of the largest. A route with an
+only: the roughness is measured over sliding *roughness windows* [a, a + W] of a fixed
+length W at every offset a (:func:`profileopt.terrain.roughness.roughness_windows`: each
+distinct set of samples a window can hold, with the extent over which the windows holding
+it lie), wherever the segments fall, and a segment's admissible speeds are those admissible
+for every window that shares a point with it, i.e. every entry whose extent does. So each
+segment carries the least and the largest RI (Eq. 1, detrended) of those windows, and the
+worst-case elevation e_max of Eq. (8) of the largest. A route with an
 assumed roughness (:attr:`profileopt.core.route.Route.assumed_roughness`) keeps its windows'
 places but every window gets the assumed RI (:func:`route_roughness_windows`).
 """
@@ -52,7 +54,7 @@ class Segments:
         Segment lengths (m).
     ri : numpy.ndarray, shape (N,)
         The largest detrended RI of the roughness windows that share a point with each
-        segment (dimensionless).
+        segment, at any offset (dimensionless).
     ri_min : numpy.ndarray, shape (N,)
         The least RI of those windows (dimensionless).
     e_max_m : numpy.ndarray, shape (N,)
@@ -176,7 +178,8 @@ def segment_route(route: "Route", vehicle: "Vehicle", segment_length_m: float = 
 def route_roughness_windows(route: "Route", vehicle: "Vehicle", *, window_m: float) -> RoughnessWindows:
     """The route's roughness windows (:func:`profileopt.terrain.roughness.roughness_windows`) with the
     RI the planner uses: the measured one, or for a route with an assumed roughness, the
-    assumed RI in every window (the windows' places stay those of the route's samples).
+    assumed RI in every window (the windows' places and extents stay those of the route's
+    samples).
 
     Parameters
     ----------
@@ -225,6 +228,11 @@ def roughness_source(route: "Route", windows: RoughnessWindows) -> dict:
 def segments_at(boundaries_m: np.ndarray, windows: RoughnessWindows, vehicle: "Vehicle", *, starts: np.ndarray,
                 stops: np.ndarray, notes: tuple[str, ...] = ()) -> Segments:
     """The segments between given boundaries, with the RI range of the windows each meets.
+
+    A segment [s_i, s_i+1] meets an entry of ``windows`` when it shares a point with the
+    entry's extent [start_m, stop_m] (:meth:`RoughnessWindows.overlapping`): then some window
+    [a, a + W] holding the entry's samples shares a point with it, or comes arbitrarily
+    close (an open end of the extent), where the speed is the limit of speeds inside.
 
     Parameters
     ----------

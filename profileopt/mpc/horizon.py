@@ -164,7 +164,8 @@ def terrain_envelope(
     """The largest worst-case elevation a stage starting at s can meet, as a smooth
     ``casadi.Function`` of s.
 
-    Every roughness window [a, a + W] of the route (those that start or end at a sample,
+    Every roughness window [a, a + W] of the route (at any offset a: each distinct set of
+    samples with the stretch its windows cover,
     :func:`~profileopt.terrain.roughness.roughness_windows`) has its RI (Eq. 1) and its e_max =
     z RI h (Eq. 8). The requirement at s is the largest e_max of the windows that overlap
     [s, s + reach_m]: every window a vehicle can be inside while it moves from s to at most

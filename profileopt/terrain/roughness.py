@@ -240,39 +240,58 @@ MIN_SAMPLES_PER_WINDOW = 8
 
 @dataclasses.dataclass(frozen=True)
 class RoughnessWindows:
-    """Every roughness window of a profile: its place, its samples and its RI (Eq. 1).
+    """Every roughness window of a profile: the stretch it covers, its samples and its RI (Eq. 1).
 
-    A window of length W is a stretch [a, a + W] of the route. The windows kept are those
-    that start at a sample and those that end at one (so the set is the same driven either
-    way), sorted by start; each holds the samples a <= s <= a + W. Together they are every
-    distinct set of samples that a window sliding continuously along the route covers
-    when it has just taken in or is about to let go of a sample.
+    A roughness window of length W is a stretch [a, a + W] of the route, for every real
+    offset a in [s_0, s_end - W]; it holds the samples a <= s <= a + W (a sample within
+    1e-9 W of an end counts as inside). As a slides along the route, the samples it holds
+    change only where an end passes a sample, so the windows hold finitely many distinct
+    sample sets: those are the entries kept, one per distinct set j..k, sorted by place.
+    They are of three kinds: the set of a window that starts at a sample, that of a window
+    that ends at one, and the set of a window strictly between (a in (s_{j-1}, s_j) and
+    a + W in (s_k, s_{k+1})), which can be none of the first two and have a larger RI
+    (the detrended STD is not monotone under taking a subset of the samples).
+
+    Each entry stands for *all* the windows [a, a + W] that hold its set: the offsets
+    a in (s_{j-1}, s_j] (first sample j) and in [s_k - W, s_{k+1} - W) (last sample k),
+    an interval. Its extent [start_m, stop_m] is the union of those windows' stretches,
+    closed:
+
+        start_m = max(s_{j-1}, s_k - W),   stop_m = min(s_j + W, s_{k+1})
+
+    (s_0 for j = 0, s_end for the last sample), at least W long and at most W plus one
+    sample spacing (the one before its first sample, or after its last). "Every speed driven inside every window holding the set
+    is admissible for its RI" is exactly "every speed driven on [start_m, stop_m] is": the
+    closure adds only limit points, where the speed is the limit of speeds driven inside.
 
     Attributes
     ----------
     window_m : float
         The window length W (m).
-    start_m : numpy.ndarray, shape (K,)
-        Where each window starts (m), non-decreasing; it ends at ``start_m + window_m``.
+    start_m, stop_m : numpy.ndarray, shape (K,)
+        The extent of each entry (m): every window holding its samples lies in
+        [start_m, stop_m], and every point of it lies in one of them or is a limit of such
+        points. Both are non-decreasing; stop_m - start_m >= W (to rounding).
     first_sample, stop_sample : numpy.ndarray of int, shape (K,)
-        The window holds the samples ``first_sample[k] <= j < stop_sample[k]``.
+        The entry's samples are ``first_sample[k] <= j < stop_sample[k]``.
     ri : numpy.ndarray, shape (K,)
-        RI of each window's samples, detrended or not (dimensionless).
+        RI of each entry's samples, detrended or not (dimensionless).
     """
 
     window_m: float
     start_m: np.ndarray
+    stop_m: np.ndarray
     first_sample: np.ndarray
     stop_sample: np.ndarray
     ri: np.ndarray
 
     @property
     def count(self) -> int:
-        """Number of windows K."""
+        """Number of entries K (distinct sample sets)."""
         return int(self.start_m.size)
 
     def overlapping(self, start_m: ArrayLike, stop_m: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
-        """The windows that share a point with each stretch [start, stop] of the route.
+        """The entries whose extent shares a point with each stretch [start, stop] of the route.
 
         Parameters
         ----------
@@ -282,18 +301,27 @@ class RoughnessWindows:
         Returns
         -------
         first, stop : numpy.ndarray of int, shape (N,)
-            Stretch i meets the windows ``first[i] <= k < stop[i]`` (a window that only
-            touches it at one end included: the vehicle is in both at that point).
+            Stretch i meets the entries ``first[i] <= k < stop[i]`` (an extent that only
+            touches it at one end included: the vehicle is in both at that point, or
+            arbitrarily close to it).
         """
         tol = 1e-9 * max(self.window_m, 1.0)
-        lo = np.searchsorted(self.start_m, np.asarray(start_m, dtype=float) - self.window_m - tol, side="left")
+        lo = np.searchsorted(self.stop_m, np.asarray(start_m, dtype=float) - tol, side="left")
         hi = np.searchsorted(self.start_m, np.asarray(stop_m, dtype=float) + tol, side="right")
         return lo, hi
 
 
 def roughness_windows(positions_m: ArrayLike, elevations_m: ArrayLike, clearance_m: float, *, window_m: float,
                       detrend: bool = True, source: str = "the route") -> RoughnessWindows:
-    """The RI (Eq. 1) of every roughness window of a profile (:class:`RoughnessWindows`).
+    """The RI (Eq. 1) of every roughness window of a profile, at any offset (:class:`RoughnessWindows`).
+
+    The windows holding samples j..k are those with a in (s_{j-1}, s_j] and a + W in
+    [s_k, s_{k+1}): for first sample j, the last sample k runs from the last one a window
+    starting just after s_{j-1} holds, K(j - 1), to the last one a window starting at s_j
+    holds, K(j), with K(j) the last sample <= s_j + W. Every such pair is a distinct set;
+    there are about two per sample (one more than the start-anchored window for each
+    sample a + W passes while a moves from s_{j-1} to s_j). Their moments come from prefix
+    sums (:func:`~profileopt.terrain.window_sums.batched_window_moments`).
 
     Parameters
     ----------
@@ -316,8 +344,10 @@ def roughness_windows(positions_m: ArrayLike, elevations_m: ArrayLike, clearance
     Raises
     ------
     InputError
-        A window length that is not a positive number, or a window with fewer than :data:`MIN_SAMPLES_PER_WINDOW` samples (the message says what
-        sample spacing is needed).
+        A window length that is not a positive number, or a window starting or ending at a
+        sample with fewer than :data:`MIN_SAMPLES_PER_WINDOW` samples (the message says what
+        sample spacing is needed). A window between samples holds at most one sample fewer
+        than the one starting at the sample before it; it is not refused for that.
     """
     s = np.asarray(positions_m, dtype=float)
     z = np.asarray(elevations_m, dtype=float)
@@ -328,32 +358,46 @@ def roughness_windows(positions_m: ArrayLike, elevations_m: ArrayLike, clearance
     tol = 1e-9 * max(width, 1.0)
     if width > total:  # a route shorter than the window is one window: the whole route
         width = total
+    _check_window_samples(s, width, tol, source)
+    reach = width + tol  # a sample within tol of a window's end counts as inside
+    m = s.size
+    # K(j): the last sample a window starting at s_j holds; first samples j up to the one
+    # at or after s_end - W (a window cannot start later)
+    j_end = int(np.searchsorted(s, s[-1] - reach, side="left")) + 1
+    last = np.searchsorted(s, s[:j_end] + reach, side="right") - 1
+    k_lo = np.concatenate([last[:1], last[:-1]])  # K(j - 1): a = s_0 only for j = 0
+    per = last - k_lo + 1
+    first = np.repeat(np.arange(j_end), per)
+    offsets = np.cumsum(per) - per
+    k = np.repeat(k_lo - offsets, per) + np.arange(int(per.sum()))
+    # the extent: the union of [a, a + W] over the offsets a holding j..k (the class docstring)
+    start = np.where(first > 0, np.maximum(s[np.maximum(first - 1, 0)], s[k] - width), s[0])
+    stop = np.minimum(np.minimum(s[first] + width, s[np.minimum(k + 1, m - 1)]), s[-1])
+    stop_sample = k + 1
+    var_s, cov, var_z = batched_window_moments(s, z, first, stop_sample, block_m=width * (1 + 1e-6) + 2 * tol)
+    if detrend:
+        ok = var_s > 0
+        var_z = var_z - np.where(ok, cov * cov / np.where(ok, var_s, 1.0), 0.0)
+    return RoughnessWindows(window_m=width, start_m=start, stop_m=stop, first_sample=first,
+                            stop_sample=stop_sample, ri=np.sqrt(np.maximum(var_z, 0.0)) / float(clearance_m))
+
+
+def _check_window_samples(s: np.ndarray, width: float, tol: float, source: str) -> None:
+    """Refuse a profile whose windows starting or ending at a sample hold fewer than
+    :data:`MIN_SAMPLES_PER_WINDOW` samples, naming the first such window (by start)."""
     from_start = np.flatnonzero(s + width <= s[-1] + tol)  # windows [s_j, s_j + W]
     to_end = np.flatnonzero(s - width >= s[0] - tol)  # windows [s_k - W, s_k]
     first = np.concatenate([from_start, np.searchsorted(s, s[to_end] - width - tol, side="left")])
     stop = np.concatenate([np.searchsorted(s, s[from_start] + width + tol, side="right"), to_end + 1])
     start = np.concatenate([s[from_start], s[to_end] - width])
-    order = np.lexsort((stop, first, start))
-    first, stop, start = first[order], stop[order], start[order]
-    # a window that both starts at one sample and ends at another is listed once
-    same = (np.diff(start) <= tol) & (np.diff(first) == 0) & (np.diff(stop) == 0)
-    keep = np.concatenate([[True], ~same])
-    first, stop, start = first[keep], stop[keep], start[keep]
-    count = stop - first
-    thin = np.flatnonzero(count < MIN_SAMPLES_PER_WINDOW)
+    thin = np.flatnonzero(stop - first < MIN_SAMPLES_PER_WINDOW)
     if thin.size:
-        k = thin[0]
+        k = thin[np.lexsort((stop[thin], first[thin], start[thin]))[0]]
         raise InputError(
-            f"{source}: the roughness window from {start[k]:g} to {start[k] + width:g} m holds {count[k]} samples; "
-            f"measuring roughness needs at least {MIN_SAMPLES_PER_WINDOW}: sample the route every "
+            f"{source}: the roughness window from {start[k]:g} to {start[k] + width:g} m holds {stop[k] - first[k]} "
+            f"samples; measuring roughness needs at least {MIN_SAMPLES_PER_WINDOW}: sample the route every "
             f"{width / MIN_SAMPLES_PER_WINDOW:.3g} m or closer, or raise roughness_window_m"
         )
-    var_s, cov, var_z = batched_window_moments(s, z, first, stop, block_m=width * (1 + 1e-6) + 2 * tol)
-    if detrend:
-        ok = var_s > 0
-        var_z = var_z - np.where(ok, cov * cov / np.where(ok, var_s, 1.0), 0.0)
-    return RoughnessWindows(window_m=width, start_m=start, first_sample=first, stop_sample=stop,
-                            ri=np.sqrt(np.maximum(var_z, 0.0)) / float(clearance_m))
 
 
 def range_extremes(values: ArrayLike, first: ArrayLike, stop: ArrayLike) -> tuple[np.ndarray, np.ndarray]:

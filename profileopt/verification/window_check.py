@@ -1,22 +1,29 @@
 """A simulated drive judged by roughness windows (issue 10): in every window, the peak force
 while the vehicle is inside it against that window's own prediction and the limit.
 
-A profile keeps the force limit when, for every roughness window [a, a + W] of the route
-(:func:`profileopt.terrain.roughness.roughness_windows`: every window that starts or ends at a sample,
-W the profile's ``roughness_window_m``), every speed driven while the vehicle is inside the
-window is admissible for the window's RI. :func:`check_windows` puts each window to the
-simulation (:mod:`profileopt.physics.simulate`):
+A profile keeps the force limit when, for every roughness window [a, a + W] of the route (a
+anywhere in [s_0, s_end - W], W the profile's ``roughness_window_m``), every speed driven
+while the vehicle is inside the window is admissible for the window's RI. The windows hold
+finitely many distinct sets of samples; :func:`profileopt.terrain.roughness.roughness_windows`
+lists each set once, with its extent [start, stop]: the union of the stretches of every
+window [a, a + W] that holds it (issue 29: a window starting between two samples can hold a
+set that no window starting or ending at a sample holds). Judging all the windows holding
+one set is judging the speeds and the forces on its extent, so :func:`check_windows` puts each
+entry to the simulation (:mod:`profileopt.physics.simulate`) over its extent:
 
 *predicted*
     The model's largest force over the speeds driven inside the window, at the window's
     own RI: exact, not the envelope over an RI range the planner uses for a segment. v^2 is
-    linear in s inside each segment, so the speeds driven inside [a, a + W] are the interval
-    between the least and the largest of the speeds at a, at a + W and at the segment
-    boundaries between; the force over it is largest at one of its ends or at an interior
+    linear in s inside each segment, so the speeds driven inside [start, stop] are the
+    interval between the least and the largest of the speeds at start, at stop and at the
+    segment boundaries between; the force over it is largest at one of its ends or at an interior
     maximum of the force in speed (only SBEM:TF has one, its resonance peak, whose frequency
     ratio depends on zeta alone: :func:`profileopt.physics.forces.force_peak_ratio`).
 *simulated*
-    The largest |F| of the simulation's rows whose position lies in [a, a + W].
+    The largest |F| of the simulation's rows whose position lies in [start, stop]. The
+    extent is closed; where an end is open (no window holding the set reaches it, only
+    windows arbitrarily close), the rows at that end are judged too: conservative by at
+    most the jump of the force at a kink of the wheel's path exactly there.
 *the datum of the excitation force*
     The transmitted force F_T = m x'' has none. The excitation force F = k y~ + c y~' is
     measured, in each window, from the window's own least-squares line of the base input y
@@ -78,8 +85,9 @@ class WindowCheck:
     ----------
     window_m : float
         Window length W (m).
-    start_m : numpy.ndarray, shape (K,)
-        Where each window starts (m); it ends at ``start_m + window_m``.
+    start_m, stop_m : numpy.ndarray, shape (K,)
+        Each entry's extent (m): every window [a, a + W] holding its samples lies in it
+        (:class:`~profileopt.terrain.roughness.RoughnessWindows`); non-decreasing.
     ri : numpy.ndarray, shape (K,)
         Each window's detrended RI (Eq. 1, dimensionless).
     speed_low_mps, speed_high_mps : numpy.ndarray, shape (K,)
@@ -101,6 +109,7 @@ class WindowCheck:
 
     window_m: float
     start_m: np.ndarray
+    stop_m: np.ndarray
     ri: np.ndarray
     speed_low_mps: np.ndarray
     speed_high_mps: np.ndarray
@@ -167,7 +176,7 @@ class WindowCheck:
             ``start_m``, ``stop_m``, ``ri``, ``speed_low_mps``, ``speed_high_mps``,
             ``peak_s_m``, ``simulated_n``, ``predicted_n``, ``limit_n``, ``ratio``.
         """
-        return {"start_m": float(self.start_m[k]), "stop_m": float(self.start_m[k] + self.window_m),
+        return {"start_m": float(self.start_m[k]), "stop_m": float(self.stop_m[k]),
                 "ri": float(self.ri[k]), "speed_low_mps": float(self.speed_low_mps[k]),
                 "speed_high_mps": float(self.speed_high_mps[k]), "peak_s_m": float(self.peak_s_m[k]),
                 "simulated_n": float(self.simulated_n[k]), "predicted_n": float(self.predicted_n[k]),
@@ -202,7 +211,7 @@ class WindowCheck:
         """
         b = np.asarray(boundaries_m, dtype=float)
         tol = 1e-9 * max(self.window_m, 1.0)
-        lo = np.searchsorted(self.start_m, b[:-1] - self.window_m - tol, side="left")
+        lo = np.searchsorted(self.stop_m, b[:-1] - tol, side="left")
         hi = np.maximum(np.searchsorted(self.start_m, b[1:] + tol, side="right"), lo + 1)
         return _range_argmax(self.simulated_n, lo, np.minimum(hi, self.count))
 
@@ -428,7 +437,7 @@ def check_windows(route: "Route", run: "QuarterCarRun", speed_mps: np.ndarray, v
     """
     spec = get_model(model)
     window_m = windows.window_m
-    start, stop = windows.start_m, windows.start_m + windows.window_m
+    start, stop = windows.start_m, windows.stop_m
     low, high = window_speed_range_mps(run.boundaries_m, speed_mps, start, stop)
     predicted = window_predicted_force_n(spec.key, vehicle, windows.ri, low, high)
     tol = 1e-9 * max(window_m, 1.0)
@@ -450,7 +459,7 @@ def check_windows(route: "Route", run: "QuarterCarRun", speed_mps: np.ndarray, v
         offset = k_spring * mean_y - k_spring * slope * mean_s
         peak, row = _affine_peaks(a_part, b_part, lo, hi, slope, offset)
         datum = "window line" if detrend else "window mean"
-    return WindowCheck(window_m=window_m, start_m=start, ri=windows.ri, speed_low_mps=low,
+    return WindowCheck(window_m=window_m, start_m=start, stop_m=stop, ri=windows.ri, speed_low_mps=low,
                        speed_high_mps=high, predicted_n=predicted, simulated_n=peak, peak_s_m=run.s_m[row],
                        limit_n=spec.limit_n(vehicle), model=spec.key, datum=datum)
 

@@ -68,7 +68,7 @@ def _requirement(x: np.ndarray, s: np.ndarray, z: np.ndarray, reach: float, vehi
     tol = 1e-9
     for i in range(0, x.size, 400):
         block = xc[i:i + 400, None]
-        meets = (win.start_m[None, :] <= block + reach + tol) & (win.start_m[None, :] + W >= block - tol)
+        meets = (win.start_m[None, :] <= block + reach + tol) & (win.stop_m[None, :] >= block - tol)
         assert np.all(meets.any(axis=1))
         out[i:i + 400] = np.max(np.where(meets, e[None, :], -np.inf), axis=1)
     return out
@@ -281,7 +281,7 @@ def _stages_on_the_route(vehicle, s, z, env, ds: float, rng) -> float:
         v0, v1 = rng.uniform(0, top, 2)
         rows = np.asarray(interval_force_constraints(v0, v1, env(s_k), vehicle).g).ravel()
         lo, hi = np.clip(s_k, s[0], s[-1]), np.clip(s_k + ds, s[0], s[-1])
-        met = (win.start_m <= hi) & (win.start_m + W >= lo)
+        met = (win.start_m <= hi) & (win.stop_m >= lo)
         speeds = np.linspace(min(v0, v1), max(v0, v1), 401)
         brute = np.max(force_n(speeds[:, None], vehicle, e_max_m=e[met][None, :])) / vehicle.max_transmitted_force_n - 1
         worst = max(worst, brute - rows.max())

@@ -27,7 +27,7 @@ from profileopt.studies.safety import SafetyStudy
 from profileopt.studies.compare import INFEASIBLE
 from profileopt.terrain.roughness import roughness_windows
 
-from conftest import ROOT
+from conftest import ROOT, window_sets
 
 EXAMPLE = ROOT / "examples" / "safety_study.py"
 
@@ -87,13 +87,13 @@ def test_sbem_tf_keeps_every_window_within_the_limit_in_simulation(example, stud
     curb = [r for r in study.runs if r.model == "sbem_tf" and example.base_name(r.route) == "curb.csv"
             and r.vehicle == "atv-resonant"]
     assert curb and max(r.worst_window_ratio for r in curb) < 0.96
-    # the windows counted are every window of every route: one per sample, less the samples
-    # within W of the end (a window ending at a sample covers the samples of one starting at
-    # a sample), counted here from the samples themselves
+    # the windows counted are every window of every route: each distinct set of samples a
+    # 5 m window holds at any offset (issue 29; on these routes, 5 cm apart, two per sample
+    # with room: the window starting at it and the one starting just after the sample
+    # before), counted here from the offsets themselves (conftest.window_sets)
     expected = 0
     for route in example.route_set():
-        s = route.s_m
-        expected += 2 * int(np.count_nonzero(s <= s[-1] - 5.0 + 1e-9))  # two vehicles
+        expected += 2 * int(window_sets(route.s_m, 5.0)[0].size)  # two vehicles
     assert tf.windows == expected
 
 

@@ -4,12 +4,13 @@ the segments fall (refined segments: tests/planning/test_refine.py)."""
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
 import pytest
 
-from conftest import window_ri
+from conftest import direct_ri, window_sets
 from profileopt.errors import InputError
 from profileopt.physics.forces import (envelope_force_n, force_n, sbem_tf_envelope_force_n, sbem_tf_force_n,
                                transmissibility_peak_ratio)
@@ -36,22 +37,105 @@ def test_window_ri_matches_polyfit_on_a_100_km_route() -> None:
         # the reference: numpy.polyfit's line through the window, on its own raw coordinates
         residual = zs - np.polyval(np.polyfit(xs, zs, 1), xs)
         assert windows.ri[k] == pytest.approx(np.std(residual) / 0.1, rel=1e-8)
-        assert xs[0] >= windows.start_m[k] - 1e-9 and xs[-1] <= windows.start_m[k] + 5.0 + 1e-9
+        assert xs[0] >= windows.start_m[k] - 1e-9 and xs[-1] <= windows.stop_m[k] + 1e-9
 
 
-def test_windows_start_and_end_at_every_sample_and_match_a_direct_computation() -> None:
+def test_windows_at_every_offset_match_a_direct_computation() -> None:
     s = np.cumsum(np.random.default_rng(2).uniform(0.02, 0.08, 3000))  # uneven spacing
     z = 0.05 * np.sin(1.3 * s) + 0.01 * np.cos(7.0 * s)
-    route = Route(s, z, source="uneven")
     windows = roughness_windows(s, z, 0.1, window_m=3.0)
-    start_ref, ri_ref = window_ri(route, 3.0, 0.1)  # conftest: a padded two-pass computation
-    # every window of the reference is in the package's set (same start within 1e-9 m)
-    k = np.searchsorted(windows.start_m, start_ref - 1e-9)
-    assert np.all(np.abs(windows.start_m[np.minimum(k, windows.count - 1)] - start_ref) <= 1e-9)
-    np.testing.assert_allclose(windows.ri[k], ri_ref, rtol=1e-9, atol=1e-12)
-    # windows start at every sample that leaves room, and end at every sample after W
-    assert set(np.round(s[s + 3.0 <= s[-1]], 9)) <= set(np.round(windows.start_m, 9))
-    assert set(np.round(s[s - 3.0 >= s[0]], 9)) <= set(np.round(windows.start_m + 3.0, 9))
+    # conftest: the sets found from the offsets directly, their RI by two passes per window
+    first, stop, a_lo, a_hi = window_sets(s, 3.0)
+    np.testing.assert_array_equal(windows.first_sample, first)
+    np.testing.assert_array_equal(windows.stop_sample, stop)
+    np.testing.assert_allclose(windows.ri, direct_ri(s, z, first, stop, 0.1), rtol=1e-9, atol=1e-12)
+    # the extent is the hull of the windows [a, a + W] holding the set
+    np.testing.assert_allclose(windows.start_m, a_lo, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(windows.stop_m, a_hi + 3.0, rtol=0, atol=1e-9)
+    # among them, the windows starting at every sample that leaves room and ending at every
+    # sample after W
+    held = set(zip(first.tolist(), stop.tolist()))
+    for j in np.flatnonzero(s + 3.0 <= s[-1]):
+        assert (j, int(np.searchsorted(s, s[j] + 3.0 + 1e-9, side="right"))) in held
+    for k in np.flatnonzero(s - 3.0 >= s[0]):
+        assert (int(np.searchsorted(s, s[k] - 3.0 - 1e-9, side="left")), k + 1) in held
+
+
+def _offset_sets(s: np.ndarray, window_m: float) -> dict[tuple[int, int], tuple[float, float]]:
+    """Brute force over offsets: every sample set j..k-1 a window [a, a + W] holds, for a
+    at every breakpoint (a sample, or a sample less W) in [s_0, s_end - W] and between
+    each two consecutive ones (the set is constant on each open interval), with the hull of
+    the stretches [a, a + W] holding it."""
+    points = np.concatenate([s, s - window_m, [s[0], s[-1] - window_m]])
+    points = np.unique(points[(points >= s[0]) & (points <= s[-1] - window_m)])
+    sets: dict[tuple[int, int], tuple[float, float]] = {}
+    for a, lo, hi in [(p, p, p) for p in points] + [(0.5 * (p + q), p, q) for p, q in itertools.pairwise(points)]:
+        inside = np.flatnonzero((s >= a) & (s <= a + window_m))
+        key = (int(inside[0]), int(inside[-1]) + 1)
+        old = sets.get(key, (math.inf, -math.inf))
+        sets[key] = (min(old[0], lo), max(old[1], hi + window_m))
+    return sets
+
+
+@pytest.mark.parametrize("spacing", ["uniform", "uneven", "coarse"])
+def test_windows_at_every_offset_are_every_distinct_sample_set_with_its_extent(spacing) -> None:
+    # Issue 29: a window starting between two samples holds a set no window starting or
+    # ending at a sample holds. The entries are every set a window [a, a + W] holds for
+    # some real a, each once, with the hull of those windows as its extent; the reference
+    # enumerates the offsets directly (_offset_sets) and fits each set with numpy.polyfit.
+    rng = np.random.default_rng(11)
+    if spacing == "uniform":  # W a whole number of spacings (0.5 m and 4 m: exact in binary)
+        s, width = 0.5 * np.arange(60), 4.0
+    elif spacing == "uneven":
+        s, width = np.cumsum(rng.uniform(0.1, 0.5, 80)), 4.3
+    else:  # spacing jumps: windows whose ends pass several samples while a passes one
+        s, width = np.cumsum(np.repeat([0.05, 0.6, 0.1, 0.45], 20)), 5.0
+    z = 0.02 * rng.standard_normal(s.size) + 0.03 * s
+    windows = roughness_windows(s, z, 0.1, window_m=width)
+    ref = _offset_sets(s, width)
+    got = {(int(f), int(t)): (float(a), float(b))
+           for f, t, a, b in zip(windows.first_sample, windows.stop_sample, windows.start_m, windows.stop_m)}
+    assert len(got) == windows.count and set(got) == set(ref)
+    for key, (lo, hi) in ref.items():
+        assert got[key] == pytest.approx((lo, hi), abs=1e-12)
+        xs, zs = s[key[0]:key[1]], z[key[0]:key[1]]
+        ri = np.std(zs - np.polyval(np.polyfit(xs, zs, 1), xs)) / 0.1
+        assert windows.ri[list(got).index(key)] == pytest.approx(ri, rel=1e-9)
+    # sorted for the searches of overlapping(): both ends non-decreasing
+    assert np.all(np.diff(windows.start_m) >= 0) and np.all(np.diff(windows.stop_m) >= 0)
+    # about two sets per sample: one more than the windows starting at samples
+    assert windows.count > 1.5 * np.count_nonzero(s <= s[-1] - width)
+    # overlapping(): the entries whose extent shares a point with a stretch, against a loop
+    lo, hi = np.sort(rng.uniform(s[0] - 1.0, s[-1] + 1.0, (2, 200)), axis=0)
+    first, stop = windows.overlapping(lo, hi)
+    for i in range(lo.size):
+        meets = np.flatnonzero((windows.start_m <= hi[i]) & (windows.stop_m >= lo[i]))
+        assert meets.tolist() == list(range(first[i], stop[i]))
+
+
+def test_a_window_between_samples_can_be_rougher_than_every_window_at_a_sample() -> None:
+    # Flat ground at 0, then 20 samples zigzagging +-1 cm, then flat again, every 0.25 m,
+    # W = 5 m = 20 spacings. A window starting strictly between the sample before the zigzag
+    # and its first holds exactly the zigzag; every window starting or ending at a sample
+    # holds a flat sample as well, which lies near the zigzag's line (residual ~0), so its
+    # population variance is the zigzag's sum of squares over one more sample: by hand,
+    # RI_at_a_sample <= sqrt(20 / 21) RI_between (plus the flat sample's small residual).
+    s = 0.25 * np.arange(81)
+    z = np.where((s >= 10.0) & (s < 15.0), 0.01 * (-1.0) ** np.arange(81), 0.0)
+    windows = roughness_windows(s, z, 0.1, window_m=5.0)
+    zigzag = (40, 60)  # samples 40..59: 10 m to 14.75 m
+    k = list(zip(windows.first_sample.tolist(), windows.stop_sample.tolist())).index(zigzag)
+    xs, zs = s[40:60], z[40:60]
+    ri_between = np.std(zs - np.polyval(np.polyfit(xs, zs, 1), xs)) / 0.1
+    assert windows.ri[k] == pytest.approx(ri_between, rel=1e-9) and windows.ri.max() == windows.ri[k]
+    assert windows.start_m[k] == 9.75 and windows.stop_m[k] == 15.0  # a in (9.75, 10)
+    # the windows at samples, directly: [s_j, s_j + W] and [s_j - W, s_j]
+    at_samples = []
+    for a in np.concatenate([s[s <= 15.0], s[s >= 5.0] - 5.0]):
+        inside = (s >= a - 1e-9) & (s <= a + 5.0 + 1e-9)
+        at_samples.append(np.std(z[inside] - np.polyval(np.polyfit(s[inside], z[inside], 1), s[inside])) / 0.1)
+    assert max(at_samples) < 0.99 * ri_between
+    assert max(at_samples) == pytest.approx(math.sqrt(20 / 21) * ri_between, rel=0.01)
 
 
 def test_range_extremes_against_a_loop() -> None:

@@ -212,17 +212,21 @@ def test_verify_command_end_to_end(tmp_path: Path) -> None:
     assert summary["model"] == "prev_bem" and summary["segments"] == 101
     assert summary["over_count"] == sum(int(r["over_limit"]) for r in rows)
     assert "timings_s" not in summary  # the printed output is the same on every run
-    # the windows: 9996 of them (every 5 m window that starts or ends at one of the 10096
-    # samples, 5 cm apart), the worst in the text, in the JSON and in the CSV (the worst
-    # window meeting a segment, so the largest window_ratio of the CSV is the worst window)
+    # the windows: 19991 of them (every set of samples a 5 m window holds at any offset: of
+    # the 10096 samples, 5 cm apart, the 9996 with room start one each, and each but the first
+    # also one starting just after the sample before it), the worst in the text, in the JSON
+    # and in the CSV (the worst window meeting a segment, so the largest window_ratio of the
+    # CSV is the worst window)
     windows = summary["windows"]
-    assert windows["windows"] == 9996 and windows["window_m"] == 5.0 and windows["datum"] == "window line"
+    assert windows["windows"] == 19991 and windows["window_m"] == 5.0 and windows["datum"] == "window line"
     worst = windows["worst"]
     assert worst["ratio"] == pytest.approx(worst["simulated_n"] / 5000.0)
-    assert worst["start_m"] <= worst["peak_s_m"] <= worst["stop_m"] == pytest.approx(worst["start_m"] + 5.0)
+    # (a window's extent: the stretch every window holding its samples covers, W to W + 5 cm)
+    assert worst["start_m"] <= worst["peak_s_m"] <= worst["stop_m"] <= worst["start_m"] + 5.05 + 1e-9
+    assert worst["stop_m"] >= worst["start_m"] + 5.0 - 1e-9
     assert max(float(r["window_ratio"]) for r in rows) == pytest.approx(worst["ratio"], rel=1e-9)
     assert windows["over_count"] > 0 and summary["exit_status"] == 4
-    assert f"{windows['over_count']} of 9996 roughness windows" in done.stdout.splitlines()[1]
+    assert f"{windows['over_count']} of 19991 roughness windows" in done.stdout.splitlines()[1]
 
 
 @pytest.mark.slow

@@ -6,8 +6,11 @@ loops, from the definitions and not from ``profileopt.verification.window_check`
 and RI (Eq. 1 with ``numpy.polyfit``), the speeds driven inside it from the kinematics of
 constant acceleration (v^2 = v_i^2 + 2 a_i (s - s_i)), the model's largest force over them
 (a dense grid refined by ``scipy.optimize.minimize_scalar``), and the largest simulated |F|
-over the simulation's rows inside [a, a + W], the excitation measured from the window's own
-least-squares line (``numpy.polyfit`` of the base input at the window's samples).
+over the simulation's rows inside it, the excitation measured from the window's own
+least-squares line (``numpy.polyfit`` of the base input at the window's samples). A window
+[a, a + W] may start anywhere (issue 29): each entry stands for every window holding its
+samples, and is judged over their union, its extent [start, stop]; the offset-grid test
+below enumerates the offsets a themselves.
 
 The kerbs are the issue's first bullet: a 0.05 m kerb exactly on a segment boundary was
 invisible to the per-segment RI (both segments detrend to flat), was planned at full speed
@@ -99,14 +102,16 @@ def brute_force(route: Route, profile, vehicle, result, detrend: bool = True) ->
     # c y' = F - k (y - L_seg(s)) + c m_seg v: y' of the rows, from the simulator's own F
     dy = (run.excitation_n - k * (run.base_m - lv - m_seg * (run.s_m - s0))) / c + m_seg * run.speed_mps
     out = {name: np.empty(win.count) for name in ("ri", "low", "high", "predicted", "simulated")}
-    for j, a in enumerate(win.start_m):
+    for j, (lo, hi) in enumerate(zip(win.start_m, win.stop_m)):
+        # the entry's windows [a, a + W] start anywhere in [lo, hi - W]; one in the middle
+        a = 0.5 * (lo + hi - WINDOW_M)
         inside = (s >= a - 1e-9) & (s <= a + WINDOW_M + 1e-9)
         xs, zs = s[inside], z[inside]
         residual = zs - np.polyval(np.polyfit(xs - xs[0], zs, 1), xs - xs[0])
         out["ri"][j] = np.std(residual) / h
-        out["low"][j], out["high"][j] = speeds_inside(profile.s_m, profile.speed_mps, a, a + WINDOW_M)
+        out["low"][j], out["high"][j] = speeds_inside(profile.s_m, profile.speed_mps, lo, hi)
         out["predicted"][j] = largest_force(model, vehicle, out["ri"][j], out["low"][j], out["high"][j])
-        rows = (run.s_m >= a - 1e-9) & (run.s_m <= a + WINDOW_M + 1e-9)
+        rows = (run.s_m >= lo - 1e-9) & (run.s_m <= hi + 1e-9)
         if result.quantity == "transmitted":
             out["simulated"][j] = np.max(np.abs(run.transmitted_n[rows]))
         else:
@@ -131,7 +136,7 @@ def test_every_window_matches_a_brute_force_computation(route_name, vehicle_name
     result = verify(route, profile, vehicle, detrend=detrend)
     win = result.windows
     ref = brute_force(route, profile, vehicle, result, detrend)
-    # the window set itself is roughness_windows' (every window starting or ending at a sample)
+    # the window set itself is roughness_windows' (every sample set a window can hold)
     assert win.count == roughness_windows(route.s_m, route.z_m, vehicle.ground_clearance_m, window_m=5.0).count
     # (atol: a flat window at the kerb's height has RI 0; from running sums 1.5e-8)
     np.testing.assert_allclose(win.ri, ref["ri"], rtol=1e-6, atol=1e-7)
@@ -233,3 +238,43 @@ def test_the_excitation_datum_is_the_windows_line_so_a_grade_adds_nothing() -> N
     raw = verify(graded, profile, ATV, detrend=False)
     assert raw.windows.datum == "window mean"
     assert np.min(raw.windows.simulated_n) > 0.05 * ATV.spring_n_per_m * WINDOW_M / 2
+
+
+def test_every_window_at_any_offset_is_judged() -> None:
+    # Issue 29: windows starting between samples hold sample sets of their own. On a short
+    # route with a zigzag (a window starting just before it holds exactly the zigzag, and is
+    # rougher than every window starting or ending at a sample), every offset a on a fine
+    # grid: its samples, RI (numpy.polyfit), the speeds driven in [a, a + W], the model's
+    # largest force over them (a grid of speeds: never above the true largest) and the
+    # simulated peak |F_T| over the rows in [a, a + W]. Each must be an entry of the check,
+    # whose prediction and simulated peak are at least the offset's.
+    s = 0.25 * np.arange(121)
+    z = np.where((s >= 12.0) & (s < 17.0), 0.03 * (-1.0) ** np.arange(s.size), 0.0)
+    route = Route(s, z, source="zigzag")
+    profile = plan(route, ATV, model="sbem_tf")
+    result = verify(route, profile, ATV)
+    win, run = result.windows, result.run
+    windows = roughness_windows(s, z, ATV.ground_clearance_m, window_m=WINDOW_M)
+    entry = {(f, t): k for k, (f, t) in enumerate(zip(windows.first_sample.tolist(), windows.stop_sample.tolist()))}
+    fine = (s[:-1, None] + 0.25 * (np.arange(1, 8) / 8)[None, :]).ravel()
+    offsets = np.unique(np.concatenate([s, s - WINDOW_M, fine]))
+    offsets = offsets[(offsets >= s[0]) & (offsets <= s[-1] - WINDOW_M)]
+    seen, ri_at = set(), {True: 0.0, False: 0.0}  # the largest RI of windows at a sample, and between
+    for a in offsets:
+        inside = np.flatnonzero((s >= a) & (s <= a + WINDOW_M))
+        k = entry[(int(inside[0]), int(inside[-1]) + 1)]  # a KeyError is a window not judged
+        seen.add(k)
+        xs, zs = s[inside], z[inside]
+        ri = np.std(zs - np.polyval(np.polyfit(xs, zs, 1), xs)) / ATV.ground_clearance_m
+        assert win.ri[k] == pytest.approx(ri, rel=1e-9, abs=1e-9)
+        low, high = speeds_inside(profile.s_m, profile.speed_mps, a, a + WINDOW_M)
+        assert win.speed_low_mps[k] <= low + 1e-9 and high <= win.speed_high_mps[k] + 1e-9
+        speeds = np.linspace(low, high, 201)
+        predicted = float(np.max(force_n(speeds, ATV, ri=np.full(speeds.size, ri), model="sbem_tf")))
+        assert predicted <= win.predicted_n[k] * (1 + 1e-9) and predicted <= win.limit_n * (1 + 1e-6)
+        rows = (run.s_m >= a) & (run.s_m <= a + WINDOW_M)
+        assert np.max(np.abs(run.transmitted_n[rows])) <= win.simulated_n[k]
+        at_sample = bool(np.isin(a, s) or np.isin(a + WINDOW_M, s))
+        ri_at[at_sample] = max(ri_at[at_sample], ri)
+    assert seen == set(range(win.count))  # and every entry is some offset's window
+    assert ri_at[False] > 1.02 * ri_at[True]  # the route is what it is built for
