@@ -7,7 +7,7 @@ them from here, so ``profileopt --help`` needs none of the numerical packages.
 from __future__ import annotations
 
 __all__ = ["MODEL_KEYS", "DEFAULT_MODEL", "DEFAULT_SMOOTHING", "DEFAULT_SEGMENT_LENGTH_M", "DEFAULT_REFINE", "DEFAULT_ROUGHNESS_WINDOW_M",
-           "DEFAULT_PATH_TOLERANCE_M", "PLAN_BANDS", "PLAN_METHODS", "MAX_C_BYTES", "DEFAULT_TRACK_SPACING_M",
+           "DEFAULT_PATH_TOLERANCE_M", "MIN_PATH_TOLERANCE_M", "CRAWL_SPEED_MPS", "PLAN_BANDS", "PLAN_METHODS", "MAX_C_BYTES", "DEFAULT_TRACK_SPACING_M",
            "DEFAULT_CORRIDOR_M", "DEFAULT_MAX_GAP_M", "MIN_POINTS_PER_BIN", "MAX_ROUGHNESS_SPACING_M",
            "MAX_ROUGHNESS_CORRIDOR_M", "LIMIT_RTOL"]
 
@@ -29,13 +29,25 @@ DEFAULT_REFINE = True
 #: is judged by its own RI (docs/paper-notes.md, "Roughness windows"); 5 m, the segment
 #: length that the RI was measured over before windows.
 DEFAULT_ROUGHNESS_WINDOW_M = 5.0
-#: How far (m) the smoothed path whose curvature limits the speed in turns may stray from a
-#: route's x, y samples (:func:`profileopt.terrain.geometry.smooth_path`): wider than the noise of a
-#: path surveyed by RTK-GNSS or LiDAR (1 cm standard deviation, about 4 cm at most over
-#: thousands of samples), well inside the path-tracking error of an off-road vehicle
-#: (decimetres), so the smoothed path is one the vehicle can follow. A consumer GPS track
-#: (metres of noise) needs a tolerance of its own noise (docs: guide/turns-and-hills.md).
-DEFAULT_PATH_TOLERANCE_M = 0.1
+#: The path tolerance when none is given: ``None``, estimate it from the route's own x, y
+#: (:func:`profileopt.terrain.geometry.estimate_path_noise`): the horizontal noise of its points,
+#: times the largest a noise of that spread reaches over so many points, sqrt(2 ln n) (the
+#: universal threshold), never below :data:`MIN_PATH_TOLERANCE_M`. ``--path-tolerance M``
+#: gives it instead (docs: guide/turns-and-hills.md).
+DEFAULT_PATH_TOLERANCE_M = None
+#: The smallest path tolerance (m) an estimate gives, and the sharpest turn the path is read
+#: to make (radius, m): how far the smoothed path whose curvature limits the speed in turns
+#: may stray from a route's x, y samples (:func:`profileopt.terrain.geometry.smooth_path`) at
+#: least. Wider than the noise of a path surveyed by RTK-GNSS or LiDAR (1 cm standard
+#: deviation, about 4 cm at most over thousands of samples), well inside the path-tracking
+#: error of an off-road vehicle (decimetres), so the smoothed path is one the vehicle can
+#: follow. A consumer GPS track (metres of noise) gets an estimate of its own noise.
+MIN_PATH_TOLERANCE_M = 0.1
+#: Speed (m/s) at which a turn sharper than the vehicle's ``min_turn_radius_m`` is planned
+#: (:func:`profileopt.physics.motion.turn_speed_cap_mps`): a slow walk, at which the vehicle
+#: is taken through a turn it cannot make in one sweep (a reversal, a hairpin tighter than
+#: its turning circle) in several moves, with a note naming where.
+CRAWL_SPEED_MPS = 1.0
 #: Spacing (m) of the route samples taken along a track over a terrain map
 #: (:func:`profileopt.terrain.ground_track.route_from_track`): half the 0.1 m wheel radius of the
 #: bundled vehicles. Eq. (2) saturates a step's width at the wheel radius r, so the force

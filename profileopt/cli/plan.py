@@ -20,6 +20,7 @@ from ..defaults import (
 )
 from ..errors import InputError
 from .paths import vehicle_input
+from .route import PATH_TOLERANCE_HELP, smoothed_track_route
 from .track import (
     add_track_arguments,
     assumed_roughness,
@@ -27,7 +28,6 @@ from .track import (
     number_argument,
     refuse_track_options,
     track_inputs,
-    track_route,
 )
 
 
@@ -50,9 +50,7 @@ def arguments(parser: argparse.ArgumentParser) -> None:
                         help="roughness window in m: every stretch this long, wherever it starts, is driven at "
                              f"speeds admissible for its own RI (default: {DEFAULT_ROUGHNESS_WINDOW_M:g})")
     parser.add_argument("--path-tolerance", type=number_argument, default=DEFAULT_PATH_TOLERANCE_M, metavar="M",
-                        help="how far in m the smoothed path, whose curvature limits the speed in turns, may stray "
-                             "from an x,y,z route's points; give the track's noise, a few m for a consumer GPS "
-                             f"(default: {DEFAULT_PATH_TOLERANCE_M:g})")
+                        help=PATH_TOLERANCE_HELP)
     parser.add_argument("--model", default=DEFAULT_MODEL, choices=list(MODEL_KEYS),
                         help="force model (default: sbem_tf)")
     parser.add_argument("--smoothing", type=number_argument, default=DEFAULT_SMOOTHING, metavar="W",
@@ -92,10 +90,13 @@ def run(args: argparse.Namespace) -> int:
     vehicle = load_vehicle(args.vehicle)
     from ..planning import plan  # the numerical packages: imported only when planning
 
-    made = None
+    made = track = None
+    tolerance = args.path_tolerance
     if is_track(args.route, args):
-        made = track_route(args.route, args, "profileopt plan")
+        made, track = smoothed_track_route(args.route, args, "profileopt plan")
         route = made.route
+        if track.smoothing is not None and track.smoothing.smoothed:
+            tolerance = None  # the points are on the path smoothed within it; what is left is estimated
     else:
         refuse_track_options(args.route, args)
         route = _route_file(args)
@@ -106,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"profileopt plan: note: {note}", file=sys.stderr)
     profile = plan(
         route, vehicle, segment_length_m=args.segment_length, roughness_window_m=args.roughness_window,
-        path_tolerance_m=args.path_tolerance, model=args.model, smoothing=args.smoothing,
+        path_tolerance_m=tolerance, model=args.model, smoothing=args.smoothing,
         max_jerk_mps3=args.max_jerk, v0_mps=args.v0, vend_mps=args.vend, method=args.method,
         band=args.band, refine=args.refine,
     )
@@ -122,9 +123,14 @@ def run(args: argparse.Namespace) -> int:
             from ..viz.maps import plot_plan_map
 
             plot_plan_map(profile, made if made is not None else _plain_map(route), args.map)
-    for note in profile.notes:
-        print(f"profileopt plan: note: {note}", file=sys.stderr)
     summary = profile.summary()
+    for note in summary["notes"]:  # the plan's, then each turn sharper than the turning circle
+        print(f"profileopt plan: note: {note}", file=sys.stderr)
+    smoothing = track.smoothing if track is not None else None
+    if smoothing is not None:
+        summary["track"] = {"smoothed": smoothing.smoothed, "tolerance_m": smoothing.tolerance_m,
+                            "source": smoothing.tolerance_source, "noise_m": smoothing.noise.noise_m,
+                            "points": smoothing.noise.points, "moved_max_m": smoothing.moved_max_m}
     out = sys.stderr if outputs.uses_stdout else sys.stdout  # standard output holds the profile
     if args.json:
         print(json.dumps(summary, indent=2), file=out)
@@ -187,6 +193,7 @@ def _human(summary: dict, args: argparse.Namespace) -> str:
           if summary.get("roughness", {}).get("source") == "assumed" else []),
         *(f"  {name:<12} {_ratio(margins[key])}" for key, name in (("lateral", "lateral"), ("friction", "friction"))
           if key in margins),
+        *([_path_line(summary)] if "path" in summary or "track" in summary else []),
         f"  acceleration {_ratio(margins['accel'])}",
         f"  deceleration {_ratio(margins['decel'])}",
         *([f"  power        {_ratio(margins['power'])}"] if "power" in margins else []),
@@ -207,6 +214,27 @@ def _human(summary: dict, args: argparse.Namespace) -> str:
     return "\n".join(lines)
 
 
+
+
+def _path_line(summary: dict) -> str:
+    """The path tolerance the turns were found with, and why."""
+    parts = []
+    track = summary.get("track")
+    if track is not None:
+        why = "given" if track["source"] == "given" else (f"estimated: GPS noise {track['noise_m']:.3g} m over "
+                                                           f"{track['points']} points, times sqrt(2 ln n)")
+        parts.append(f"the track's points moved onto the smoothest path within {track['tolerance_m']:.3g} m ({why})"
+                     if track["smoothed"] else f"the track's points kept (noise {track['noise_m']:.3g} m estimated)")
+    path = summary.get("path")
+    if path is not None:
+        why = "given" if path["source"] == "given" else f"estimated from the x,y: noise {path['noise_m']:.3g} m"
+        text = f"tolerance {path['tolerance_m']:.3g} m ({why})"
+        if path.get("sharp_turns"):
+            circle = path.get("min_turn_radius_m")
+            text += (f", {path['sharp_turns']} turn(s) sharper than min_turn_radius_m {circle:g} m, crawled"
+                     if circle is not None else f", {path['sharp_turns']} reversal(s)")
+        parts.append(text)
+    return "  path         " + "; ".join(parts)
 
 
 def _label(model: str) -> str:

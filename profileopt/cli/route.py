@@ -5,9 +5,19 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .. import __version__
-from .track import add_track_arguments, track_inputs, track_route
+from .track import add_track_arguments, assumed_roughness, number_argument, track_inputs
+
+if TYPE_CHECKING:
+    from ..io.tracks import Track
+    from ..terrain.ground_track import TrackRoute
+
+#: ``--path-tolerance``'s help, shared with ``profileopt plan``.
+PATH_TOLERANCE_HELP = ("how far in m the smoothed path, whose curvature limits the speed in turns, may stray from "
+                       "a track's points (which are moved onto it) or an x,y,z route's (default: estimated from "
+                       "the points' own scatter, their noise times sqrt(2 ln n), at least 0.1)")
 
 
 def arguments(parser: argparse.ArgumentParser) -> None:
@@ -15,6 +25,7 @@ def arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--output", required=True, metavar="CSV",
                         help="write the route CSV (x_m,y_m,z_m) here ('-': standard output)")
     parser.add_argument("--plot", metavar="PNG", help="draw the track over the terrain and the route's elevation")
+    parser.add_argument("--path-tolerance", type=number_argument, default=None, metavar="M", help=PATH_TOLERANCE_HELP)
     add_track_arguments(parser)
 
 
@@ -25,12 +36,13 @@ def run(args: argparse.Namespace) -> int:
     )
 
     outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot)], inputs=[args.track, *track_inputs(args)])
-    result = track_route(args.track, args, "profileopt route")
+    result, track = smoothed_track_route(args.track, args, "profileopt route")
     from ..io.routes import write_route
 
     name = Path(args.output).name if args.output != STDOUT else "route"
     made = f"profileopt {__version__} route {args.track}" + (f" --terrain {args.terrain}" if args.terrain else "")
     comments = [f"{name}: the ground under the wheels along a track, made by `{made}`", *result.comments,
+                *([f"x, y: {track.smoothing.note(Path(args.track).name)}"] if track.smoothing is not None else []),
                 f"options: spacing {args.spacing:g} m, corridor {args.corridor:g} m, max gap {args.max_gap:g} m"]
     with outputs:
         write_route(result.route, args.output, comments=comments)
@@ -42,6 +54,39 @@ def run(args: argparse.Namespace) -> int:
     out = sys.stderr if outputs.uses_stdout else sys.stdout
     print(_human(result, args), file=out)
     return 0
+
+
+def smoothed_track_route(track_path: str, args: argparse.Namespace, prog: str) -> tuple[TrackRoute, Track]:
+    """:func:`profileopt.cli.track.track_route` with the track's points moved onto the smoothest
+    path within ``--path-tolerance`` of them (or within the noise estimated from them:
+    :func:`profileopt.io.read_track`); also returns the track read. Notes go to stderr.
+
+    Parameters
+    ----------
+    track_path : str
+        The track file (GPX, GeoJSON or CSV of x,y).
+    args : argparse.Namespace
+        The options of :func:`profileopt.cli.track.add_track_arguments` and ``path_tolerance``.
+    prog : str
+        The command's name for the notes ("profileopt route").
+
+    Returns
+    -------
+    tuple of (TrackRoute, Track)
+    """
+    from ..io.terrain_maps import read_terrain
+    from ..io.tracks import read_track
+    from ..terrain.ground_track import route_from_track
+    from .messages import flags_for_parameters
+
+    terrain = read_terrain(args.terrain, terrain_crs=args.terrain_crs) if args.terrain is not None else None
+    track = read_track(track_path, track_crs=args.track_crs, track_index=args.track_index,
+                       path_tolerance_m=args.path_tolerance)
+    result = route_from_track(track, terrain, spacing_m=args.spacing, corridor_m=args.corridor,
+                              max_gap_m=args.max_gap, assumed_roughness=assumed_roughness(args))
+    for note in (*track.notes, *getattr(terrain, "notes", ()), *result.notes):
+        print(f"{prog}: note: {flags_for_parameters(note)}", file=sys.stderr)
+    return result, track
 
 
 def _human(result: object, args: argparse.Namespace) -> str:

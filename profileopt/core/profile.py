@@ -17,6 +17,7 @@ import numpy as np
 from ..defaults import DEFAULT_MODEL
 from .binding import binding_shares
 from .kinematics import boundary_jerk_mps3
+from .path import turn_notes
 
 if TYPE_CHECKING:
     from .path import SegmentPath
@@ -82,7 +83,9 @@ class Profile:
         both boundary speeds of segment i lie in [band_lower_mps[i], band_upper_mps[i]].
     settings : dict
         What the profile was planned with: vehicle, model, segment_length_m, smoothing,
-        max_accel_mps2, max_decel_mps2, max_jerk_mps3, v0_mps, vend_mps, method, band.
+        max_accel_mps2, max_decel_mps2, max_jerk_mps3, v0_mps, vend_mps, method, band;
+        path_tolerance_m and, for a route with x, y, path_tolerance_source (``estimated`` or
+        ``given``) and path_noise_m (:attr:`profileopt.terrain.geometry.RouteGeometry.settings`).
         Written into the CSV's first (comment) line and read back by
         :func:`profileopt.io.read_profile`.
     limits : tuple of Limit
@@ -205,9 +208,12 @@ class Profile:
             1, from the ``binding`` column); ``limits_off`` (the limits of turns and hills
             the vehicle file leaves off); ``roughness`` (``source``: ``"measured"`` or
             ``"assumed"``, then its ``label``, the ``ri`` every window got and ``window_m``;
-            for a profile read from a file, the label its settings record); ``solver``
-            (status, success, iterations, pieces, time_s); ``notes``. Plain Python numbers
-            only.
+            for a profile read from a file, the label its settings record); for a route with
+            x, y, ``path`` (:meth:`path_summary`: the path tolerance, where it came from, the
+            noise estimated, the turns sharper than the turning circle); ``solver``
+            (status, success, iterations, pieces, time_s); ``notes`` (the plan's, then the
+            path's: each turn sharper than the vehicle's turning circle, each reversal).
+            Plain Python numbers only.
         """
         n = self.s_m.size - 1
         v = self.speed_mps
@@ -235,6 +241,12 @@ class Profile:
         margins: dict[str, dict] = {}
         for limit in self.limits:
             margins.update(limit.margins(self))
+        path = self.path_summary()
+        path_notes = []
+        if self.path is not None and self.path.turns:
+            limited = any(limit.name == "lateral" for limit in self.limits)
+            path_notes = [note for note in turn_notes(self.path.turns, self.path.min_turn_radius_m,
+                                                      turns_limited=limited) if note not in self.notes]
         return {
             "distance_m": self.distance_m,
             "travel_time_s": self.travel_time_s,
@@ -249,9 +261,40 @@ class Profile:
             "binding": binding_shares(self.binding, self.s_m) if self.binding is not None else {},
             "limits_off": self._limits_off(),
             "roughness": self._roughness(),
+            **({"path": path} if path is not None else {}),
             "solver": {
                 "status": self.status, "success": self.success, "iterations": self.iterations,
                 "pieces": self.pieces, "time_s": float(self.timings_s.get("total", math.nan)),
             },
-            "notes": list(self.notes),
+            "notes": [*self.notes, *path_notes],
         }
+
+    def path_summary(self) -> dict | None:
+        """The path tolerance the curvature was found with, and why, for a route with x, y.
+
+        Returns
+        -------
+        dict or None
+            ``tolerance_m`` (m), ``source`` (``"estimated"`` from the route's x, y, or
+            ``"given"``), ``noise_m`` (the horizontal noise estimated, m) and, for a planned
+            profile, ``points`` (how many measured points it was estimated from),
+            ``max_deviation_m`` (how far the smoothed path strays from the samples, m),
+            ``min_turn_radius_m`` (the vehicle's turning circle, m, or None) and
+            ``sharp_turns`` (how many stretches are sharper than it, or reverse). None for a
+            route without x, y (a straight path) or a profile file that records no source.
+        """
+        if self.path is not None:
+            if not self.path.tolerance_source:
+                return None
+            return {"tolerance_m": float(self.path.tolerance_m), "source": self.path.tolerance_source,
+                    "noise_m": float(self.path.noise_m), "points": int(self.path.noise_points),
+                    "max_deviation_m": float(self.path.max_deviation_m),
+                    "min_turn_radius_m": self.path.min_turn_radius_m, "sharp_turns": len(self.path.turns)}
+        source = self.settings.get("path_tolerance_source")
+        if source is None:
+            return None
+        try:
+            tolerance, noise = float(self.settings["path_tolerance_m"]), float(self.settings.get("path_noise_m", "nan"))
+        except (KeyError, TypeError, ValueError):
+            return None
+        return {"tolerance_m": tolerance, "source": str(source), "noise_m": noise}

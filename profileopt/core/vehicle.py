@@ -45,15 +45,24 @@ _OPTIONAL_UNITS: dict[str, tuple[str, str]] = {
     "friction_coefficient": ("-", "tyre-ground friction coefficient mu"),
     "mass_kg": ("kg", "mass of the whole vehicle"),
     "max_power_w": ("W", "largest drive power at the wheels"),
+    "min_turn_radius_m": ("m", "smallest radius the vehicle can turn in (its turning circle's, at its centre)"),
 }
 
 #: The optional keys of turns and hills, in file order: a vehicle without any of them plans
-#: as before they existed (:func:`profileopt.physics.motion.plans_on_grades`).
-OPTIONAL_KEYS: tuple[str, ...] = tuple(_OPTIONAL_UNITS)
+#: as before they existed (:func:`profileopt.physics.motion.plans_on_grades`). Not
+#: ``min_turn_radius_m``: the turning circle is kept with the lateral limit, and does nothing
+#: without it.
+OPTIONAL_KEYS: tuple[str, ...] = tuple(key for key in _OPTIONAL_UNITS if key != "min_turn_radius_m")
 
 #: Optional keys that only make sense together: rollover needs both track width and centre of
 #: gravity height, the power limit needs the whole vehicle's mass.
 _PAIRED_KEYS = (("track_width_m", "cg_height_m"), ("mass_kg", "max_power_w"))
+
+#: The keys that set a lateral acceleration limit (either one, or both of the pair): the
+#: turning circle is kept by that limit's module (:mod:`profileopt.planning.limits.lateral`),
+#: so a vehicle file's ``min_turn_radius_m`` needs one of them (a Vehicle made in code
+#: without them has its turn limits off, the turning circle with them).
+_LATERAL_KEYS = ("max_lateral_accel_mps2", "track_width_m")
 
 #: key -> (smallest, largest) value a ground vehicle can physically have, in the key's unit.
 #: Wide on purpose (a 1 kg robot corner to a 400 t mining truck's, walking pace to beyond any
@@ -80,6 +89,7 @@ PLAUSIBLE_RANGES: dict[str, tuple[float, float]] = {
     "friction_coefficient": (0.01, 3.0),
     "mass_kg": (0.4, 1e6),
     "max_power_w": (1.0, 1e8),
+    "min_turn_radius_m": (0.01, 50.0),
 }
 
 
@@ -127,6 +137,14 @@ class Vehicle:
     mass_kg, max_power_w : float or None
         Mass of the whole vehicle (kg, at least ``quarter_mass_kg``) and its largest drive
         power at the wheels (W), given together: m (a + g sin theta) v <= P.
+    min_turn_radius_m : float or None
+        The smallest radius (m) the vehicle turns in, at full lock: a stretch of the path
+        sharper than it (a reversal always is) cannot be driven in one sweep and is planned
+        at a crawl, :data:`~profileopt.defaults.CRAWL_SPEED_MPS`, with a note naming where
+        (:func:`profileopt.physics.motion.turn_speed_cap_mps`). It is kept with the lateral
+        limit (``max_lateral_accel_mps2``, or ``track_width_m`` and ``cg_height_m``), which a
+        vehicle file giving it must give too; without one the turn limits are off. None: no
+        turning circle (a skid-steer vehicle that turns on the spot).
     name : str
         Where the vehicle came from (a bundled name or a path); not a file key.
     """
@@ -150,6 +168,7 @@ class Vehicle:
     friction_coefficient: float | None = None
     mass_kg: float | None = None
     max_power_w: float | None = None
+    min_turn_radius_m: float | None = None
     name: str = dataclasses.field(default="", compare=False)
 
     def __post_init__(self) -> None:
@@ -323,6 +342,10 @@ def load_vehicle(name_or_path: str | Path) -> Vehicle:
                 f"{where}: key '{key}' = {value!r} is not finite; give the {what} as a finite "
                 f"number > 0 in {unit}"
             )
+    if "min_turn_radius_m" in data and not any(key in data for key in _LATERAL_KEYS):
+        raise InputError(f"{where}: key 'min_turn_radius_m' needs a lateral acceleration limit as well (the "
+                         "turning circle is kept by the limit of turns); add 'max_lateral_accel_mps2' in m/s^2 (or "
+                         "'track_width_m' and 'cg_height_m'), or remove 'min_turn_radius_m'")
     return Vehicle(**data, name=where)
 
 

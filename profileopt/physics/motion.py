@@ -26,13 +26,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..core.vehicle import OPTIONAL_KEYS
+from ..defaults import CRAWL_SPEED_MPS
 
 if TYPE_CHECKING:
     from ..core.vehicle import Vehicle
 
 __all__ = ["STANDARD_GRAVITY_MPS2", "lateral_accel_mps2", "rollover_threshold_mps2", "lateral_limit_mps2",
            "tyre_accel_mps2", "friction_radius_mps2", "friction_usage", "drive_power_w", "power_accel_mps2",
-           "lateral_speed_cap_mps", "plans_on_grades",
+           "lateral_speed_cap_mps", "turn_speed_cap_mps", "plans_on_grades",
            "segment_friction_radius_mps2"]
 
 #: Standard gravity g (m/s^2), ISO 80000-3.
@@ -100,6 +101,33 @@ def lateral_speed_cap_mps(lateral_limit: Any, curvature_1pm: Any) -> Any:
     kappa = np.asarray(curvature_1pm, dtype=float)
     with np.errstate(divide="ignore"):
         return np.sqrt(np.where(kappa > 0, lateral_limit / np.where(kappa > 0, kappa, 1.0), np.inf))
+
+
+def turn_speed_cap_mps(lateral_limit: Any, curvature_1pm: Any, min_turn_radius_m: float | None = None) -> Any:
+    """The highest speed in a turn: sqrt(lateral_limit / kappa) (:func:`lateral_speed_cap_mps`),
+    and at most :data:`~profileopt.defaults.CRAWL_SPEED_MPS` where the turn is sharper than the
+    vehicle can steer, kappa > 1 / min_turn_radius_m: it is driven there in several moves, at a
+    crawl. Numeric arguments only (numpy).
+
+    Parameters
+    ----------
+    lateral_limit : float or numpy.ndarray
+        Lateral acceleration limit (m/s^2).
+    curvature_1pm : float or numpy.ndarray
+        |kappa| (1/m), >= 0.
+    min_turn_radius_m : float, optional
+        The vehicle's turning circle (m); None: no turning circle (the lateral cap alone).
+
+    Returns
+    -------
+    numpy.ndarray
+        The cap (m/s), inf on a straight.
+    """
+    cap = lateral_speed_cap_mps(lateral_limit, curvature_1pm)
+    if min_turn_radius_m is None:
+        return cap
+    return np.where(np.asarray(curvature_1pm, dtype=float) * min_turn_radius_m > 1.0,
+                    np.minimum(cap, CRAWL_SPEED_MPS), cap)
 
 
 def tyre_accel_mps2(accel_mps2: Any, grade_rad: Any) -> Any:

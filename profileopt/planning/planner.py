@@ -12,6 +12,9 @@
    no solver gave a usable one, fall back to a slower profile that keeps every limit
    (:mod:`.fallback`).
 5. Build the :class:`~.result.Profile` and check it once more against every limit.
+6. Drive it in the exact simulation ``verify`` uses (:mod:`.gate`) and, where the force goes
+   over the limit, plan again from step 2 with the gate's caps on the stretches that caused
+   it, until the simulation holds: a plan is never returned that its own gate rejects.
 """
 
 from __future__ import annotations
@@ -97,7 +100,7 @@ def plan(
     *,
     segment_length_m: float = DEFAULT_SEGMENT_LENGTH_M,
     roughness_window_m: float = DEFAULT_ROUGHNESS_WINDOW_M,
-    path_tolerance_m: float = DEFAULT_PATH_TOLERANCE_M,
+    path_tolerance_m: float | None = DEFAULT_PATH_TOLERANCE_M,
     model: str = DEFAULT_MODEL,
     smoothing: float = DEFAULT_SMOOTHING,
     max_jerk_mps3: float | None = None,
@@ -126,10 +129,15 @@ def plan(
         of the route (a at every sample), at every speed driven inside it, for that
         stretch's own RI (docs/paper-notes.md, "Roughness windows"). The grade is measured
         over twice this length (:mod:`profileopt.terrain.geometry`).
-    path_tolerance_m : float, default :data:`~profileopt.defaults.DEFAULT_PATH_TOLERANCE_M`
+    path_tolerance_m : float or None, default None (:data:`~profileopt.defaults.DEFAULT_PATH_TOLERANCE_M`)
         How far (m) the smoothed path whose curvature limits the speed in turns may stray
-        from the route's x, y samples (:func:`profileopt.terrain.geometry.smooth_path`); give the
-        noise of the track (a few metres for a consumer GPS). Ignored for an ``s,z`` route.
+        from the route's x, y samples (:func:`profileopt.terrain.geometry.smooth_path`). None
+        estimates it from the route's own x, y: their noise sigma times sqrt(2 ln n), at least
+        :data:`~profileopt.defaults.MIN_PATH_TOLERANCE_M`
+        (:func:`profileopt.terrain.geometry.estimate_path_noise`); the profile's settings and
+        summary say which it was. Ignored for an ``s,z`` route. A turn sharper than the
+        vehicle's ``min_turn_radius_m`` (a reversal always is) is planned at a crawl, with a
+        note naming where.
     model : str, default :data:`~profileopt.physics.forces.DEFAULT_MODEL` (``"sbem_tf"``)
         Force model: ``"sbem_tf"``, ``"sbem_ef"``, ``"iecm"`` or ``"prev_bem"``.
     smoothing : float, default :data:`DEFAULT_SMOOTHING` (0.01)
@@ -173,7 +181,9 @@ def plan(
     -------
     Profile
         ``status`` says how it was obtained; a profile is never returned that breaks a
-        force, speed, acceleration or jerk limit.
+        force, speed, acceleration or jerk limit, nor (model ``sbem_tf``, measured ground)
+        one whose exact simulation goes over the force limit (:mod:`profileopt.planning.gate`;
+        a note says where the gate lowered the speed).
 
     Raises
     ------
@@ -182,7 +192,9 @@ def plan(
     InfeasibleError
         No profile keeps every limit (an impassable segment, unreachable boundary speeds).
     PlanningError
-        The NLP could not be solved and no limit-keeping fallback profile exists (please report it).
+        The NLP could not be solved and no limit-keeping fallback profile exists, or the
+        simulation gate could not bring the plan within the force limit in
+        :data:`~profileopt.planning.gate.MAX_GATE_ROUNDS` rounds (please report it).
     """
     t_start = time.perf_counter()
     jerk = vehicle.max_jerk_mps3 if max_jerk_mps3 is None else float(max_jerk_mps3)
@@ -196,7 +208,8 @@ def plan(
     t = time.perf_counter()
     from ..terrain.geometry import route_geometry  # scipy: only when a plan is made
 
-    geometry = route_geometry(route, tolerance_m=path_tolerance_m, grade_scale_m=2.0 * seg.roughness_window_m)
+    geometry = route_geometry(route, tolerance_m=path_tolerance_m, grade_scale_m=2.0 * seg.roughness_window_m,
+                              min_turn_radius_m=vehicle.min_turn_radius_m)
     timings["path"] = time.perf_counter() - t
 
     def once(limits: tuple[Limit, ...]) -> Profile:
@@ -208,20 +221,20 @@ def plan(
 
     profile = once(limits)
     if gate_applies(route, model):  # drive it in the exact simulation; cap where it goes over
-        profile = _gate(profile, once, limits, route, vehicle, timings)
+        profile = _gate(profile, once, limits, route, vehicle, seg.roughness_window_m, timings)
     timings["total"] = time.perf_counter() - t_start
     return dataclasses.replace(profile, timings_s=dict(timings))
 
 
 def _gate(profile: Profile, once: "Callable[[tuple[Limit, ...]], Profile]", limits: tuple[Limit, ...],
-          route: "Route", vehicle: "Vehicle", timings: dict[str, float]) -> Profile:
+          route: "Route", vehicle: "Vehicle", window_m: float, timings: dict[str, float]) -> Profile:
     """Simulate ``profile`` and, while it goes over the force limit, plan again with the
     gate's caps (:mod:`.gate`); the last profile, with a note when the gate capped anything."""
     caps = None
     first_ratio = first_s = None
     for round_number in range(1, MAX_GATE_ROUNDS + 1):
         t = time.perf_counter()
-        check = check_plan(route, profile, vehicle)
+        check = check_plan(route, profile, vehicle, window_m=window_m)
         timings["simulate"] = timings.get("simulate", 0.0) + time.perf_counter() - t
         if check.passes:
             break
@@ -230,7 +243,7 @@ def _gate(profile: Profile, once: "Callable[[tuple[Limit, ...]], Profile]", limi
         caps = merged_caps(caps, gate_caps(check, vehicle, round_number))
         profile = once((*limits, SimulatedLimit(caps=caps)))
     else:
-        check = check_plan(route, profile, vehicle)
+        check = check_plan(route, profile, vehicle, window_m=window_m)
         if not check.passes:
             raise PlanningError(
                 f"{route.source}: after {MAX_GATE_ROUNDS} rounds of lowering the speed, the exact simulation is "
@@ -248,7 +261,7 @@ def _gate(profile: Profile, once: "Callable[[tuple[Limit, ...]], Profile]", limi
 def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *, seg: Segments,
                geometry: "RouteGeometry", options: SolverOptions, jerk: float, model: str, smoothing: float,
                v0_mps: float, vend_mps: float, method: str, band: str, refine: bool, segment_length_m: float,
-               roughness_window_m: float, path_tolerance_m: float, timings: dict[str, float]) -> Profile:
+               roughness_window_m: float, path_tolerance_m: float | None, timings: dict[str, float]) -> Profile:
     """One plan with ``limits`` on the segments ``seg`` (refined inside) and the route's
     ``geometry``: the steps of :func:`plan` after the route was cut and its geometry found;
     the other arguments as :func:`plan`'s. Adds to ``timings`` (s)."""
@@ -353,7 +366,7 @@ def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *,
     settings = {
         "vehicle": vehicle_reference(vehicle) or "unnamed", "model": model,
         "segment_length_m": float(segment_length_m), "roughness_window_m": float(roughness_window_m),
-        "path_tolerance_m": float(path_tolerance_m), "smoothing": float(smoothing),
+        **geometry.settings, "smoothing": float(smoothing),
         "max_speed_mps": vehicle.max_speed_mps, "max_accel_mps2": vehicle.max_accel_mps2,
         "max_decel_mps2": vehicle.max_decel_mps2, "max_jerk_mps3": jerk,
         # "bands" is the profile file's key for the band option (kept so files stay readable)

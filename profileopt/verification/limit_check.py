@@ -22,7 +22,7 @@ from ..core.kinematics import boundary_jerk_mps3, segment_accel_mps2
 from ..core.path import segment_path
 from ..core.segments import Segments, route_roughness_windows, segments_at
 from ..core.stations import segment_samples
-from ..defaults import DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M, LIMIT_RTOL
+from ..defaults import DEFAULT_ROUGHNESS_WINDOW_M, LIMIT_RTOL
 from ..errors import InputError
 from ..physics.forces import get_model
 from ..physics.motion import STANDARD_GRAVITY_MPS2 as G
@@ -31,6 +31,7 @@ from ..physics.motion import (
     lateral_speed_cap_mps,
     plans_on_grades,
     segment_friction_radius_mps2,
+    turn_speed_cap_mps,
     tyre_accel_mps2,
 )
 from ..physics.rows import (
@@ -211,12 +212,12 @@ def _first_breach(quantity: str, limit_name: str, values: np.ndarray, limit: np.
                        count=int(np.count_nonzero(broken)), of=int(values.size), worst_ratio=worst)
 
 
-def _setting_m(profile: "Profile", key: str, default: float) -> float:
+def _setting_m(profile: "Profile", key: str, default: float | None) -> float | None:
     """A length the profile records in its settings (m), else ``default``."""
     try:
-        value = float(profile.settings.get(key, default))
-    except (TypeError, ValueError):
-        value = default
+        value = float(profile.settings[key])
+    except (KeyError, TypeError, ValueError):
+        return default
     return value if math.isfinite(value) and value > 0 else default
 
 
@@ -275,8 +276,11 @@ def check_limits(
     first and last samples) and its RI column must be the route's own. The limits are the
     vehicle's, each computed here from :mod:`profileopt.physics`: the speed caps (the
     vehicle's top speed, SBEM:TF's step limit, the route's ``speed_limit`` and, for a vehicle
-    that gives their keys, the lateral and friction caps of turns, with the path's curvature
-    found with the profile's recorded ``path_tolerance_m``), the acceleration and
+    that gives their keys, the lateral and friction caps of turns and the crawl through a
+    turn sharper than its ``min_turn_radius_m``, with the path's curvature found as the planner
+    finds it (:func:`profileopt.terrain.geometry.route_geometry`: a reversal is a turn of the
+    sharpest radius, never a straight) with the profile's recorded ``path_tolerance_m``, or
+    estimated from the route when the profile records none), the acceleration and
     deceleration bounds (on the route's grades, for such a vehicle), the friction circle and
     the drive power, the jerk bound the profile records in its settings (else the
     vehicle's), and the model's force limit. The predicted force of each segment is recomputed from the speeds:
@@ -342,9 +346,10 @@ def check_limits(
         route_geometry,  # scipy: only when a profile is checked
     )
 
-    tolerance = _setting_m(profile, "path_tolerance_m", DEFAULT_PATH_TOLERANCE_M)
+    tolerance = _setting_m(profile, "path_tolerance_m", None)  # None: estimated, as the planner does
     path = segment_path(route, segments, route_geometry(route, tolerance_m=tolerance,
-                                                        grade_scale_m=2.0 * segments.roughness_window_m))
+                                                        grade_scale_m=2.0 * segments.roughness_window_m,
+                                                        min_turn_radius_m=vehicle.min_turn_radius_m))
     caps = _speed_caps(route, vehicle, segments, path, force_model.key)
     decel_bound, accel_bound = _accel_bounds(vehicle, path)
     bands = speed_bands(ri_here, vehicle, model=force_model.key, ri_min=segments.ri_min)
@@ -402,8 +407,9 @@ def _speed_caps(route: "Route", vehicle: "Vehicle", segments: Segments, path: "S
                 model: str) -> list[tuple[str, np.ndarray]]:
     """The caps on every speed driven in each segment besides the top speed, in words and m/s:
     SBEM:TF's step limit where the wheel meets a step or lands after a drop, the route's
-    ``speed_limit`` (the lowest of the segment's samples), and the lateral acceleration and
-    the friction circle in turns (for a vehicle that gives their keys)."""
+    ``speed_limit`` (the lowest of the segment's samples), the lateral acceleration and
+    the friction circle in turns, and the crawl through a turn sharper than the vehicle's
+    turning circle (for a vehicle that gives their keys)."""
     caps = []
     if model == "sbem_tf":
         caps.append(("the step limit (SBEM:TF where the wheel meets a step or lands after a drop)",
@@ -413,6 +419,10 @@ def _speed_caps(route: "Route", vehicle: "Vehicle", segments: Segments, path: "S
     lateral = lateral_limit_mps2(vehicle)
     if math.isfinite(lateral):
         caps.append(("the lateral acceleration limit in turns", lateral_speed_cap_mps(lateral, path.curvature_max_1pm)))
+        if vehicle.min_turn_radius_m is not None:
+            crawl = turn_speed_cap_mps(math.inf, path.curvature_max_1pm, vehicle.min_turn_radius_m)
+            name = f"the crawl through a turn sharper than the vehicle's min_turn_radius_m ({vehicle.min_turn_radius_m:g} m)"
+            caps.append((name, crawl))
     if vehicle.friction_coefficient is not None:
         radius = segment_friction_radius_mps2(vehicle.friction_coefficient, path.grade_lo_rad, path.grade_hi_rad)
         caps.append(("the friction limit in turns", lateral_speed_cap_mps(radius, path.curvature_max_1pm)))

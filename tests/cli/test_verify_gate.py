@@ -180,14 +180,14 @@ def test_speeds_of_1e155_break_the_top_speed_without_a_crash(profileopt_command,
 @pytest.mark.slow
 def test_a_plan_that_keeps_its_limits_but_not_in_simulation_exits_4(profileopt_command, planned) -> None:
     # Prev:BEM's plan keeps Prev:BEM's own prediction within the limit, but the simulated
-    # excitation exceeds it in hundreds of the 9996 roughness windows (738 measured) and on 7
-    # segments (README, compare table). 9996 windows: the 10096 samples 5 cm apart, less the
-    # 100 whose 5 m window would run past the end (a window ending at a sample covers the
-    # same samples as one starting at a sample).
+    # excitation exceeds it in hundreds of the 19991 roughness windows (1471 measured) and on 7
+    # segments (README, compare table). 19991 windows: every set of samples a 5 m window holds
+    # at any offset; of the 10096 samples 5 cm apart, the 9996 with room each start one, and
+    # each but the first one more starting just after the sample before it.
     done = run(profileopt_command, "verify", KRC_1IN, planned["krc_prev_bem"])
     assert done.returncode == 4, done.stdout + done.stderr
     verdict = verdict_line(done.stdout)
-    over = re.search(r"in simulation (\d+) of 9996 roughness windows \(5 m\) and (\d+) of 101 segments", verdict)
+    over = re.search(r"in simulation (\d+) of 19991 roughness windows \(5 m\) and (\d+) of 101 segments", verdict)
     assert over and int(over.group(1)) >= 100 and int(over.group(2)) >= 5, verdict
 
 
@@ -207,3 +207,39 @@ def test_the_simulator_refuses_a_speed_whose_square_overflows(atv) -> None:
     s = np.linspace(0.0, 10.0, 201)
     with pytest.raises(InputError, match="1e\\+155 m/s, is too large to simulate"):
         simulate_quarter_car(s, np.zeros_like(s), np.array([0.0, 5.0, 10.0]), np.full(3, 1e155), atv)
+
+
+def test_a_reversal_is_crawled_by_plan_and_a_top_speed_one_fails_verify(tmp_path: Path, capsys) -> None:
+    # issue 29: out 60 m and back along the same line was planned at top speed through the
+    # U-turn and passed verify. A reversal within the 0.1 m tolerance is a U-turn of radius
+    # 0.1 m: sqrt(4 m/s^2 * 0.1 m) = 0.632 m/s for the atv (tests/planning/test_lateral.py)
+    from profileopt.cli import main
+    from profileopt.io import read_profile
+
+    leg = np.arange(0.0, 60.25, 0.5)
+    x = np.concatenate([leg, leg[::-1][1:]])
+    s = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(x)))])
+    z = 0.002 * np.sin(s)
+    route, twin = tmp_path / "out-and-back.csv", tmp_path / "straight.csv"
+    np.savetxt(route, np.column_stack([x, 0 * x, z]), delimiter=",", header="x,y,z", comments="", fmt="%.6f")
+    np.savetxt(twin, np.column_stack([s, z]), delimiter=",", header="s,z", comments="", fmt="%.6f")
+    planned, fast = tmp_path / "planned.csv", tmp_path / "fast.csv"
+    assert main(["plan", str(route), "-o", str(planned)]) == 0
+    out, err = capsys.readouterr()
+    assert "path         tolerance 0.1 m (estimated from the x,y" in out
+    note = [line for line in err.splitlines() if "reverses" in line]
+    assert len(note) == 1 and "s = 60" in note[0] and "180 deg" in note[0] and "crawl" in note[0]
+    profile = read_profile(planned)
+    turn = np.abs(profile.s_m - 60.0) <= 2.5
+    assert profile.speed_mps[turn].max() == pytest.approx(0.632, abs=0.001)  # at most 2 m/s: a crawl
+    assert profile.settings["path_tolerance_source"] == "estimated"
+    assert main(["verify", str(route), str(planned)]) == 0
+    capsys.readouterr()
+    # the speeds of the straight twin, driven through the U-turn near the top speed: exit 3
+    assert main(["plan", str(twin), "-o", str(fast)]) == 0
+    assert read_profile(fast).speed_mps[np.abs(read_profile(fast).s_m - 60.0) <= 5.0].min() > 15.0
+    capsys.readouterr()
+    assert main(["verify", str(route), str(fast)]) == 3
+    out, _ = capsys.readouterr()
+    assert "breaks the lateral acceleration limit in turns (0.6325 m/s) first in the segment from s = 5" in out
+    assert "min_turn_radius_m (3.25 m)" in out

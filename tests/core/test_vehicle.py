@@ -70,7 +70,8 @@ def test_a_valid_file_loads_and_integers_become_floats(tmp_path):
     assert vehicle.quarter_mass_kg == 100.0 and isinstance(vehicle.quarter_mass_kg, float)
     # same values (name is not compared); the file has none of the optional keys of turns and hills
     assert vehicle == load_vehicle("atv").replace(max_lateral_accel_mps2=None, track_width_m=None, cg_height_m=None,
-                                                  friction_coefficient=None, mass_kg=None, max_power_w=None)
+                                                  friction_coefficient=None, mass_kg=None, max_power_w=None,
+                                                  min_turn_radius_m=None)
     assert vehicle.max_power_w is None and vehicle.friction_coefficient is None
     assert load_vehicle(str(path)).name == str(path)
 
@@ -187,3 +188,26 @@ def test_optional_keys_of_turns_and_hills_load_and_pair(tmp_path):
         load_vehicle(write_vehicle(tmp_path, extra="cg_height_m = 0.5\n"))
     with pytest.raises(InputError, match="'friction_coefficient' = 0"):
         load_vehicle(write_vehicle(tmp_path, extra="friction_coefficient = 0\n"))
+
+
+def test_the_turning_circle_is_an_optional_key_that_needs_a_lateral_limit(tmp_path):
+    # the bundled ATVs: a utility ATV turns in 3 to 3.5 m (models/atv.toml's comment)
+    for name in ("atv", "atv-resonant", "atv-low-range"):
+        assert load_vehicle(name).min_turn_radius_m == 3.25
+    path = write_vehicle(tmp_path, extra="max_lateral_accel_mps2 = 4.0\nmin_turn_radius_m = 6\n")
+    assert load_vehicle(path).min_turn_radius_m == 6.0
+    # alone it would keep nothing (the turning circle is kept by the limit of turns): refused
+    alone = write_vehicle(tmp_path, extra="min_turn_radius_m = 6.0\n")
+    with pytest.raises(InputError) as exc:
+        load_vehicle(alone)
+    assert_one_line_naming(exc, str(alone), "min_turn_radius_m", "max_lateral_accel_mps2")
+    for bad in ("0.0", "-3.0", "500.0"):  # metres: a ground vehicle turns in 1 cm to 50 m
+        path = write_vehicle(tmp_path, extra=f"max_lateral_accel_mps2 = 4.0\nmin_turn_radius_m = {bad}\n")
+        with pytest.raises(InputError) as exc:
+            load_vehicle(path)
+        assert_one_line_naming(exc, "min_turn_radius_m", "m")
+    # without it a vehicle has no turning circle; it is not a key that puts grades in the bounds
+    from profileopt.core.vehicle import OPTIONAL_KEYS
+
+    assert "min_turn_radius_m" not in OPTIONAL_KEYS
+    assert load_vehicle("atv").replace(min_turn_radius_m=None).min_turn_radius_m is None

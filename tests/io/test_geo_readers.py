@@ -75,7 +75,7 @@ def one_line(raised: pytest.ExceptionInfo, *words: str) -> str:
 
 
 def test_mojstrovka_reads_and_projects_to_utm_33_by_hand_formula() -> None:
-    track = read_track(GPX_DIR / "Mojstrovka.gpx")
+    track = read_track(GPX_DIR / "Mojstrovka.gpx", smooth=False)  # the points as the file gives them
     assert len(track) == 184 and track.z_m is not None and track.crs.to_epsg() == 4326
     # first point of the file: lat 46.434981, lon 13.748273, ele 1614.678
     assert (track.x[0], track.y[0], track.z_m[0]) == (13.748273, 46.434981, 1614.678)
@@ -539,3 +539,50 @@ def test_importing_the_readers_imports_no_geo_package() -> None:
     done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=60, cwd=ROOT)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "[]"
+
+
+# ------------------------------------------------------------------------ GPS noise
+
+
+def noisy_circle_gpx(path: Path, sigma_m: float, seed: int = 5) -> tuple[np.ndarray, np.ndarray]:
+    """A GPX of 300 points 3 m apart on a 60 m circle in UTM 33N, with Gaussian noise of
+    ``sigma_m`` in each coordinate; returns the noisy points in UTM 33N (m)."""
+    rng = np.random.default_rng(seed)
+    angle = np.arange(300) * 3.0 / 60.0
+    x = 430_000.0 + 60.0 * np.sin(angle) + sigma_m * rng.standard_normal(angle.size)
+    y = 5_100_000.0 - 60.0 * np.cos(angle) + sigma_m * rng.standard_normal(angle.size)
+    lon, lat = pyproj.Transformer.from_crs(32633, 4326, always_xy=True).transform(x, y)
+    points = "".join(f'<trkpt lat="{la:.10f}" lon="{lo:.10f}"><ele>100</ele></trkpt>\n' for la, lo in zip(lat, lon))
+    path.write_text('<?xml version="1.0"?>\n<gpx version="1.1" creator="test" '
+                    f'xmlns="http://www.topografix.com/GPX/1/1"><trk><trkseg>\n{points}</trkseg></trk></gpx>\n')
+    return x, y
+
+
+def test_a_noisy_gps_track_is_moved_onto_its_path_within_the_tolerance(tmp_path: Path) -> None:
+    path = tmp_path / "noisy.gpx"
+    x, y = noisy_circle_gpx(path, 1.5)
+    track = read_track(path)
+    done = track.smoothing
+    # the noise put in, estimated within 15 % (tests/terrain/test_geometry.py for the estimator)
+    assert done.smoothed and done.noise.noise_m == pytest.approx(1.5, rel=0.15)
+    assert "moved onto the smoothest path" in track.notes[-1]
+    moved = project_track(track, pyproj.CRS.from_epsg(32633))
+    # each point moved by at most the tolerance (the tangent plane's error over 400 m: < 1 mm)
+    distance = np.hypot(moved.x - x, moved.y - y)
+    assert distance.max() <= done.tolerance_m + 1e-3
+    # towards the circle: the points' distance from the centre strays from 60 m by less than
+    # half as much (RMS) as the noisy points' (1.5 m across the path)
+    rms = [float(np.sqrt(np.mean((np.hypot(px - 430_000.0, py - 5_100_000.0) - 60.0) ** 2)))
+           for px, py in ((moved.x, moved.y), (x, y))]
+    assert rms[0] < 0.5 * rms[1]
+    given = read_track(path, path_tolerance_m=2.0)
+    assert given.smoothing.tolerance_m == 2.0 and given.smoothing.tolerance_source == "given"
+    moved = project_track(given, pyproj.CRS.from_epsg(32633))
+    assert np.hypot(moved.x - x, moved.y - y).max() <= 2.0 + 1e-3
+    raw = read_track(path, smooth=False)  # the file's points as they are
+    assert raw.smoothing is None and not any("moved" in note for note in raw.notes)
+    # a clean track (10 cm of noise every 3 m lengthens it by 0.1 %) is kept as it is
+    noisy_circle_gpx(path, 0.1)
+    kept = read_track(path)
+    assert not kept.smoothing.smoothed
+    np.testing.assert_array_equal(kept.x, read_track(path, smooth=False).x)

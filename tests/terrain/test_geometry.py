@@ -11,7 +11,19 @@ References, each derived here by hand, not from the module:
   (b - a)/2 |u|, and |u| is even, so over a symmetric window the slope is (a + b)/2;
 * the least-squares slope of sin(w s) over [c - h, c + h] (continuous) is
   cov / var = 3 cos(w c) / h^3 (sin(w h) / w^2 - h cos(w h) / w), whose magnitude is at
-  most 3 (1 / (h^2 w) + 1 / (h^3 w^2)).
+  most 3 (1 / (h^2 w) + 1 / (h^3 w^2));
+* the noise estimate is checked against the noise put in: Gaussian, of standard deviation
+  sigma in each coordinate, drawn here with a seed; the median of n >= 500 squared
+  residuals is within a few per cent of its expectation (its relative standard error is
+  about 1.6 / sqrt(n)), so sigma within 10 %;
+* a polyline resampled along its pieces has its corners where the pieces meet: the corner
+  points given;
+* a U-turn of radius r keeps within r of an out-and-back line's points (its legs r either
+  side of the line): the radius of a reversal within the 0.1 m tolerance is 0.1 m, a
+  curvature of 10 1/m; a heading turned back by 180, 178 or 150 degrees is how the two legs
+  were drawn;
+* the length of a path of straights and arcs is the sum of the straights and of radius times
+  angle of the arcs.
 """
 
 from __future__ import annotations
@@ -24,9 +36,21 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from profileopt.errors import InputError
-from profileopt.terrain.geometry import (DEFAULT_PATH_TOLERANCE_M, RouteGeometry, SmoothPath, path_grade_rad,
-                                 route_geometry, smooth_path)
-from profileopt.core.route import Route
+from profileopt.core.route import Route, path_distance_m
+from profileopt.terrain.geometry import (
+    MAX_CURVATURE_1PM,
+    MIN_PATH_TOLERANCE_M,
+    RouteGeometry,
+    SmoothPath,
+    estimate_path_noise,
+    path_corners,
+    path_grade_rad,
+    route_geometry,
+    sharp_turns,
+    smooth_path,
+    smooth_track_points,
+)
+from profileopt.terrain.ground_track import resample_polyline
 
 SPACING_M = 0.05
 #: |kappa| above which the bundled ATV's lateral limit (4 m/s^2) binds at 20 m/s: 4 / 20^2.
@@ -55,8 +79,8 @@ def test_noisy_straight_line_leaves_the_lateral_limit_inactive() -> None:
     s = np.arange(4001) * SPACING_M
     path = smooth_path(s + 0.01 * rng.standard_normal(s.size), 0.01 * rng.standard_normal(s.size))
     assert isinstance(path, SmoothPath)
-    assert path.tolerance_m == DEFAULT_PATH_TOLERANCE_M
-    assert path.max_deviation_m <= DEFAULT_PATH_TOLERANCE_M
+    assert path.tolerance_m == MIN_PATH_TOLERANCE_M
+    assert path.max_deviation_m <= MIN_PATH_TOLERANCE_M
     # inactive with a margin of 1000: measured max |kappa| ~ 1e-6 1/m (a radius of 1000 km)
     assert np.max(np.abs(path.curvature_1pm)) < ATV_LATERAL_KAPPA_1PM / 1000
 
@@ -67,7 +91,7 @@ def test_25_m_arc_is_found_within_10_percent(noise_m: float) -> None:
     s, x, y, start, end = arc_between_straights(radius, 50.0, noise_m)
     path = smooth_path(x, y)
     kappa = path.curvature_1pm
-    assert path.max_deviation_m <= DEFAULT_PATH_TOLERANCE_M
+    assert path.max_deviation_m <= MIN_PATH_TOLERANCE_M
     middle = np.argmin(np.abs(s - (start + end) / 2))
     # issue text: the arc's curvature 1/R within 10 %; measured 1.4 % (noiseless) and 0.5 %
     assert kappa[middle] == pytest.approx(1 / radius, rel=0.10)
@@ -187,7 +211,7 @@ def test_route_geometry() -> None:
     assert isinstance(geometry, RouteGeometry)
     np.testing.assert_array_equal(geometry.curvature_1pm, smooth_path(x, y).curvature_1pm)
     np.testing.assert_allclose(geometry.grade_rad, math.atan(0.1), atol=1e-12)
-    assert 0 < geometry.max_deviation_m <= geometry.tolerance_m == DEFAULT_PATH_TOLERANCE_M
+    assert 0 < geometry.max_deviation_m <= geometry.tolerance_m == MIN_PATH_TOLERANCE_M
     assert geometry.grade_scale_m == 10.0
     flat = route_geometry(Route(s_m=s, z_m=z), tolerance_m=2.0, grade_scale_m=20.0)  # no x, y: straight
     np.testing.assert_array_equal(flat.curvature_1pm, np.zeros(s.size))
@@ -221,3 +245,159 @@ def test_bad_paths_are_input_errors() -> None:
         smooth_path([0.0, 1.0, 2.0], [0.0, 0.0])
     with pytest.raises(InputError, match="increase"):
         path_grade_rad([0.0, 2.0, 1.0], [0.0, 0.0, 0.0], scale_m=1.0)
+
+
+def known_path(step_m: float) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """Straights, two 40 m arcs (90 deg) and an 8 m hairpin (180 deg), every ``step_m`` of
+    length: x, y (m), the length (m) and the sharpest curvature, 1/8 (1/m)."""
+    pieces = [(150.0, 0.0), (40.0, math.pi / 2), (100.0, 0.0), (8.0, -math.pi), (100.0, 0.0), (40.0, math.pi / 2),
+              (150.0, 0.0)]
+    lengths = [r * abs(a) if a else r for r, a in pieces]
+    total = float(sum(lengths))
+    s = np.arange(0.0, total, step_m)
+    heading = np.zeros(s.size)
+    x, y = np.zeros(s.size), np.zeros(s.size)
+    start, h0, x0, y0 = 0.0, 0.0, 0.0, 0.0
+    for (r, a), length in zip(pieces, lengths):
+        inside = (s >= start) & (s < start + length)
+        u = s[inside] - start
+        if a == 0:
+            x[inside], y[inside], heading[inside] = x0 + u * math.cos(h0), y0 + u * math.sin(h0), h0
+            x0, y0 = x0 + length * math.cos(h0), y0 + length * math.sin(h0)
+        else:
+            turn = math.copysign(1.0, a)  # +1 left
+            cx, cy = x0 - turn * r * math.sin(h0), y0 + turn * r * math.cos(h0)
+            h = h0 + turn * u / r
+            x[inside], y[inside] = cx + turn * r * np.sin(h), cy - turn * r * np.cos(h)
+            h_end = h0 + a
+            x0, y0 = cx + turn * r * math.sin(h_end), cy - turn * r * math.cos(h_end)
+            h0 = h_end
+        start += length
+    return x, y, total, 1.0 / 8.0
+
+
+@pytest.mark.parametrize("sigma_m, uneven", [(0.5, False), (1.5, False), (1.5, True)])
+def test_the_noise_estimate_finds_the_noise_put_in(sigma_m: float, uneven: bool) -> None:
+    # points every 3 m (or 2 to 4 m) on a 40 m circle, Gaussian noise of sigma in x and y
+    rng = np.random.default_rng(29)
+    n = 1500
+    step = rng.uniform(2.0, 4.0, n) if uneven else np.full(n, 3.0)
+    angle = np.cumsum(step) / 40.0
+    x = 40 * np.cos(angle) + sigma_m * rng.standard_normal(n)
+    y = 40 * np.sin(angle) + sigma_m * rng.standard_normal(n)
+    noise = estimate_path_noise(x, y)
+    assert noise.noise_m == pytest.approx(sigma_m, rel=0.10)
+    assert noise.points >= n - 2  # a measured point on its neighbours' line is dropped only in a run of 3
+    # the universal threshold: sigma sqrt(2 ln n)
+    assert noise.tolerance_m == pytest.approx(noise.noise_m * math.sqrt(2 * math.log(n)), rel=1e-12)
+
+
+def test_a_clean_path_gets_the_smallest_tolerance_and_keeps_its_turns() -> None:
+    # a surveyed arc (1 cm of noise, every 5 cm): sigma sqrt(2 ln n) = 0.01 * 4.3 < 0.1 m
+    s, x, y, start, end = arc_between_straights(25.0, 50.0, 0.01)
+    noise = estimate_path_noise(x, y)
+    assert noise.noise_m == pytest.approx(0.01, rel=0.10)
+    path = smooth_path(x, y)
+    assert path.tolerance_m == MIN_PATH_TOLERANCE_M and path.tolerance_source == "estimated"
+    middle = np.argmin(np.abs(s - (start + end) / 2))
+    assert path.curvature_1pm[middle] == pytest.approx(1 / 25.0, rel=0.10)  # the real turn stays
+    given = smooth_path(x, y, tolerance_m=0.5)
+    assert given.tolerance_m == 0.5 and given.tolerance_source == "given"
+
+
+def test_corners_of_a_resampled_polyline_are_its_points() -> None:
+    corners_x = np.array([0.0, 10.013, 10.013, 25.37, 30.0])
+    corners_y = np.array([0.0, 0.0, 7.021, 7.021, -3.3])
+    _, x, y = resample_polyline(corners_x, corners_y, 0.05)
+    cx, cy = path_corners(x, y)
+    assert cx.size == corners_x.size
+    # a corner falls between two samples 5 cm apart: their midpoint, within 2.5 cm of it
+    np.testing.assert_allclose(cx, corners_x, atol=0.025)
+    np.testing.assert_allclose(cy, corners_y, atol=0.025)
+    # a path measured point by point keeps every point
+    rng = np.random.default_rng(1)
+    px, py = np.arange(50.0), 0.01 * rng.standard_normal(50)
+    assert path_corners(px, py)[0].size == 50
+
+
+def out_and_back(off_deg: float, offset_m: float = 0.0, step_m: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
+    """Out 50 m along +x and back, the return leg turned ``off_deg`` off the line (a heading
+    change of 180 - off_deg degrees) and moved ``offset_m`` across it."""
+    leg = np.arange(0.0, 50.0 + step_m / 2, step_m)
+    back = math.radians(180.0 - off_deg)
+    x = np.concatenate([leg, 50.0 + math.cos(back) * leg[1:]])
+    y = np.concatenate([np.zeros(leg.size), math.sin(back) * leg[1:] + offset_m])
+    return x, y
+
+
+@pytest.mark.parametrize("off_deg, offset_m", [(0.0, 0.0), (0.0, 1e-18), (2.0, 0.0), (30.0, 0.0)])
+def test_a_reversal_is_the_sharpest_turn_not_a_straight(off_deg: float, offset_m: float) -> None:
+    x, y = out_and_back(off_deg, offset_m)
+    path = smooth_path(x, y)
+    s = path.s_m
+    kappa = np.abs(path.curvature_1pm)
+    turn = np.abs(s - 50.0) <= 1.0
+    # the U-turn within the 0.1 m tolerance: radius 0.1 m (module docstring)
+    assert kappa[turn].max() == pytest.approx(MAX_CURVATURE_1PM, rel=1e-12) == 1 / MIN_PATH_TOLERANCE_M
+    assert kappa.max() <= MAX_CURVATURE_1PM
+    assert np.all(kappa[np.abs(s - 50.0) >= 10.0] < 1e-3)  # the legs stay straight
+    turns = sharp_turns(s, x, y, path, min_turn_radius_m=3.25)
+    assert len(turns) == 1
+    turn = turns[0]
+    assert turn.s_m == pytest.approx(50.0, abs=1.0) and turn.radius_m == pytest.approx(0.1)
+    assert math.degrees(turn.heading_change_rad) == pytest.approx(180.0 - off_deg, abs=1.0)
+    assert turn.reversal  # 150 degrees and more within 5 m
+
+
+def test_a_gentle_turn_is_no_sharp_turn() -> None:
+    s, x, y, _, _ = arc_between_straights(25.0, 50.0, 0.0)
+    path = smooth_path(x, y)
+    assert sharp_turns(s, x, y, path, min_turn_radius_m=3.25) == []
+    assert sharp_turns(s, x, y, path, min_turn_radius_m=30.0)[0].radius_m == pytest.approx(25.0, rel=0.05)
+
+
+@pytest.mark.parametrize("sigma_m", [1.0, 1.5])
+def test_a_noisy_track_is_moved_onto_a_path_as_long_as_the_true_one(sigma_m: float) -> None:
+    true_x, true_y, length, sharpest = known_path(3.0)
+    rng = np.random.default_rng(3)
+    x = true_x + sigma_m * rng.standard_normal(true_x.size)
+    y = true_y + sigma_m * rng.standard_normal(true_y.size)
+    raw_length = path_distance_m(x, y)[-1]
+    # the zigzag between noisy points: about sigma^2 / h^2 longer (PathNoise.lengthens_share)
+    assert raw_length > length * (1 + 0.5 * (sigma_m / 3.0) ** 2)
+    done = smooth_track_points(x, y)
+    assert done.smoothed and done.tolerance_source == "estimated"
+    assert done.noise.noise_m == pytest.approx(sigma_m, rel=0.15)
+    moved = np.hypot(done.x_m - x, done.y_m - y)
+    assert moved.max() <= done.tolerance_m * (1 + 1e-12) and done.moved_max_m == pytest.approx(moved.max())
+    # the smoothed polyline is as long as the path (its last point is up to 3 m short of the end)
+    assert path_distance_m(done.x_m, done.y_m)[-1] == pytest.approx(length - 1.5, rel=0.03)
+    # and the route's turns: none sharper than half the sharpest true turn's radius
+    _, rx, ry = resample_polyline(done.x_m, done.y_m, 0.25)
+    assert np.abs(smooth_path(rx, ry).curvature_1pm).max() < 2 * sharpest
+
+
+def test_a_clean_track_is_kept_and_a_given_tolerance_bounds_the_moves() -> None:
+    x, y, _, _ = known_path(3.0)
+    done = smooth_track_points(x, y)
+    assert not done.smoothed and done.moved_max_m == 0.0
+    np.testing.assert_array_equal(done.x_m, x)
+    rng = np.random.default_rng(4)
+    nx, ny = x + 1.5 * rng.standard_normal(x.size), y + 1.5 * rng.standard_normal(y.size)
+    given = smooth_track_points(nx, ny, tolerance_m=2.0)
+    assert given.smoothed and given.tolerance_m == 2.0 and given.tolerance_source == "given"
+    assert np.hypot(given.x_m - nx, given.y_m - ny).max() <= 2.0 * (1 + 1e-12)
+    with pytest.raises(InputError, match="path_tolerance_m"):
+        smooth_track_points(nx, ny, tolerance_m=-1.0)
+
+
+def test_route_geometry_records_the_tolerance_and_why() -> None:
+    x, y = out_and_back(0.0)
+    s = path_distance_m(x, y)
+    geometry = route_geometry(Route(s_m=s, z_m=0 * s, x_m=x, y_m=y), grade_scale_m=10.0, min_turn_radius_m=3.25)
+    assert geometry.settings == {"path_tolerance_m": 0.1, "path_tolerance_source": "estimated", "path_noise_m": 0.0}
+    assert len(geometry.turns) == 1 and geometry.min_turn_radius_m == 3.25
+    # a straight route records the tolerance it was given (or the smallest) and nothing else
+    assert route_geometry(Route(s_m=s, z_m=0 * s), grade_scale_m=10.0).settings == {"path_tolerance_m": 0.1}
+    assert route_geometry(Route(s_m=s, z_m=0 * s), tolerance_m=2.0,
+                          grade_scale_m=10.0).settings == {"path_tolerance_m": 2.0}
