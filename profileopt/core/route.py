@@ -8,13 +8,18 @@ there). Every problem is one :class:`~profileopt.errors.InputError` line.
 from __future__ import annotations
 
 import dataclasses
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import InputError
 from ..terrain.assumed import AssumedRoughness
 
-__all__ = ["Route", "validate_route_arrays", "path_distance_m", "MAX_ABS_ELEVATION_M", "MAX_ELEVATION_STEP_M", "MIN_SPEED_LIMIT_MPS"]
+if TYPE_CHECKING:
+    from .vehicle import Vehicle
+
+__all__ = ["Route", "validate_route_arrays", "path_distance_m", "with_assumed_roughness", "MAX_ABS_ELEVATION_M",
+           "MAX_ELEVATION_STEP_M", "MIN_SPEED_LIMIT_MPS"]
 
 #: Elevations beyond this (m) are not on the Earth's surface: almost surely a unit mistake.
 MAX_ABS_ELEVATION_M = 10_000.0
@@ -180,3 +185,39 @@ def validate_route_arrays(source: str, s: np.ndarray, z: np.ndarray, limit: np.n
             raise InputError(f"{source}: {what} {where[i]}: speed_limit = {limit[i]:g} m/s is below "
                              f"{MIN_SPEED_LIMIT_MPS:g} m/s, slower than any vehicle drives; give the limit in m/s "
                              "(was it given in another unit?)")
+
+
+def with_assumed_roughness(route: "Route", vehicle: "Vehicle", *, window_m: float, seed: int) -> tuple["Route", str]:
+    """The route ``verify`` (and the planner's simulation gate) drives when its roughness was
+    assumed: its elevation plus a seeded
+    random ISO 8608 profile whose RMS window roughness is the assumed one, and a note
+    saying so.
+
+    Parameters
+    ----------
+    route : Route
+        A route with ``assumed_roughness``.
+    vehicle : Vehicle
+        Supplies the ground clearance h (m).
+    window_m : float
+        The roughness window length W the profile was planned with (m).
+    seed : int
+        Seed (>= 0) of the random phases.
+
+    Returns
+    -------
+    route : Route
+        The same samples, elevation ``z_m + realisation``, the same assumed roughness.
+    note : str
+        One line for the user: the class (or RI), the seed, the band and the RMS.
+    """
+    assumed = route.assumed_roughness
+    h = vehicle.ground_clearance_m
+    added = assumed.realisation_m(route.s_m, clearance_m=h, window_m=window_m, seed=seed)
+    n_min, n_max = assumed.realisation_band_cpm(route.s_m)
+    ri = assumed.ri_for(clearance_m=h, window_m=window_m)
+    shape = f"ISO 8608 class {assumed.road_class}" if assumed.road_class else "ISO 8608 (class C's shape)"
+    note = (f"roughness assumed ({assumed.label}): simulated on the route's elevation plus a random {shape} "
+            f"profile, seed {seed}, {n_min:g} to {n_max:.3g} cycles/m, RMS {1e3 * ri * h:.3g} mm over {window_m:g} m "
+            f"windows (RI {ri:.4g}); another seed drives other ground of that roughness")
+    return dataclasses.replace(route, z_m=route.z_m + added), note

@@ -29,9 +29,11 @@ suspension transmits falls to 0 with it, so lowering always ends.
 
 The gate checks the transmitted force F_T (the quantity of SBEM:TF, the default model). The
 excitation force of Prev:BEM, IECM and SBEM:EF, k y + c y', keeps its k y term at any
-speed, so lowering a speed cannot always bring it within its limit; for those models, and
-for a route whose roughness is assumed rather than measured (its own samples do not show
-it), the plan is returned unsimulated, as before.
+speed, so lowering a speed cannot always bring it within its limit; for those models the
+plan is returned unsimulated, as before. A route whose roughness is assumed (a track over a
+DEM or a sparse cloud: its own samples cannot show wheel-scale roughness) is simulated as
+``verify`` drives it by default: its elevation plus the seeded random profile of the
+assumed class (:func:`profileopt.core.route.with_assumed_roughness`, seed 0).
 """
 
 from __future__ import annotations
@@ -45,6 +47,7 @@ import numpy as np
 from ..physics.forces import get_model
 from ..physics.simulate import QuarterCarRun, simulate_quarter_car
 from ..physics.steps import StepCaps
+from ..core.route import with_assumed_roughness
 
 if TYPE_CHECKING:
     from ..core.profile import Profile
@@ -92,8 +95,8 @@ class GateCheck:
 
 
 def gate_applies(route: "Route", model: str) -> bool:
-    """Whether the gate checks plans of ``model`` on ``route``: the transmitted force, on
-    measured ground (see the module's docstring).
+    """Whether the gate checks plans of ``model`` on ``route``: the transmitted force (see the
+    module's docstring).
 
     Parameters
     ----------
@@ -106,25 +109,31 @@ def gate_applies(route: "Route", model: str) -> bool:
     -------
     bool
     """
-    return get_model(model).quantity == "transmitted" and route.assumed_roughness is None
+    del route  # every route: an assumed roughness is simulated as verify drives it
+    return get_model(model).quantity == "transmitted"
 
 
-def check_plan(route: "Route", profile: "Profile", vehicle: "Vehicle") -> GateCheck:
+def check_plan(route: "Route", profile: "Profile", vehicle: "Vehicle", *, window_m: float) -> GateCheck:
     """Drive ``profile`` over ``route`` in the exact simulation (the one ``verify`` uses).
 
     Parameters
     ----------
     route : Route
-        The route's samples.
+        The route's samples; with an assumed roughness, driven with the seeded random
+        profile ``verify`` adds by default (seed 0).
     profile : Profile
         The planned profile (boundaries ``s_m`` and speeds ``speed_mps``).
     vehicle : Vehicle
         The quarter car and ``max_transmitted_force_n``.
+    window_m : float
+        The roughness window the plan used (m): the band of an assumed roughness's profile.
 
     Returns
     -------
     GateCheck
     """
+    if route.assumed_roughness is not None:
+        route, _ = with_assumed_roughness(route, vehicle, window_m=window_m, seed=0)
     run = simulate_quarter_car(route.s_m, route.z_m, profile.s_m, profile.speed_mps, vehicle)
     limit = float(vehicle.max_transmitted_force_n)
     force = np.abs(run.transmitted_n)

@@ -31,6 +31,7 @@ import numpy as np
 from ..core.stations import segment_index
 from ..io.atomic import atomic_write
 from ..physics.forces import get_model
+from ..core.route import with_assumed_roughness
 from .limit_check import LimitBreach, LimitCheck, check_limits, route_as_planned
 from ..physics.simulate import QuarterCarRun, simulate_quarter_car
 from .window_check import UNDERPREDICTION_TOLERANCE, WindowCheck, check_windows
@@ -40,7 +41,7 @@ if TYPE_CHECKING:
     from ..core.route import Route
     from ..core.vehicle import Vehicle
 
-__all__ = ["Verification", "verify", "with_assumed_roughness", "VERIFICATION_COLUMNS", "STANDARD_GRAVITY_MPS2"]
+__all__ = ["Verification", "verify", "VERIFICATION_COLUMNS", "STANDARD_GRAVITY_MPS2"]
 
 #: Standard gravity (m/s^2), for the static wheel load m g.
 STANDARD_GRAVITY_MPS2 = 9.80665
@@ -397,38 +398,3 @@ def verify(
         notes=notes,
         breaches=check.breaches,
     )
-
-
-def with_assumed_roughness(route: "Route", vehicle: "Vehicle", *, window_m: float, seed: int) -> tuple["Route", str]:
-    """The route verify drives when its roughness was assumed: its elevation plus a seeded
-    random ISO 8608 profile whose RMS window roughness is the assumed one, and a note
-    saying so.
-
-    Parameters
-    ----------
-    route : Route
-        A route with ``assumed_roughness``.
-    vehicle : Vehicle
-        Supplies the ground clearance h (m).
-    window_m : float
-        The roughness window length W the profile was planned with (m).
-    seed : int
-        Seed (>= 0) of the random phases.
-
-    Returns
-    -------
-    route : Route
-        The same samples, elevation ``z_m + realisation``, the same assumed roughness.
-    note : str
-        One line for the user: the class (or RI), the seed, the band and the RMS.
-    """
-    assumed = route.assumed_roughness
-    h = vehicle.ground_clearance_m
-    added = assumed.realisation_m(route.s_m, clearance_m=h, window_m=window_m, seed=seed)
-    n_min, n_max = assumed.realisation_band_cpm(route.s_m)
-    ri = assumed.ri_for(clearance_m=h, window_m=window_m)
-    shape = f"ISO 8608 class {assumed.road_class}" if assumed.road_class else "ISO 8608 (class C's shape)"
-    note = (f"roughness assumed ({assumed.label}): simulated on the route's elevation plus a random {shape} "
-            f"profile, seed {seed}, {n_min:g} to {n_max:.3g} cycles/m, RMS {1e3 * ri * h:.3g} mm over {window_m:g} m "
-            f"windows (RI {ri:.4g}); another seed drives other ground of that roughness")
-    return dataclasses.replace(route, z_m=route.z_m + added), note
