@@ -260,8 +260,10 @@ def test_a_bad_path_tolerance_is_one_line(tmp_path, atv):
 @pytest.mark.parametrize("route_name, vehicle_name", [("trail", "atv"), ("washboard", "atv-resonant")])
 def test_a_vehicle_file_without_the_keys_plans_exactly_as_before(route_name, vehicle_name):
     # tests/expected/before-turns/ holds the profiles the planner wrote before turns and hills
-    # (commit 87d3afb, IPOPT): the same vehicle without the optional keys must give them bit for
-    # bit with IPOPT, and the banded solver (issue 14, later) the same optimum within its tolerance
+    # (commit 87d3afb, IPOPT; rewritten once, with the vehicle's optional keys off, when the
+    # roughness windows became exact at any offset, issue 29): the same vehicle without the
+    # optional keys must give them bit for bit with IPOPT, and the banded solver (issue 14,
+    # later) the same optimum within its tolerance
     from profileopt.io import read_route
     from profileopt.planning import SolverOptions
 
