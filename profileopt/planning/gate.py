@@ -55,7 +55,7 @@ if TYPE_CHECKING:
     from ..core.vehicle import Vehicle
 
 __all__ = ["GATE_MARGIN", "GATE_SHRINK", "MAX_GATE_ROUNDS", "GateCheck", "gate_applies", "check_plan", "gate_caps",
-           "merged_caps"]
+           "merged_caps", "covered_m"]
 
 #: A simulated force above (1 - GATE_MARGIN) of the limit sends the plan back; a new cap aims
 #: at that much below the limit, so the profile as written to a file (rounded speeds) and
@@ -202,3 +202,25 @@ def merged_caps(old: StepCaps | None, new: StepCaps) -> StepCaps:
     order = np.argsort(start, kind="stable")
     return StepCaps(start_m=start[order], end_m=np.concatenate([old.end_m, new.end_m])[order],
                     cap_mps=np.concatenate([old.cap_mps, new.cap_mps])[order])
+
+
+def covered_m(caps: StepCaps) -> float:
+    """Length of route (m) that at least one stretch of ``caps`` covers (overlaps counted once).
+
+    Parameters
+    ----------
+    caps : StepCaps
+        Stretches (m).
+
+    Returns
+    -------
+    float
+    """
+    if caps.start_m.size == 0:
+        return 0.0
+    order = np.argsort(caps.start_m, kind="stable")
+    start, end = caps.start_m[order], np.maximum.accumulate(caps.end_m[order])
+    new = np.concatenate([[True], start[1:] > end[:-1]])  # a stretch that starts past all before it
+    heads = np.flatnonzero(new)
+    tails = np.append(heads[1:], start.size) - 1
+    return float(np.sum(end[tails] - start[heads]))

@@ -50,7 +50,7 @@ from ..physics.forces import DEFAULT_MODEL, get_model
 from ..physics.speeds import SpeedBands, max_force_over_segments
 from .bands import BandChoice, DrivePower, choose_bands, snap_to_band
 from .fallback import fallback_choice
-from .gate import MAX_GATE_ROUNDS, check_plan, gate_applies, gate_caps, merged_caps
+from .gate import MAX_GATE_ROUNDS, check_plan, covered_m, gate_applies, gate_caps, merged_caps
 from .limits import Limit, PlanContext, SimulatedLimit, default_limits
 from .nlp.pieces import choose_cuts, cut_scores, solve_pieces
 from .nlp.problem import Scaling, family_rows, objective_s, row_bounds
@@ -252,8 +252,8 @@ def _gate(profile: Profile, once: "Callable[[tuple[Limit, ...]], Profile]", limi
     if caps is None:
         return profile
     note = (f"simulation gate: the plan went {first_ratio:.4g}x over the force limit in the exact simulation "
-            f"(at s = {first_s:.6g} m); the speed was capped over {caps.cap_mps.size} stretch(es), "
-            f"{float(np.sum(caps.end_m - caps.start_m)):.3g} m in all, until it held "
+            f"(at s = {first_s:.6g} m); the speed was capped over {covered_m(caps):.3g} m of route "
+            f"({caps.cap_mps.size} stretch(es)), until it held "
             f"({check.worst_ratio:.4g} of the limit)")
     return dataclasses.replace(profile, notes=(*profile.notes, note))
 

@@ -133,3 +133,13 @@ def test_obstacles_are_planned_within_the_limit_in_simulation(kind, height_m, wi
                          + [(*case, "atv-resonant") for case in OBSTACLE_FAMILY[6::12]])
 def test_obstacles_of_the_family_are_planned_within_the_limit(kind, height_m, width_m, spacing_m, vehicle_name):
     _keeps_the_limit_in_simulation(kind, height_m, width_m, spacing_m, vehicle_name)
+
+
+def test_covered_length_counts_overlaps_once():
+    # by hand: [0, 2] and [1, 3] cover 3 m, [5, 6] one more, [5.5, 5.7] nothing new
+    from profileopt.physics.steps import StepCaps
+    from profileopt.planning.gate import covered_m
+
+    caps = StepCaps(start_m=np.array([5.0, 0.0, 1.0, 5.5]), end_m=np.array([6.0, 2.0, 3.0, 5.7]),
+                    cap_mps=np.ones(4))
+    assert covered_m(caps) == pytest.approx(4.0, abs=1e-12)
