@@ -31,7 +31,6 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
-import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable, NamedTuple, Sequence
 
@@ -40,6 +39,8 @@ import numpy as np
 from ..core.binding import binding_shares
 from ..core.route import Route
 from ..errors import InfeasibleError, InputError, PlanningError
+from ..planning.gate import covered_m
+from ..planning.limits import SimulatedLimit
 from ..terrain.synthetic import iso8608_profile, step, washboard
 
 if TYPE_CHECKING:
@@ -191,6 +192,9 @@ class PairResult:
         The notes of the plan (the summary's: refining, the simulation gate, the assumed
         roughness, the turns sharper than the vehicle's turning circle, ...) and of the
         verification.
+    gate_capped_m : float
+        Length of route the planner's simulation gate capped (m): the stretches of the
+        plan's :class:`~profileopt.planning.limits.SimulatedLimit`, overlaps counted once.
     """
 
     route: str
@@ -223,6 +227,7 @@ class PairResult:
     keeps_limits: bool = False
     plan_notes: tuple[str, ...] = ()
     verify_notes: tuple[str, ...] = ()
+    gate_capped_m: float = 0.0
 
     @property
     def planned(self) -> bool:
@@ -238,15 +243,6 @@ class PairResult:
     def gated(self) -> bool:
         """True when the planner's simulation gate capped the plan."""
         return bool(self.gate_note)
-
-    @property
-    def gate_capped_m(self) -> float:
-        """How much of the route the simulation gate capped (m, read from its note; 0 when
-        not gated, nan when the note does not say)."""
-        if not self.gated:
-            return 0.0
-        found = re.search(r"([0-9.]+) m in all", self.gate_note)
-        return float(found.group(1)) if found else math.nan
 
     @property
     def time_ratio(self) -> float:
@@ -417,6 +413,7 @@ def study_pair(route: StudyRoute, vehicle: "str | Vehicle", *, baseline_time_s: 
         keeps_limits=check.keeps_limits,
         plan_notes=tuple(summary.get("notes", profile.notes)),
         verify_notes=tuple(check.notes),
+        gate_capped_m=sum(covered_m(limit.caps) for limit in profile.limits if isinstance(limit, SimulatedLimit)),
     )
     return PairRun(result, route, loaded, profile, check)
 
