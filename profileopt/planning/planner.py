@@ -181,9 +181,10 @@ def plan(
     -------
     Profile
         ``status`` says how it was obtained; a profile is never returned that breaks a
-        force, speed, acceleration or jerk limit, nor (model ``sbem_tf``, measured ground)
-        one whose exact simulation goes over the force limit (:mod:`profileopt.planning.gate`;
-        a note says where the gate lowered the speed).
+        force, speed, acceleration or jerk limit, nor (model ``sbem_tf``) one whose exact
+        simulation goes over the force limit (:mod:`profileopt.planning.gate`; on an assumed
+        roughness, the ground ``verify`` drives by default; a note says where the gate
+        lowered the speed).
 
     Raises
     ------
