@@ -6,7 +6,7 @@ them from here, so ``profileopt --help`` needs none of the numerical packages.
 
 from __future__ import annotations
 
-__all__ = ["MODEL_KEYS", "DEFAULT_MODEL", "DEFAULT_SMOOTHING", "DEFAULT_SEGMENT_LENGTH_M", "DEFAULT_REFINE", "DEFAULT_ROUGHNESS_WINDOW_M",
+__all__ = ["MODEL_KEYS", "DEFAULT_MODEL", "DEFAULT_SMOOTHING", "DEFAULT_SEGMENT_LENGTH_M", "DEFAULT_REFINE", "DEFAULT_SIMULATION_GATE", "DEFAULT_ROUGHNESS_WINDOW_M",
            "DEFAULT_PATH_TOLERANCE_M", "MIN_PATH_TOLERANCE_M", "CRAWL_SPEED_MPS", "PLAN_BANDS", "PLAN_METHODS", "MAX_C_BYTES", "DEFAULT_TRACK_SPACING_M",
            "DEFAULT_CORRIDOR_M", "DEFAULT_MAX_GAP_M", "MIN_POINTS_PER_BIN", "MAX_ROUGHNESS_SPACING_M",
            "MAX_ROUGHNESS_CORRIDOR_M", "LIMIT_RTOL"]
@@ -25,6 +25,9 @@ DEFAULT_SEGMENT_LENGTH_M = 5.0
 #: --segment-length": refined, 1 m and 0.5 m agree within 0.1 % on every bundled route,
 #: unrefined within 2.3 %).
 DEFAULT_REFINE = True
+#: Drive every plan in the exact simulation and cap where it goes over the force limit
+#: (:mod:`profileopt.planning.gate`); off only for studies of the force models themselves.
+DEFAULT_SIMULATION_GATE = True
 #: Roughness window length W (m) when none is given: every stretch [a, a + W] of the route
 #: is judged by its own RI (docs/paper-notes.md, "Roughness windows"); 5 m, the segment
 #: length that the RI was measured over before windows.

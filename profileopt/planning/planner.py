@@ -41,6 +41,7 @@ from ..core.vehicle import PLAUSIBLE_RANGES, vehicle_reference
 from ..defaults import (
     DEFAULT_PATH_TOLERANCE_M,
     DEFAULT_REFINE,
+    DEFAULT_SIMULATION_GATE,
     DEFAULT_SMOOTHING,
     PLAN_BANDS,
     PLAN_METHODS,
@@ -111,6 +112,7 @@ def plan(
     extra_limits: Sequence[Limit] = (),
     solver_options: SolverOptions | None = None,
     refine: bool = DEFAULT_REFINE,
+    simulation_gate: bool = DEFAULT_SIMULATION_GATE,
 ) -> Profile:
     """The fastest smooth speed profile along ``route`` that keeps every limit.
 
@@ -176,6 +178,11 @@ def plan(
         depends on it (docs: guide/planning.md, "Choosing --segment-length"), for more segments. False plans
         on the uniform segments asked for (one band choice; the profile has exactly their
         boundaries).
+    simulation_gate : bool, default True (:data:`profileopt.defaults.DEFAULT_SIMULATION_GATE`)
+        Drive the plan in the exact simulation ``verify`` uses and, where the force goes over
+        the limit, plan again with lower caps there (:mod:`profileopt.planning.gate`; model
+        ``sbem_tf``). False returns the model's plan as it is: for studies of the force
+        models themselves (:func:`profileopt.studies.safety.safety_study`).
 
     Returns
     -------
@@ -221,7 +228,7 @@ def plan(
                           timings=timings)
 
     profile = once(limits)
-    if gate_applies(route, model):  # drive it in the exact simulation; cap where it goes over
+    if simulation_gate and gate_applies(route, model):  # drive it in the exact simulation; cap where it goes over
         profile = _gate(profile, once, limits, route, vehicle, seg.roughness_window_m, timings)
     timings["total"] = time.perf_counter() - t_start
     return dataclasses.replace(profile, timings_s=dict(timings))

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
-from ..defaults import DEFAULT_REFINE
+from ..defaults import DEFAULT_REFINE, DEFAULT_SIMULATION_GATE
 from ..errors import InfeasibleError
 from ..physics.forces import MODELS, get_model
 
@@ -210,7 +210,8 @@ def _exceedances(result: "Verification") -> tuple[Exceedance, ...]:
 
 
 def run_model(route: "Route", vehicle: "Vehicle", model: str, *, segment_length_m: float = 5.0,
-              roughness_window_m: float = 5.0, refine: bool = DEFAULT_REFINE) -> ModelRun:
+              roughness_window_m: float = 5.0, refine: bool = DEFAULT_REFINE,
+              simulation_gate: bool = DEFAULT_SIMULATION_GATE) -> ModelRun:
     """Plan ``route`` with ``model`` (planner defaults otherwise) and verify the plan.
 
     Parameters
@@ -226,6 +227,9 @@ def run_model(route: "Route", vehicle: "Vehicle", model: str, *, segment_length_
     refine : bool, default True (:data:`profileopt.defaults.DEFAULT_REFINE`)
         Plan with ``refine`` (:func:`profileopt.planning.plan`); False plans on uniform
         segments.
+    simulation_gate : bool, default True (:data:`profileopt.defaults.DEFAULT_SIMULATION_GATE`)
+        Plan with the planner's simulation gate (:mod:`profileopt.planning.gate`); False
+        measures the force model's own plan.
 
     Returns
     -------
@@ -248,7 +252,7 @@ def run_model(route: "Route", vehicle: "Vehicle", model: str, *, segment_length_
               "label": force_model.label, "quantity": force_model.quantity}
     try:
         profile = plan(route, vehicle, segment_length_m=segment_length_m, model=force_model.key,
-                       roughness_window_m=roughness_window_m, refine=refine)
+                       roughness_window_m=roughness_window_m, refine=refine, simulation_gate=simulation_gate)
     except InfeasibleError as exc:
         return ModelRun(**common, outcome=INFEASIBLE, status=str(exc))
     except PlanningError as exc:
@@ -280,6 +284,7 @@ def compare_models(
     segment_length_m: float = 5.0,
     roughness_window_m: float = 5.0,
     refine: bool = DEFAULT_REFINE,
+    simulation_gate: bool = DEFAULT_SIMULATION_GATE,
 ) -> tuple[ModelRun, ...]:
     """:func:`run_model` for each model on one route (``profileopt compare``).
 
@@ -296,6 +301,9 @@ def compare_models(
     refine : bool, default True (:data:`profileopt.defaults.DEFAULT_REFINE`)
         Plan with ``refine`` (:func:`profileopt.planning.plan`); False plans on uniform
         segments.
+    simulation_gate : bool, default True (:data:`profileopt.defaults.DEFAULT_SIMULATION_GATE`)
+        Plan with the planner's simulation gate (:mod:`profileopt.planning.gate`); False
+        measures the force model's own plan.
 
     Returns
     -------
@@ -304,4 +312,5 @@ def compare_models(
     """
     keys = list(MODELS) if models is None else list(models)
     return tuple(run_model(route, vehicle, key, segment_length_m=segment_length_m,
-                           roughness_window_m=roughness_window_m, refine=refine) for key in keys)
+                           roughness_window_m=roughness_window_m, refine=refine, simulation_gate=simulation_gate)
+                 for key in keys)

@@ -278,6 +278,7 @@ def safety_study(
     roughness_window_m: float = 5.0,
     reference_model: str = "sbem_tf",
     refine: bool = DEFAULT_REFINE,
+    simulation_gate: bool = False,
 ) -> SafetyStudy:
     """Plan every route for every vehicle with every model, simulate, and pool the results.
 
@@ -299,6 +300,10 @@ def safety_study(
     refine : bool, default True (:data:`profileopt.defaults.DEFAULT_REFINE`)
         Plan with ``refine`` (:func:`profileopt.planning.plan`); False plans on uniform
         segments.
+    simulation_gate : bool, default False
+        Plan with the planner's simulation gate (:mod:`profileopt.planning.gate`). Off by
+        default: the study measures the force models themselves, and with the gate SBEM:TF's
+        plans keep the limit in simulation by construction (and cost a simulation more each).
 
     Returns
     -------
@@ -317,7 +322,7 @@ def safety_study(
     reference_key = get_model(reference_model).key
     pairs = [
         compare_models(route, vehicle, models=keys, segment_length_m=segment_length_m,
-                       roughness_window_m=roughness_window_m, refine=refine)
+                       roughness_window_m=roughness_window_m, refine=refine, simulation_gate=simulation_gate)
         for route in routes
         for vehicle in vehicles
     ]

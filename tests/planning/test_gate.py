@@ -43,16 +43,14 @@ def test_gate_caps_by_hand():
         assert caps.cap_mps[0] == pytest.approx(speed * min(GATE_SHRINK, (1 - GATE_MARGIN) / force.max()), rel=1e-12)
 
 
-def test_a_plan_the_models_let_over_the_limit_comes_back_within_it(monkeypatch):
+def test_a_plan_the_models_let_over_the_limit_comes_back_within_it():
     # Issue 29: a 0.40 m x 0.15 m block sampled every 0.05 m, atv-resonant. The step limit
     # caps it at 1.27 m/s, where the exact simulation (the landing off its trailing edge) is
     # 1.34 x the limit; verify rejected the plan (exit 4). Reference: profileopt.verify, the
     # same exact simulation, run independently of the planner.
     vehicle = profileopt.load_vehicle("atv-resonant")
     route = obstacle_route("block", 0.15, 0.4, 0.05)
-    with monkeypatch.context() as patch:  # the plan as it was, without the gate
-        patch.setattr(planner, "gate_applies", lambda route, model: False)
-        ungated = profileopt.plan(route, vehicle)
+    ungated = profileopt.plan(route, vehicle, simulation_gate=False)  # the plan as it was
     assert profileopt.verify(route, ungated, vehicle).worst_ratio > 1.3
     profile = profileopt.plan(route, vehicle)
     result = profileopt.verify(route, profile, vehicle)
