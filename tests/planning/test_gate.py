@@ -1,7 +1,6 @@
 """The planner's simulation gate: a plan is driven in the exact simulation before it is
 returned, and capped where it goes over the force limit (profileopt.planning.gate)."""
 
-import itertools
 import math
 import types
 
