@@ -245,12 +245,7 @@ def _motion_in_segment(t: np.ndarray, seg: np.ndarray, b: np.ndarray, v: np.ndar
     return np.clip(s, b[seg], b[seg + 1]), speed
 
 
-def choose_time_step_s(
-    sample_spacing_m: float,
-    peak_speed_mps: float,
-    natural_frequency_radps: float,
-    shortest_segment_time_s: float,
-) -> float:
+def choose_time_step_s(natural_frequency_radps: float) -> float:
     """The step dt (s) of the simulation's uniform time grid, and why.
 
     Every break of the wheel's path is a knot whatever dt is, and the input between knots
@@ -271,21 +266,14 @@ def choose_time_step_s(
 
     Parameters
     ----------
-    sample_spacing_m : float
-        Smallest distance between route samples (m); no longer limits dt (kept for callers).
-    peak_speed_mps : float
-        Top speed of the profile (m/s); no longer limits dt (kept for callers).
     natural_frequency_radps : float
         Suspension natural frequency wn (rad/s).
-    shortest_segment_time_s : float
-        Time spent in the shortest-lived segment (s); no longer limits dt (kept for callers).
 
     Returns
     -------
     float
         dt (s).
     """
-    del sample_spacing_m, peak_speed_mps, shortest_segment_time_s  # see above: knots and quarter points
     return 2.0 * math.pi / (STEPS_PER_PERIOD * natural_frequency_radps)
 
 
@@ -418,9 +406,7 @@ def simulate_quarter_car(
     total = float(times[-1])
     spacing = float(np.min(np.diff(s)))
     if time_step_s is None:
-        time_step_s = choose_time_step_s(
-            spacing, float(np.max(v)), vehicle.natural_frequency_radps, float(np.min(np.diff(times)))
-        )
+        time_step_s = choose_time_step_s(vehicle.natural_frequency_radps)
     steps = max(int(math.ceil(total / time_step_s)), 1)
     if steps > MAX_STEPS:  # memory
         slowest = int(np.argmax(np.diff(times)))

@@ -94,14 +94,13 @@ class GateCheck:
         return self.worst_ratio <= 1.0 - GATE_MARGIN
 
 
-def gate_applies(route: "Route", model: str) -> bool:
-    """Whether the gate checks plans of ``model`` on ``route``: the transmitted force (see the
-    module's docstring).
+def gate_applies(model: str) -> bool:
+    """Whether the gate checks plans of ``model``: those limiting the transmitted force, on
+    every route (an assumed roughness is simulated as verify drives it; see the module's
+    docstring).
 
     Parameters
     ----------
-    route : Route
-        The route planned.
     model : str
         Force model key.
 
@@ -109,7 +108,6 @@ def gate_applies(route: "Route", model: str) -> bool:
     -------
     bool
     """
-    del route  # every route: an assumed roughness is simulated as verify drives it
     return get_model(model).quantity == "transmitted"
 
 

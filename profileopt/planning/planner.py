@@ -228,7 +228,7 @@ def plan(
                           timings=timings)
 
     profile = once(limits)
-    if simulation_gate and gate_applies(route, model):  # drive it in the exact simulation; cap where it goes over
+    if simulation_gate and gate_applies(model):  # drive it in the exact simulation; cap where it goes over
         profile = _gate(profile, once, limits, route, vehicle, seg.roughness_window_m, timings)
     timings["total"] = time.perf_counter() - t_start
     return dataclasses.replace(profile, timings_s=dict(timings))

@@ -9,7 +9,6 @@ import pytest
 
 import profileopt
 from profileopt.physics.simulate import simulate_quarter_car
-from profileopt.planning import planner
 from profileopt.planning.gate import GATE_MARGIN, GATE_SHRINK, check_plan, gate_caps
 from profileopt.planning.limits import SimulatedLimit
 from profileopt.studies.real_routes import OBSTACLE_FAMILY, obstacle_route
@@ -63,14 +62,12 @@ def test_a_plan_the_models_let_over_the_limit_comes_back_within_it():
                                                                     ungated.speed_mps), rtol=1e-6)
 
 
-def test_a_plan_within_the_limit_is_returned_as_planned(monkeypatch):
+def test_a_plan_within_the_limit_is_returned_as_planned():
     # curb.csv with atv: the exact simulation stays within the limit (0.86 of it), so the gate
     # simulates once and changes nothing.
     vehicle = profileopt.load_vehicle("atv")
     route = profileopt.read_route(ROUTES / "curb.csv")
-    with monkeypatch.context() as patch:
-        patch.setattr(planner, "gate_applies", lambda route, model: False)
-        ungated = profileopt.plan(route, vehicle)
+    ungated = profileopt.plan(route, vehicle, simulation_gate=False)
     profile = profileopt.plan(route, vehicle)
     np.testing.assert_array_equal(profile.speed_mps, ungated.speed_mps)
     assert not any("simulation gate" in note for note in profile.notes)
@@ -81,9 +78,8 @@ def test_the_gate_leaves_the_excitation_models_alone():
     # their force keeps its k y term at any speed: a lower speed cannot always help
     from profileopt.planning.gate import gate_applies
 
-    route = obstacle_route("kerb", 0.1, 0.0, 0.05)
-    assert gate_applies(route, "sbem_tf")
-    assert not any(gate_applies(route, model) for model in ("sbem_ef", "iecm", "prev_bem"))
+    assert gate_applies("sbem_tf")
+    assert not any(gate_applies(model) for model in ("sbem_ef", "iecm", "prev_bem"))
 
 
 def test_an_assumed_roughness_is_gated_on_the_ground_verify_drives():

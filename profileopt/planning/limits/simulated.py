@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ...physics.steps import StepCaps
+from ...physics.steps import StepCaps, segment_step_caps_mps
 from .base import Limit, PlanContext, own_cap_excess
 
 if TYPE_CHECKING:
@@ -53,8 +53,7 @@ class SimulatedLimit(Limit):
         -------
         numpy.ndarray, shape (N,)
         """
-        b = context.segments.boundaries_m
-        return self.caps.lowest_over(b[:-1], b[1:], np.inf)
+        return segment_step_caps_mps(self.caps, context.segments.boundaries_m)
 
     def cap_stretches_m(self, context: PlanContext) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The stretches and their caps, so that refining cuts segments just outside them.
