@@ -14,7 +14,16 @@ One design for every output of the package:
 - An output that exists and is not a regular file (a character device such as
   ``/dev/null`` or a terminal, a FIFO, a symlink to ``/proc/self/fd/1``) is never replaced:
   the finished temporary file is copied into it. A block device or a socket is refused.
-  ``-`` is standard output for the outputs a command allows it for (text, not PNG).
+  ``-`` is standard output for the outputs a command allows it for (text, not pictures).
+- An output that is a symlink to a file (or a dangling symlink) is written through to its
+  target, as shell redirection does; the link stays.
+- A set writes its streams first and renames its files last, so that a stream that fails
+  (``/dev/full``, a closed standard output) leaves every file as it was. Each rename is made
+  in the folder the set checked (by its file descriptor, where the system allows it) and
+  only if the file there is still none of the command's inputs (device and inode), so that
+  a folder swapped for a link to the inputs' folder during the run replaces nothing.
+- A picture output (``--plot``, ``--map``) must end in an extension matplotlib can write
+  (``.png``, ``.jpg``, ``.pdf``, ``.svg``, ...): :func:`picture_format` names the format.
 """
 
 from __future__ import annotations
@@ -22,6 +31,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import dataclasses
+import errno
 import os
 import shutil
 import stat
@@ -32,11 +42,55 @@ from typing import IO, Iterable, Iterator
 
 from ..errors import InputError
 
-__all__ = ["atomic_write", "atomic_path", "check_output_path", "check_output_paths", "OutputSet", "STDOUT"]
+__all__ = ["atomic_write", "atomic_path", "check_output_path", "check_output_paths", "OutputSet", "STDOUT",
+           "PICTURE_OPTIONS", "WRITE_FAILURES", "picture_format"]
 
 #: The output path that means standard output (for the outputs that allow it).
 STDOUT = "-"
+#: The errors of a write that found no room (a full disk or quota, a file too large,
+#: /dev/full) or a device that failed: the user's to fix (exit status 2), not internal errors.
+WRITE_FAILURES = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO})
+#: The options that name a picture: their path's extension must be a format matplotlib writes.
+PICTURE_OPTIONS = ("--plot", "--map")
 _TEMP_PREFIX, _TEMP_SUFFIX = ".po-", ".tmp"
+# rename within a folder held open since the check (renameat): a folder path swapped during
+# the run cannot redirect the rename
+_DIR_FD = os.rename in os.supports_dir_fd and hasattr(os, "O_DIRECTORY")  # renameat, as os.replace uses
+#: The picture formats matplotlib's Agg, PDF, PS and SVG back ends write, by extension
+#: (matplotlib.backend_bases.FigureCanvasBase.get_supported_filetypes(), without importing
+#: matplotlib before the work; JPEG, TIFF and WebP through Pillow, a matplotlib dependency).
+_PICTURE_FORMATS = {"png": "png", "jpg": "jpeg", "jpeg": "jpeg", "pdf": "pdf", "svg": "svg", "svgz": "svgz",
+                    "eps": "eps", "ps": "ps", "tif": "tiff", "tiff": "tiff", "webp": "webp"}
+
+
+def picture_format(path: str | os.PathLike) -> str:
+    """The matplotlib format a picture path names by its extension (``"png"`` without one).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The picture's file name, e.g. ``plan.jpg``.
+
+    Returns
+    -------
+    str
+        The ``format=`` to give ``Figure.savefig``: ``"png"``, ``"jpeg"``, ``"pdf"``,
+        ``"svg"``, ...; ``"png"`` for a name without an extension (``/dev/null``, ``plot``).
+
+    Raises
+    ------
+    InputError
+        The extension is not one matplotlib writes.
+    """
+    suffix = Path(os.fspath(path)).suffix
+    if not suffix:
+        return "png"
+    found = _PICTURE_FORMATS.get(suffix[1:].lower())
+    if found is None:
+        names = ", ".join(f".{ext}" for ext in _PICTURE_FORMATS)
+        raise InputError(f"{os.fspath(path)}: a picture cannot be written as '{suffix}'; end its name in one of "
+                         f"{names}")
+    return found
 
 
 def _umask() -> int:
@@ -49,10 +103,16 @@ def _umask() -> int:
 class _Target:
     """A checked output: where it goes and how it is delivered."""
 
-    path: Path
+    path: Path  # as the user wrote it (for messages)
     label: str
     stream: bool = False  # an existing character device or FIFO: copied into, never replaced
     stdout: bool = False  # '-'
+    real: Path | None = None  # where a file is written: the path with its symlinks resolved
+
+    @property
+    def file(self) -> Path:
+        """The file written (a symlink's target; the path itself for a stream)."""
+        return self.real if self.real is not None else self.path
 
     def describe(self) -> str:
         return f"{self.label} {self.path}" if self.label else str(self.path)
@@ -74,6 +134,8 @@ def _inspect(path: str | os.PathLike, label: str = "", *, stdout_ok: bool = Fals
     if text == STDOUT and label:  # '-' means standard output only on the command line
         if not stdout_ok:
             raise InputError(f"{label} -: this output cannot go to standard output; give the path of a file")
+        if sys.stdout is None:  # started with standard output closed (>&-)
+            raise InputError(f"{label} -: standard output is closed; give the path of a file to write")
         return _Target(Path(STDOUT), label, stream=True, stdout=True)
     target = Path(text)
     shown = f"{where}{target}"
@@ -93,17 +155,21 @@ def _inspect(path: str | os.PathLike, label: str = "", *, stdout_ok: bool = Fals
         if not stat.S_ISREG(st.st_mode):
             raise InputError(f"{shown}: exists and is neither a regular file, a character device nor a FIFO; "
                              "it is never replaced, choose another path")
-    directory = target.parent if str(target.parent) else Path(".")
+    # a symlink (dangling or not) is written through to its target, as '>' does; the link stays
+    real = Path(os.path.realpath(target)) if os.path.islink(target) else target
+    if real != target and os.path.isdir(real):
+        raise InputError(f"{shown}: is a link to the folder {real}; give the path of a file to write")
+    directory = real.parent if str(real.parent) else Path(".")
     if not directory.is_dir():
         what = "is a file, not a folder" if directory.exists() else "does not exist"
         raise InputError(f"{shown}: {directory} {what}; create the folder or choose another path")
     if not os.access(directory, os.W_OK | os.X_OK):
         raise InputError(f"{shown}: cannot write in {directory} (permission denied); choose another path")
-    size, limit = len(os.fsencode(target.name)), _name_max(directory)
+    size, limit = len(os.fsencode(real.name)), _name_max(directory)
     if size > limit:
         raise InputError(f"{shown}: the file name is {size} bytes, longer than the {limit} bytes a name may "
                          "have there; choose a shorter name")
-    return _Target(target, label)
+    return _Target(target, label, real=real)
 
 
 def check_output_path(path: str | os.PathLike) -> Path:
@@ -222,6 +288,21 @@ class OutputSet:
                                  "output its own path")
             seen[key] = target
             self._targets[_key(path)] = target
+        for target in self._targets.values():  # after the checks above, which say more
+            if target.label in PICTURE_OPTIONS:
+                try:
+                    picture_format(target.path)
+                except InputError as exc:
+                    raise InputError(f"{target.label} {exc}") from None
+        self._inputs = input_ids
+        self._folders: dict[Path, int] = {}  # each output folder, held open from the check to the renames
+        try:
+            for target in self._targets.values():
+                if not target.stream and _DIR_FD and target.file.parent not in self._folders:
+                    self._folders[target.file.parent] = _open_folder(target)
+        except BaseException:
+            self._close_folders()
+            raise
 
     @property
     def paths(self) -> list[Path]:
@@ -245,16 +326,27 @@ class OutputSet:
         if self._token is not None:
             _ACTIVE.reset(self._token)
             self._token = None
+        writing = self._pending[-1][0] if self._pending else None  # the output being written when it failed
         try:
             if exc_type is None:
-                # renames first: each is atomic and cannot be half done; then the copies into
-                # streams (standard output, a FIFO, /dev/null), which a reader may stop early
-                for target, tmp in sorted(self._pending, key=lambda item: item[0].stream):
-                    _deliver(target, tmp)
+                # the copies into streams first (standard output, a FIFO, /dev/full): a stream
+                # that fails leaves every file as it was; then the renames, each atomic
+                for target, tmp in sorted(self._pending, key=lambda item: not item[0].stream):
+                    _deliver(target, tmp, folder=self._folders.get(target.file.parent), inputs=self._inputs)
         finally:
             for _, tmp in self._pending:
                 _remove(tmp)
             self._pending = []
+            self._close_folders()
+        if (isinstance(exc, OSError) and not isinstance(exc, BrokenPipeError) and exc.errno in WRITE_FAILURES
+                and writing is not None):  # the disk filled up while an output was written
+            raise InputError(f"{writing.describe()}: cannot write it ({exc.strerror or exc}); nothing was written, "
+                             "free some space or choose another output") from None
+
+    def _close_folders(self) -> None:
+        for fd in self._folders.values():
+            os.close(fd)
+        self._folders = {}
 
 
 def _key(path: str | os.PathLike) -> str:
@@ -265,7 +357,7 @@ def _key(path: str | os.PathLike) -> str:
 def _make_temp(target: _Target) -> Path:
     """A new empty temporary file for ``target``: beside it, or in the temporary folder for a
     stream (a device's folder, /dev, is no place for it)."""
-    directory = None if target.stream else (target.path.parent if str(target.path.parent) else Path("."))
+    directory = None if target.stream else (target.file.parent if str(target.file.parent) else Path("."))
     try:
         fd, tmp = tempfile.mkstemp(prefix=_TEMP_PREFIX, suffix=_TEMP_SUFFIX, dir=directory)
     except OSError as exc:
@@ -276,19 +368,53 @@ def _make_temp(target: _Target) -> Path:
     return Path(tmp)
 
 
-def _deliver(target: _Target, tmp: Path) -> None:
-    """Put the finished temporary file in place: rename, or copy into a stream."""
+def _open_folder(target: _Target) -> int:
+    """The folder of a file output, opened (a descriptor to rename in, see :func:`_deliver`)."""
+    folder = target.file.parent if str(target.file.parent) else Path(".")
+    try:
+        return os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
+    except OSError as exc:
+        raise InputError(f"{target.describe()}: cannot open its folder {folder} ({exc.strerror}); choose another "
+                         "path") from None
+
+
+def _deliver(target: _Target, tmp: Path, *, folder: int | None = None, inputs: dict | None = None) -> None:
+    """Put the finished temporary file in place: rename, or copy into a stream.
+
+    ``folder``: the descriptor of the output's folder as checked (the rename is made there, or
+    fails if the temporary file is not there: the folder path was swapped during the run);
+    ``inputs``: the command's inputs by identity, none of which the output may now be.
+    """
     if not target.stream:
-        os.replace(tmp, target.path)
+        now = _identity(target.file)
+        if inputs and now in inputs:
+            raise InputError(f"{target.describe()}: is now the input {inputs[now]} (the output's folder or file "
+                             "was changed while the command ran); nothing was written, choose another output path")
+        if folder is None:
+            os.replace(tmp, target.file)
+            return
+        try:
+            os.replace(tmp.name, target.file.name, src_dir_fd=folder, dst_dir_fd=folder)
+        except FileNotFoundError:
+            raise InputError(f"{target.describe()}: its folder {target.file.parent} was replaced while the command "
+                             "ran; nothing was written, run again") from None
         return
-    with open(tmp, "rb") as source:
-        if target.stdout:
-            sys.stdout.flush()
-            shutil.copyfileobj(source, sys.stdout.buffer)
-            sys.stdout.buffer.flush()
-        else:
-            with open(target.path, "wb") as sink:  # a device or FIFO: written into, not replaced
-                shutil.copyfileobj(source, sink)
+    try:
+        with open(tmp, "rb") as source:
+            if target.stdout:
+                sys.stdout.flush()
+                shutil.copyfileobj(source, sys.stdout.buffer)
+                sys.stdout.buffer.flush()
+            else:
+                with open(target.path, "wb") as sink:  # a device or FIFO: written into, not replaced
+                    shutil.copyfileobj(source, sink)
+    except BrokenPipeError:  # the reader stopped early (| head): the command line's status 141
+        raise
+    except OSError as exc:  # /dev/full, a device that refuses the write
+        if exc.errno not in WRITE_FAILURES and not isinstance(exc, PermissionError):
+            raise
+        raise InputError(f"{target.describe()}: cannot write it ({exc.strerror or exc}); no file output was "
+                         "written, choose another output") from None
 
 
 def _remove(tmp: Path) -> None:
@@ -331,12 +457,17 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
         yield tmp
         return
     target = _inspect(path)
-    tmp = _make_temp(target)
+    folder = _open_folder(target) if _DIR_FD and not target.stream else None
     try:
-        yield tmp
-        _deliver(target, tmp)
+        tmp = _make_temp(target)
+        try:
+            yield tmp
+            _deliver(target, tmp, folder=folder)
+        finally:
+            _remove(tmp)
     finally:
-        _remove(tmp)
+        if folder is not None:
+            os.close(folder)
 
 
 @contextlib.contextmanager
