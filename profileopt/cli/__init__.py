@@ -6,6 +6,44 @@
 :mod:`~profileopt.cli.route`, :mod:`~profileopt.cli.figures`, :mod:`~profileopt.cli.export_c`).
 """
 
-from .app import build_parser, main
+from __future__ import annotations
+
+import sys
+from typing import TYPE_CHECKING, Sequence
+
+if TYPE_CHECKING:
+    import argparse
 
 __all__ = ["main", "build_parser"]
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line (:func:`profileopt.cli.app.main`); returns the exit status.
+
+    The console script calls this first: the command line's own modules are imported here,
+    so that Ctrl-C while they load is the command's one line and status 130, not a traceback.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        The arguments after the program name; None reads ``sys.argv[1:]``.
+
+    Returns
+    -------
+    int
+        The exit status (see :func:`profileopt.cli.app.main`).
+    """
+    try:
+        from .app import main as run
+    except KeyboardInterrupt:
+        print("profileopt: interrupted", file=sys.stderr)
+        return 130
+    return run(argv)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every registered sub-command (:func:`profileopt.cli.app.build_parser`)."""
+    from .app import build_parser as build
+
+    return build()
+

@@ -16,6 +16,7 @@ no simulated force exceeds the limit
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import re
 import signal
@@ -39,7 +40,26 @@ class _Parser(argparse.ArgumentParser):
         if switch:
             names = [name for name in switch.groups()[:2] if name]
             message = f"{'/'.join(names)} takes no value ('{switch.group(3)}' given): write {' or '.join(names)}"
+        choice = re.fullmatch(r"argument (.+): invalid choice: '(.*)' \(choose from (.*)\)", message)
+        if choice:  # a misspelt sub-command or choice: the nearest, first
+            offered = re.findall(r"'([^']*)'", choice.group(3))
+            message += _did_you_mean(choice.group(2), offered)
         self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+
+    def unrecognized(self, extras: Sequence[str]) -> NoReturn:
+        """Refuse the arguments this (sub-)command does not know, naming the nearest option."""
+        options = [option for action in self._actions for option in action.option_strings]
+        first = next((word for word in extras if word.startswith("-")), None)
+        hint = _did_you_mean(first.split("=", 1)[0], options) if first is not None else ""
+        self.error(f"unrecognized arguments: {' '.join(extras)}{hint}")
+
+
+def _did_you_mean(word: str, offered: Sequence[str]) -> str:
+    """``"; did you mean --segment-length?"`` for the offered word nearest ``word``, or ``""``."""
+    import difflib
+
+    nearest = difflib.get_close_matches(word, offered, n=1, cutoff=0.6)
+    return f"; did you mean {nearest[0]}?" if nearest else ""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -56,6 +76,17 @@ def build_parser() -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=help_text, description=help_text)
         load_command(name).arguments(p)
     return parser
+
+
+def _parse(parser: argparse.ArgumentParser, argv: Sequence[str] | None) -> argparse.Namespace:
+    """The arguments; what the sub-command does not know is refused by the sub-command, by
+    name (``profileopt plan: error: unrecognized arguments: --segment-lenght; did you mean
+    --segment-length?``), not by the top-level parser."""
+    args, extras = parser.parse_known_args(argv)
+    if extras:
+        sub = next(action for action in parser._actions if isinstance(action, argparse._SubParsersAction))
+        sub.choices[args.command].unrecognized(extras)
+    return args
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -82,11 +113,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     # unless the user says otherwise.
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = _parse(build_parser(), argv)
+    except KeyboardInterrupt:  # Ctrl-C while the command line is read: no traceback either
+        print("profileopt: interrupted", file=sys.stderr)
+        return 130
     previous = _catch_sigterm()
     try:
-        return load_command(args.command).run(args)
+        status = load_command(args.command).run(args)
+        _flush_stdout()
+        return status
     except Terminated:  # SIGTERM: the same clean-up as Ctrl-C (no temporary file is left)
         print(f"profileopt {args.command}: terminated", file=sys.stderr)
         return 128 + signal.SIGTERM
@@ -96,26 +132,76 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"profileopt {args.command}: error: {flags_for_parameters(str(exc))}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # output piped into a reader that stopped early (e.g. head)
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
+        _silence_stdout()
         # the status of a program ended by SIGPIPE in a shell (128 + 13), not 1 (an internal
         # error): the reader chose to stop, nothing went wrong here
         return 128 + getattr(signal, "SIGPIPE", 13)
+    except OSError as exc:
+        from ..io.atomic import WRITE_FAILURES
+
+        if exc.errno not in WRITE_FAILURES:
+            return _internal_error(args, exc)
+        if args.debug:
+            traceback.print_exc()
+        # a full disk or device: the outputs' own failures are InputErrors naming them
+        # (profileopt.io.atomic.OutputSet); what is left is a file named by the error, or
+        # what the command printed (the summary, to a full standard output)
+        if isinstance(exc, _StdoutFailed) or exc.filename is None:
+            text = (f"standard output: cannot write ({exc.strerror}); free some space or send standard output "
+                    "elsewhere")
+        else:
+            text = (f"{exc.filename}: cannot write ({exc.strerror}); nothing was written, free some space or "
+                    "choose another output")
+        _silence_stdout()
+        print(f"profileopt {args.command}: error: {text}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print(f"profileopt {args.command}: interrupted", file=sys.stderr)
         return 130
     except Exception as exc:  # an internal error: still one line unless --debug
-        if args.debug:
-            traceback.print_exc()
-        print(
-            f"profileopt {args.command}: internal error: {type(exc).__name__}: {exc} "
-            "(run again with --debug for a traceback and report it)",
-            file=sys.stderr,
-        )
-        return 1
+        return _internal_error(args, exc)
     finally:
         if previous is not _NO_HANDLER:
             signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
+
+
+def _internal_error(args: argparse.Namespace, exc: BaseException) -> int:
+    if args.debug:
+        traceback.print_exc()
+    print(
+        f"profileopt {args.command}: internal error: {type(exc).__name__}: {exc} "
+        "(run again with --debug for a traceback and report it)",
+        file=sys.stderr,
+    )
+    return 1
+
+
+def _flush_stdout() -> None:
+    """Write what the command printed now, so that a full standard output (``> /dev/full``)
+    is an error of the command, not a message from the interpreter at exit."""
+    if sys.stdout is None:  # started with standard output closed: what was printed went nowhere
+        return
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        raise
+    except OSError as exc:
+        raise _StdoutFailed(exc.errno, exc.strerror) from exc
+
+
+class _StdoutFailed(OSError):
+    """Standard output could not take what the command printed."""
+
+
+def _silence_stdout() -> None:
+    """Point standard output at the null device, so that the interpreter's last flush of what
+    could not be written does not fail again at exit."""
+    if sys.stdout is None:
+        return
+    with contextlib.suppress(OSError, ValueError):
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
 
 
 class Terminated(KeyboardInterrupt):

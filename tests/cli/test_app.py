@@ -1,0 +1,112 @@
+"""profileopt.cli.app: the command line's own errors (issue 30, items 2, 11 and 17).
+
+A misspelt option is refused by the sub-command that was meant, naming the nearest option; a
+write that finds no room, standard output full or closed, is one line and exit 2; Ctrl-C while
+the command line is still being read is one line and 130, never a traceback.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from profileopt import cli
+
+from conftest import PROFILEOPT, ROUTES
+
+
+def refusal(capsys: pytest.CaptureFixture, argv: list[str]) -> str:
+    """The one line of a command line argparse refuses (exit status 2)."""
+    with pytest.raises(SystemExit) as stop:
+        cli.main(argv)
+    assert stop.value.code == 2
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 1, lines
+    return lines[0]
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["plan", "r.csv", "--segment-lenght", "2"],
+     "profileopt plan: error: unrecognized arguments: --segment-lenght 2; did you mean --segment-length?"),
+    (["verify", "r.csv", "p.csv", "--sed=3"], "profileopt verify: error: unrecognized arguments: --sed=3; did you "
+                                              "mean --seed?"),
+    (["plan", "r.csv", "--zzzz"], "profileopt plan: error: unrecognized arguments: --zzzz (see"),
+    (["paln", "r.csv"], "did you mean plan?"),
+    (["plan", "r.csv", "--model", "sbem_fT"], "did you mean sbem_tf?"),
+])
+def test_a_misspelt_option_names_its_command_and_the_nearest_option(capsys: pytest.CaptureFixture,
+                                                                   argv: list[str], words: str) -> None:
+    assert words in refusal(capsys, argv)
+
+
+def test_ctrl_c_while_the_command_line_is_read_is_one_line(capsys: pytest.CaptureFixture,
+                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+    from profileopt.cli import app
+
+    def interrupted() -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(app, "build_parser", interrupted)
+    assert cli.main(["plan", "r.csv"]) == 130
+    assert capsys.readouterr().err == "profileopt: interrupted\n"
+
+
+def test_a_full_disk_while_an_output_is_written_is_exit_2_naming_it(tmp_path: Path, capsys: pytest.CaptureFixture,
+                                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    """The disk fills while the profile is written: one line naming the output, exit 2, and
+    the earlier file there is kept (the outputs are all or none)."""
+    from profileopt.io import atomic
+    from profileopt.cli import plan as plan_command
+
+    out = tmp_path / "out.csv"
+    out.write_text("a good earlier profile\n")
+
+    def disk_full(args) -> int:  # noqa: ANN001  (what write_profile meets on a full disk)
+        with atomic.OutputSet([("-o", str(out), True)]):
+            with atomic.atomic_write(out) as handle:
+                handle.write("half")
+                raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(plan_command, "run", disk_full)
+    assert cli.main(["plan", "r.csv"]) == 2
+    assert capsys.readouterr().err == (f"profileopt plan: error: -o {out}: cannot write it (No space left on "
+                                       "device); nothing was written, free some space or choose another output\n")
+    assert out.read_text() == "a good earlier profile\n"
+
+
+# --------------------------------------------------------------------------------------
+# Standard output full or closed: the real command line, in a subprocess.
+
+
+@pytest.fixture(scope="module")
+def short_route(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The first 30 m of the bundled curb course (a plan in a fraction of a second)."""
+    lines = (ROUTES / "curb.csv").read_text().splitlines()
+    keep = [line for line in lines if not line[:1].isdigit() or float(line.split(",")[0]) <= 30.0]
+    path = tmp_path_factory.mktemp("app") / "route.csv"
+    path.write_text("\n".join(keep) + "\n")
+    return path
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full (Linux)")
+def test_the_summary_to_a_full_standard_output_is_one_line(short_route: Path) -> None:
+    with open("/dev/full", "w") as full:
+        done = subprocess.run([*PROFILEOPT, "plan", str(short_route)], stdout=full, stderr=subprocess.PIPE,
+                              text=True, timeout=120)
+    assert done.returncode == 2, done.stderr
+    errors = [line for line in done.stderr.splitlines() if "note:" not in line]
+    assert errors == ["profileopt plan: error: standard output: cannot write (No space left on device); free some "
+                      "space or send standard output elsewhere"]
+
+
+@pytest.mark.slow
+def test_the_profile_to_a_closed_standard_output_is_refused(short_route: Path) -> None:
+    done = subprocess.run([*PROFILEOPT, "plan", str(short_route), "-o", "-"], stderr=subprocess.PIPE, text=True,
+                          timeout=120, preexec_fn=lambda: os.close(1))
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.splitlines() == ["profileopt plan: error: -o -: standard output is closed; give the path of "
+                                        "a file to write"]
