@@ -513,7 +513,7 @@ def test_every_output_goes_through_a_temporary_file(writer: str, tmp_path: Path,
     for name in written:
         (tmp_path / name).unlink()
 
-    def interrupted(src: object, dst: object) -> None:
+    def interrupted(src: object, dst: object, **dir_fds: int) -> None:  # os.replace (src_dir_fd=, dst_dir_fd=)
         raise KeyboardInterrupt
 
     monkeypatch.setattr(os, "replace", interrupted)
