@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .. import __version__
-from .track import add_track_arguments, assumed_roughness, number_argument, track_inputs
+from .track import add_track_arguments, assumed_roughness, number_argument, refuse_terrain_options, track_inputs
 
 if TYPE_CHECKING:
     from ..io.tracks import Track
@@ -57,9 +57,14 @@ def run(args: argparse.Namespace) -> int:
 
 
 def smoothed_track_route(track_path: str, args: argparse.Namespace, prog: str) -> tuple[TrackRoute, Track]:
-    """:func:`profileopt.cli.track.track_route` with the track's points moved onto the smoothest
-    path within ``--path-tolerance`` of them (or within the noise estimated from them:
-    :func:`profileopt.io.read_track`); also returns the track read. Notes go to stderr.
+    """Read the track and the terrain and sample the ground along the track; notes go to stderr.
+
+    The track's points are moved onto the smoothest path within ``--path-tolerance`` of them
+    (or within the noise estimated from them: :func:`profileopt.io.read_track`). Before the
+    terrain is read and the track sampled, the options and the track are checked: no
+    ``--terrain-crs`` without ``--terrain``; without a terrain, no track in degrees taken as
+    metres (:func:`profileopt.io.tracks.check_not_degrees`); no more samples than a route may
+    have (:func:`profileopt.io.tracks.check_track_samples`).
 
     Parameters
     ----------
@@ -75,13 +80,17 @@ def smoothed_track_route(track_path: str, args: argparse.Namespace, prog: str) -
     tuple of (TrackRoute, Track)
     """
     from ..io.terrain_maps import read_terrain
-    from ..io.tracks import read_track
+    from ..io.tracks import check_not_degrees, check_track_samples, read_track
     from ..terrain.ground_track import route_from_track
     from .messages import flags_for_parameters
 
-    terrain = read_terrain(args.terrain, terrain_crs=args.terrain_crs) if args.terrain is not None else None
+    refuse_terrain_options(args)
     track = read_track(track_path, track_crs=args.track_crs, track_index=args.track_index,
                        path_tolerance_m=args.path_tolerance)
+    if args.terrain is None:
+        check_not_degrees(track)
+    check_track_samples(track, args.spacing)
+    terrain = read_terrain(args.terrain, terrain_crs=args.terrain_crs) if args.terrain is not None else None
     result = route_from_track(track, terrain, spacing_m=args.spacing, corridor_m=args.corridor,
                               max_gap_m=args.max_gap, assumed_roughness=assumed_roughness(args))
     for note in (*track.notes, *getattr(terrain, "notes", ()), *result.notes):

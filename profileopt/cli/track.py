@@ -1,17 +1,13 @@
-"""What ``profileopt route`` and ``profileopt plan`` share about tracks and terrain maps:
-their options, and the route they make of a track over a terrain."""
+"""What ``profileopt route`` and ``profileopt plan`` share about tracks and terrain maps: their
+options and the checks of them (the route they make of a track over a terrain:
+:func:`profileopt.cli.route.smoothed_track_route`)."""
 
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from ..defaults import DEFAULT_CORRIDOR_M, DEFAULT_MAX_GAP_M, DEFAULT_TRACK_SPACING_M
-
-if TYPE_CHECKING:
-    from ..terrain.ground_track import TrackRoute
 
 #: File name endings that are tracks, never route CSVs.
 TRACK_SUFFIXES = (".gpx", ".geojson", ".json")
@@ -19,19 +15,30 @@ TRACK_SUFFIXES = (".gpx", ".geojson", ".json")
 ROAD_CLASSES = tuple("ABCDEFGH")
 
 
+def _shown(text: str) -> str:
+    """An option's value as a message quotes it: at most 40 characters, anything but printable
+    ASCII escaped (``\\u0661``)."""
+    return text[:40] if text.isascii() and text.isprintable() else ascii(text[:40])[1:-1]
+
+
 def number_argument(text: str) -> float:
-    """An option's number, or argparse's one-line error."""
-    try:
-        return float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
+    """An option's number in ASCII decimal notation (``inf`` and ``nan`` too, which the options
+    refuse or allow themselves), or argparse's one-line error."""
+    from ..io.table import decimal_number  # when an option is parsed, not for --help
+
+    value = decimal_number(text)
+    if value is None:
+        raise argparse.ArgumentTypeError(f"'{_shown(text)}' is not a number (digits 0-9, '.', an optional exponent)")
+    return value
 
 
 def _index(text: str) -> int:
-    try:
-        return int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a whole number") from None
+    """A whole number in ASCII digits (not ``1_0`` or an Arabic-Indic digit, which ``int()``
+    reads), or argparse's one-line error."""
+    digits = text.strip()
+    if not (digits.isascii() and digits.removeprefix("-").removeprefix("+").isdigit()):
+        raise argparse.ArgumentTypeError(f"'{_shown(text)}' is not a whole number (digits 0-9)")
+    return int(digits)
 
 
 def add_track_arguments(parser: argparse.ArgumentParser) -> None:
@@ -82,35 +89,19 @@ def assumed_roughness(args: argparse.Namespace):  # noqa: ANN201  (AssumedRoughn
     return AssumedRoughness(road_class=args.roughness_class, ri=args.ri)
 
 
-def track_route(track_path: str, args: argparse.Namespace, prog: str) -> "TrackRoute":
-    """Read the track and the terrain and sample the ground along the track; notes go to stderr.
+def refuse_terrain_options(args: argparse.Namespace) -> None:
+    """Refuse ``--terrain-crs`` without ``--terrain``: it has no terrain file to apply to.
 
-    Parameters
-    ----------
-    track_path : str
-        The track file (GPX, GeoJSON or CSV of x,y).
-    args : argparse.Namespace
-        The options of :func:`add_track_arguments`.
-    prog : str
-        The command's name for the notes ("profileopt route").
-
-    Returns
-    -------
-    TrackRoute
+    Raises
+    ------
+    InputError
+        ``--terrain-crs`` given and ``--terrain`` not.
     """
-    from ..io.terrain_maps import read_terrain
-    from ..io.tracks import read_track
-    from ..terrain.ground_track import route_from_track
+    if args.terrain is None and args.terrain_crs is not None:
+        from ..errors import InputError
 
-    terrain = read_terrain(args.terrain, terrain_crs=args.terrain_crs) if args.terrain is not None else None
-    track = read_track(track_path, track_crs=args.track_crs, track_index=args.track_index)
-    result = route_from_track(track, terrain, spacing_m=args.spacing, corridor_m=args.corridor,
-                              max_gap_m=args.max_gap, assumed_roughness=assumed_roughness(args))
-    from .messages import flags_for_parameters
-
-    for note in (*track.notes, *getattr(terrain, "notes", ()), *result.notes):
-        print(f"{prog}: note: {flags_for_parameters(note)}", file=sys.stderr)
-    return result
+        raise InputError(f"--terrain-crs {_shown(args.terrain_crs)} sets the CRS of a terrain file, and no --terrain "
+                         "is given; drop it, or give the terrain (--terrain FILE); the track's CRS is --track-crs")
 
 
 def refuse_track_options(route_path: str, args: argparse.Namespace) -> None:

@@ -353,25 +353,23 @@ def _read_vehicle_text(name_or_path: str | Path) -> tuple[str, str]:
     raw = str(name_or_path)
     looks_like_path = isinstance(name_or_path, Path) or raw.endswith(".toml") or "/" in raw or "\\" in raw
     if not looks_like_path:
-        for d in _bundled_dirs():
-            entry = d / f"{raw}.toml"
-            if entry.is_file():
-                return _read_vehicle_file(entry), str(entry)
+        names = bundled_vehicles()
+        if raw in names:  # a name only (never a path the system is asked about: 5,000 characters, NUL)
+            entry = next(d / f"{raw}.toml" for d in _bundled_dirs() if (d / f"{raw}.toml").is_file())
+            return _read_vehicle_file(entry), str(entry)
+        shown = raw if len(raw) <= 60 else raw[:60] + "..."
         raise InputError(
-            f"vehicle '{raw}': no bundled vehicle of that name; use one of "
-            f"{', '.join(bundled_vehicles())} or the path of a .toml file"
+            f"vehicle {shown!r}: no bundled vehicle of that name; use one of "
+            f"{', '.join(names)} or the path of a .toml file"
         )
     path = Path(raw)
     return _read_vehicle_file(path), str(path)
 
 
 def _read_vehicle_file(path: Path) -> str:
-    # a regular file of at most MAX_VEHICLE_BYTES (not /dev/zero, not a FIFO), as text mode reads it
+    # a regular file of at most MAX_VEHICLE_BYTES (not /dev/zero, not a FIFO), its lines ending
+    # at \n as in route and profile files (a byte-order mark is accepted)
     from ..io import inputs
+    from ..io.table import read_text
 
-    data = inputs.read_input(path, "vehicle file", inputs.MAX_VEHICLE_BYTES)
-    try:
-        text = data.decode("utf-8-sig")  # a byte-order mark is accepted, as in route and profile files
-    except UnicodeDecodeError as exc:
-        raise InputError(f"{path}: cannot read the vehicle file ({exc})") from None
-    return text.replace("\r\n", "\n").replace("\r", "\n") if "\r" in text else text
+    return read_text(path, "vehicle file", max_bytes=inputs.MAX_VEHICLE_BYTES)

@@ -1,13 +1,16 @@
 """Reading and writing files: routes, profiles, measured terrain, and atomic outputs.
 
-- :mod:`~profileopt.io.table`: the one CSV table reader behind route and profile files;
+- :mod:`~profileopt.io.table`: the one CSV table reader behind route, profile and track CSV
+  files (its rule for line ends holds for vehicle files too);
 - :mod:`~profileopt.io.routes`: route files (:func:`read_route`);
 - :mod:`~profileopt.io.profiles`: profile files (:func:`read_profile`, :func:`write_profile`);
 - :mod:`~profileopt.io.atomic`: outputs that appear whole or not at all
   (:func:`atomic_write`, :func:`atomic_path`, :func:`check_output_paths`);
 - :mod:`~profileopt.io.las`: ASPRS LAS and LAZ point clouds (:func:`read_las`, via laspy);
 - :mod:`~profileopt.io.tracks`: GPS tracks from GPX, GeoJSON and CSV (:func:`read_track`,
-  :func:`project_track`, :func:`local_projected_crs`);
+  :func:`project_track`, :func:`local_projected_crs`, and the checks before a track is
+  sampled: :func:`~profileopt.io.tracks.check_track_samples`,
+  :func:`~profileopt.io.tracks.check_not_degrees`);
 - :mod:`~profileopt.io.terrain_maps`: raster DEMs and OpenCRG surfaces
   (:func:`read_geotiff`, :func:`read_crg_surface`, :func:`read_terrain`);
 - :mod:`~profileopt.io.geo`: the optional ``geo`` packages and CRS helpers (:func:`parse_crs`);

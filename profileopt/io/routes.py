@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import os
 import re
+from pathlib import Path
 from typing import Sequence
 
 import numpy as np
@@ -40,7 +41,8 @@ from ..core.route import Route, path_distance_m, validate_route_arrays
 from ..errors import InputError
 from ..terrain.assumed import MAX_ASSUMED_RI, AssumedRoughness
 from .atomic import atomic_write
-from .table import Table, read_table
+from .table import Table, decimal_number, read_table
+from .tracks import degrees_like_extent
 
 __all__ = ["read_route", "write_route", "route_metadata_lines", "ROUTE_COLUMN_ALIASES", "ROUGHNESS_KEYS"]
 
@@ -74,9 +76,13 @@ def read_route(path: str | os.PathLike) -> Route:
     ------
     InputError
         Empty file, no header, missing or unusable columns, a non-numeric, NaN or infinite
-        cell, s not strictly increasing, a single row, absurd magnitudes or a speed limit
-        <= 0. The message names the file and line.
+        cell (numbers in ASCII decimal notation only), s not strictly increasing, a single
+        row, absurd magnitudes or a speed limit <= 0; x, y that look like longitude and
+        latitude in degrees (:func:`~profileopt.io.tracks.degrees_like_extent`); a terrain
+        file (``.las``, ``.laz``, ``.tif``, ``.tiff``, ``.crg``) given as the route. The message
+        names the file and line.
     """
+    _refuse_terrain_file(path)
     table = read_table(path, "route file", header_example="'s,z' or 'x,y,z'",
                        empty_fix="a route CSV starts with a header line such as 's,z'")
     name = table.source
@@ -116,9 +122,39 @@ def read_route(path: str | os.PathLike) -> Route:
         if bad.size:
             raise InputError(f"{name}: line {where[bad[0] + 1]}: the point repeats the previous x,y; "
                              "remove duplicate points")
+        extent = degrees_like_extent(x, y)
+        if extent is not None:
+            raise InputError(f"{name}: x, y look like longitude, latitude in degrees (within +-180, +-90 and "
+                             f"{extent:.3g} across), but a route file's are metres; make a route of them as a track "
+                             f"(profileopt route {Path(name).name} --track-crs EPSG:4326 -o route.csv) or convert "
+                             "them to metres in a projected CRS")
     validate_route_arrays(name, s, z, limit, where, "line")
     return Route(s_m=s, z_m=z, speed_limit_mps=limit, source=name, notes=notes, x_m=x, y_m=y,
                  assumed_roughness=_assumed_roughness(table))
+
+
+#: What each kind of terrain file (:data:`profileopt.io.terrain_maps.TERRAIN_SUFFIXES`) is, for
+#: the message when one is given as a route.
+_TERRAIN_KINDS = {"LAS": "a point cloud (LAS)", "LAZ": "a point cloud (LAZ)", "GeoTIFF": "a terrain map (GeoTIFF DEM)",
+                  "OpenCRG": "a terrain surface (OpenCRG)"}
+
+
+def _refuse_terrain_file(path: str | os.PathLike) -> None:
+    """Refuse a terrain file given where a route file belongs, saying how to use it.
+
+    Raises
+    ------
+    InputError
+        ``path`` ends in a terrain file's ending (``.las``, ``.laz``, ``.tif``, ``.tiff``, ``.crg``).
+    """
+    from .terrain_maps import TERRAIN_SUFFIXES  # its endings (no geo package is imported)
+
+    suffix = os.path.splitext(str(path))[1].lower()
+    if suffix in TERRAIN_SUFFIXES:
+        kind = _TERRAIN_KINDS[TERRAIN_SUFFIXES[suffix]]
+        raise InputError(f"{path}: is {kind}, not a route file; give it as --terrain with the track to drive over it "
+                         f"(profileopt plan TRACK.gpx --terrain {os.path.basename(str(path))}, or make a route first "
+                         "with profileopt route)")
 
 
 def _assumed_roughness(table: Table) -> AssumedRoughness | None:
@@ -161,11 +197,12 @@ def _assumed_roughness(table: Table) -> AssumedRoughness | None:
     return found
 
 
-def _number(text: str) -> float | str:
-    try:
-        return float(text)
-    except ValueError:
-        return text  # AssumedRoughness says it is not a number
+def _number(text: str) -> float:
+    """The RI a roughness line writes, in ASCII decimal notation (:func:`~profileopt.io.table.decimal_number`)."""
+    value = decimal_number(text)
+    if value is None:
+        raise InputError(f"assumed roughness: {text!r} is not a number written in ASCII digits")
+    return value
 
 
 def _reason(exc: InputError) -> str:

@@ -40,17 +40,20 @@ import dataclasses
 import json
 import math
 import os
+import sys
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 
+from ..core.route import path_distance_m
 from ..errors import InputError
 from . import inputs
 from .geo import crs_label, length_units_m, parse_crs, require_geo
 from .table import read_table, read_text
 
-__all__ = ["Track", "read_track", "project_track", "local_projected_crs", "JOIN_GAP_M", "TRACK_SUFFIXES"]
+__all__ = ["Track", "read_track", "project_track", "local_projected_crs", "track_length_m", "check_track_samples",
+           "check_not_degrees", "degrees_like_extent", "JOIN_GAP_M", "TRACK_SUFFIXES", "DEGREES_EXTENT"]
 
 #: Largest gap (m) between the end of one GPX track or segment and the start of the next
 #: that is joined (see the module's notes).
@@ -58,6 +61,12 @@ JOIN_GAP_M = 50.0
 
 #: File name endings :func:`read_track` accepts, and the reader of each.
 TRACK_SUFFIXES = {".gpx": "GPX", ".geojson": "GeoJSON", ".json": "GeoJSON", ".csv": "CSV"}
+
+#: A track without a CRS whose x all lie within +-180 and y within +-90, and whose bounding box
+#: is smaller than this across (its diagonal, in the file's units), is taken to be longitude
+#: and latitude in degrees, not metres (:func:`degrees_like_extent`): 2 degrees is about 200 km,
+#: while 2 m is too short a route to plan a speed along (a few wheel turns).
+DEGREES_EXTENT = 2.0
 
 _CSV_COLUMNS = {"x": "x", "x_m": "x", "y": "y", "y_m": "y", "z": "z", "z_m": "z",
                 "speed_limit": "speed_limit", "speed_limit_mps": "speed_limit"}
@@ -331,6 +340,10 @@ def _read_gpx(path: Path, track_index: int | None, notes: list[str]) -> _Points:
             notes.append(f"{path.name}: skipped {kind}(s) without points: {', '.join(map(str, empty))}")
     if gpx.waypoints:
         notes.append(f"{path.name}: ignored {len(gpx.waypoints)} waypoint(s) (only {kind} points are read)")
+    routes = sum(1 for rte in gpx.routes if rte.points)
+    if kind == "track" and routes:
+        notes.append(f"{path.name}: ignored {routes} route(s) with points (<rte>): a GPX file with track points is "
+                     "read for its tracks; to drive a route, save it in a file of its own")
 
     pieces = [(i, j, segment) for i in chosen for j, segment in enumerate(items[i][1]) if segment]
     labels: list[tuple[int, int, int]] = []
@@ -381,11 +394,18 @@ def _check_lonlat(path: Path, point: Any, label: str) -> None:
 
 
 def _read_geojson(path: Path, notes: list[str]) -> tuple[_Points, Any]:
-    text = read_text(path, "GeoJSON file")
+    text = read_text(path, "GeoJSON file", line_ends=False)  # JSON: a \r is white space
     try:
         root = json.loads(text)
     except json.JSONDecodeError as exc:
         raise InputError(f"{path}: line {exc.lineno}: not valid JSON ({exc.msg}); check the file") from None
+    except RecursionError:
+        raise InputError(f"{path}: the JSON is nested deeper than it can be read (about {sys.getrecursionlimit()} "
+                         "levels); a GeoJSON track is a LineString of positions [[x, y], ...], a few levels "
+                         "deep") from None
+    except ValueError:  # an integer of more digits than Python converts (sys.get_int_max_str_digits)
+        raise InputError(f"{path}: holds a number of more than {sys.get_int_max_str_digits():,} digits, too large "
+                         "for any coordinate; fix it") from None
     if not isinstance(root, dict):
         raise InputError(f"{path}: the JSON is not a GeoJSON object; give a LineString, a Feature or a "
                          "FeatureCollection")
@@ -397,11 +417,17 @@ def _read_geojson(path: Path, notes: list[str]) -> tuple[_Points, Any]:
     for k, position in enumerate(coordinates):
         if (not isinstance(position, list) or len(position) not in (2, 3)
                 or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in position)):
-            raise InputError(f"{path}: {where} coordinate {k}: {json.dumps(position)[:60]} is not a position "
+            raise InputError(f"{path}: {where} coordinate {k}: {_json_excerpt(position)} is not a position "
                              "[x, y] or [x, y, z] of numbers; fix it")
-        out.x.append(float(position[0]))
-        out.y.append(float(position[1]))
-        out.z.append(float(position[2]) if len(position) == 3 else None)
+        try:
+            values = [float(v) for v in position]
+        except OverflowError:  # an integer of hundreds of digits
+            raise InputError(f"{path}: {where} coordinate {k}: a number of "
+                             f"{max(len(str(abs(v))) for v in position if isinstance(v, int))} digits, too large for "
+                             "any coordinate; fix it") from None
+        out.x.append(values[0])
+        out.y.append(values[1])
+        out.z.append(values[2] if len(values) == 3 else None)
         out.t.append(math.nan)
     crs = parse_crs("EPSG:4326", str(path), "GeoJSON")  # RFC 7946, section 4
     member = root.get("crs")
@@ -414,6 +440,15 @@ def _read_geojson(path: Path, notes: list[str]) -> tuple[_Points, Any]:
         crs = parse_crs(name, str(path), "the file's 'crs' member")
         notes.append(f"{path.name}: CRS {crs_label(crs)} from the file's legacy 'crs' member")
     return out, crs
+
+
+def _json_excerpt(value: Any, limit: int = 60) -> str:
+    """The start of ``value`` written as JSON, for a message (a value nested too deep to write
+    is described instead)."""
+    try:
+        return json.dumps(value)[:limit]
+    except (RecursionError, ValueError):
+        return f"a {type(value).__name__} nested too deep"
 
 
 def _one_linestring(path: Path, root: dict, notes: list[str]) -> tuple[dict, str]:
@@ -580,3 +615,112 @@ def local_projected_crs(track: Track) -> Any:
                          "pass a projected CRS for polar regions (e.g. EPSG:3413 or EPSG:3031)")
     zone = int((mean_lon + 180.0) // 6.0) % 60 + 1
     return pyproj.CRS.from_epsg((32600 if mean_lat >= 0 else 32700) + zone)
+
+
+# ------------------------------------------------------------------------------ checks
+
+
+def track_length_m(track: Track) -> float:
+    """The length of the track's polyline (m).
+
+    Along the WGS 84 ellipsoid (geodesics between the points) for a geographic track; in the
+    plane for a projected one (x, y in metres) and for one without a CRS (its units taken
+    as metres, as a track used without a terrain map is).
+
+    Parameters
+    ----------
+    track : Track
+        As :func:`read_track` returns it.
+
+    Returns
+    -------
+    float
+    """
+    if track.crs is not None and _is_geographic(track.crs):
+        geod = require_geo("pyproj", "measuring a track").Geod(ellps="WGS84")
+        return float(geod.line_length(track.x, track.y))
+    return float(path_distance_m(track.x, track.y)[-1])
+
+
+def check_track_samples(track: Track, spacing_m: float) -> None:
+    """Refuse, before sampling, a track that would make more route samples than a route may have.
+
+    A route made from a track has about length / spacing samples; more than
+    :func:`profileopt.io.inputs.max_route_samples` would need more memory than the largest
+    route file (see :mod:`profileopt.io.inputs`). A spacing that is not a number > 0 is left
+    to the sampler to refuse.
+
+    Parameters
+    ----------
+    track : Track
+        As :func:`read_track` returns it.
+    spacing_m : float
+        Distance between the route's samples along the track (m).
+
+    Raises
+    ------
+    InputError
+        Too many samples; the message names the track's length and the smallest spacing
+        that fits (two significant digits, rounded up).
+    """
+    if not (math.isfinite(spacing_m) and spacing_m > 0):
+        return
+    cap = inputs.max_route_samples()
+    length = track_length_m(track)
+    count = length / spacing_m + 1
+    if count <= cap:
+        return
+    least = length / (cap - 1)
+    step = 10.0 ** (math.floor(math.log10(least)) - 1)
+    fit = math.ceil(least / step) * step
+    raise InputError(f"{track.source}: the track is {length / 1000:.4g} km long: at spacing_m {spacing_m:g} m it makes "
+                     f"{count:.3g} route samples, more than the {cap:,} a route may have (the memory of the "
+                     f"largest route file; see profileopt.io.inputs); give spacing_m {fit:.2g} or more, or split the "
+                     "track")
+
+
+def degrees_like_extent(x: np.ndarray, y: np.ndarray) -> float | None:
+    """The extent of x, y that look like longitude and latitude in degrees, else None.
+
+    They look so when every x lies within +-180, every y within +-90, and their bounding
+    box is less than :data:`DEGREES_EXTENT` across (its diagonal).
+
+    Parameters
+    ----------
+    x, y : numpy.ndarray, shape (N,)
+        Coordinates as a file gives them.
+
+    Returns
+    -------
+    float or None
+        The bounding box's diagonal (in the file's units) when they look like degrees.
+    """
+    if x.size == 0:
+        return None
+    extent = math.hypot(float(np.ptp(x)), float(np.ptp(y)))
+    if extent < DEGREES_EXTENT and np.all(np.abs(x) <= 180.0) and np.all(np.abs(y) <= 90.0):
+        return extent
+    return None
+
+
+def check_not_degrees(track: Track) -> None:
+    """Refuse a track without a CRS whose x, y look like longitude and latitude in degrees.
+
+    Used where the track's x, y would be taken as metres (no terrain map): a track in
+    degrees would be planned as a route some millimetres long (:func:`degrees_like_extent`).
+
+    Parameters
+    ----------
+    track : Track
+        As :func:`read_track` returns it.
+
+    Raises
+    ------
+    InputError
+        The track states no CRS and its x, y look like degrees.
+    """
+    extent = None if track.crs is not None else degrees_like_extent(track.x, track.y)
+    if extent is not None:
+        raise InputError(f"{track.source}: states no CRS and its x, y look like longitude, latitude in degrees (within "
+                         f"+-180, +-90 and {extent:.3g} across: as metres, a route {extent:.3g} m across); give "
+                         "track_crs EPSG:4326 (or the CRS they are in)")

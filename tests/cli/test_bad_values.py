@@ -154,7 +154,7 @@ def test_distances_beyond_double_precision_are_named_as_such(tmp_path):
 
 
 # --------------------------------------------------------------------------------------
-# Silent misreading: lines end at \n only; a byte-order mark is accepted in every file
+# Silent misreading: a comment ends only where its line does; a byte-order mark is accepted in every file
 
 
 @pytest.mark.parametrize("separator", ["\u2028", "\u2029", "\x0c", "\x0b", "\x85", "\x1c"])
@@ -171,6 +171,28 @@ def test_a_line_separator_inside_a_comment_stays_in_the_comment(tmp_path, separa
     np.testing.assert_array_equal(a.z_m, b.z_m)
 
 
+@pytest.mark.parametrize(("comment", "line"), [("# note\r10.025,5", 203), ("# x\r# roughness_class = H", 1)],
+                         ids=["data after a CR", "roughness after a CR"])
+def test_a_lone_carriage_return_in_a_comment_is_refused_by_plan(tmp_path, capsys, comment, line):
+    # issue 30 item 3: before, "10.025,5" became a data row (a 5 m step: 5.2 s of travel became
+    # 108 s) and the second comment set an assumed roughness of class H; both exit 0
+    from profileopt.cli import main
+
+    rows = [f"{a:.3f},0" for a in np.arange(0.0, 20.001, 0.05)]
+    lines = ["s,z", *rows]
+    if comment.startswith("# note"):
+        lines.insert(lines.index("10.000,0") + 1, comment)
+    else:
+        lines.insert(0, comment)
+    route = tmp_path / "cr.csv"
+    route.write_bytes(("\n".join(lines) + "\n").encode())
+    out = tmp_path / "p.csv"
+    assert main(["plan", str(route), "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"cr.csv: line {line}: a carriage return (\\r) inside the line" in err[0], err
+    assert not out.exists()
+
+
 def test_a_byte_order_mark_is_accepted_in_route_and_profile_files(tmp_path, atv):
     route = read_route(ROUTES / "curb.csv")
     profile = plan(route, atv)
@@ -178,7 +200,8 @@ def test_a_byte_order_mark_is_accepted_in_route_and_profile_files(tmp_path, atv)
     (tmp_path / "bom.csv").write_bytes(b"\xef\xbb\xbf" + (tmp_path / "profile.csv").read_bytes())
     from profileopt import read_profile
 
-    np.testing.assert_array_equal(read_profile(tmp_path / "bom.csv").speed_mps, profile.speed_mps)
+    np.testing.assert_array_equal(read_profile(tmp_path / "bom.csv").speed_mps,
+                                  read_profile(tmp_path / "profile.csv").speed_mps)
     (tmp_path / "route.csv").write_bytes(b"\xef\xbb\xbf" + (ROUTES / "curb.csv").read_bytes())
     np.testing.assert_array_equal(read_route(tmp_path / "route.csv").z_m, route.z_m)
 

@@ -9,6 +9,7 @@ same route read back from its file.
 from __future__ import annotations
 
 import json
+import math
 import os
 import re
 import subprocess
@@ -182,7 +183,7 @@ def _bad(tmp_path: Path, synthetic: dict, case: str) -> tuple[list[str], tuple[s
     if case == "truncated laz":
         cut = tmp_path / "cut.laz"
         cut.write_bytes(synthetic["laz"].read_bytes()[: synthetic["laz"].stat().st_size // 2])
-        return [gpx, "--terrain", str(cut)], ("cut.laz", "truncated")
+        return [gpx, "--terrain", str(cut)], ("cut.laz", "cut short")
     if case == "duplicate points":
         dup = tmp_path / "dup.gpx"
         dup.write_text('<?xml version="1.0"?><gpx version="1.1" creator="t" xmlns="http://www.topografix.com/GPX/1/1">'
@@ -398,3 +399,73 @@ def test_plan_of_a_noisy_gps_track_is_within_10_percent_and_names_its_tolerance(
     assert summary["path"]["source"] == "estimated" and "moved onto the smoothest path" in err
     assert profile.settings["path_tolerance_source"] == "estimated"
     assert not runs["true"][0]["track"]["smoothed"]
+
+
+# ------------------------------------------------- issue 30: hostile and misleading track inputs
+
+GPX_HEAD = '<?xml version="1.0"?><gpx version="1.1" creator="t" xmlns="http://www.topografix.com/GPX/1/1">'
+
+
+def test_a_tiny_file_spanning_500_km_is_refused_before_sampling(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    # issue 30 item 9: before, 1e7 samples at 0.05 m, then MemoryError after 4 minutes at 3.3 GB
+    import time
+
+    track = tmp_path / "long.gpx"
+    track.write_text(f'{GPX_HEAD}<trk><trkseg><trkpt lat="45" lon="10"><ele>0</ele></trkpt><trkpt lat="47" '
+                     'lon="12"><ele>0</ele></trkpt><trkpt lat="49" lon="14"><ele>0</ele></trkpt></trkseg></trk></gpx>')
+    for command in (["plan", str(track), "--ri", "0.05"], ["route", str(track), "--ri", "0.05"]):
+        start = time.perf_counter()
+        status, _, err = _run([*command, "-o", str(tmp_path / "out.csv")], capsys)
+        assert time.perf_counter() - start < 5.0
+        _one_line_error(status, err, "long.gpx", "km long", "--spacing 0.05", "more than the 909,090",
+                        "give --spacing 0.6 or more")
+        assert not (tmp_path / "out.csv").exists()
+    status, _, err = _run(["route", str(track), "--ri", "0.05", "--spacing", "1000", "-o", str(tmp_path / "o.csv")],
+                          capsys)
+    assert status == 0, err
+
+
+def test_a_csv_in_degrees_without_a_crs_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    # issue 30 item 8: before, planned as a route 4 mm long
+    track = tmp_path / "deg.csv"
+    track.write_text("x,y,z\n14.5,46.0,300\n14.501,46.0002,301\n14.502,46.0004,302\n14.503,46.0006,303\n"
+                     "14.504,46.0008,304\n")
+    status, _, err = _run(["route", str(track), "--ri", "0.05", "-o", str(tmp_path / "r.csv")], capsys)
+    _one_line_error(status, err, "deg.csv", "look like longitude, latitude in degrees", "--track-crs EPSG:4326")
+    status, _, err = _run(["plan", str(track), "--ri", "0.05", "-o", str(tmp_path / "p.csv")], capsys)
+    _one_line_error(status, err, "deg.csv", "look like longitude, latitude in degrees",
+                    "route deg.csv --track-crs EPSG:4326")
+    status, out, err = _run(["route", str(track), "--ri", "0.05", "--track-crs", "EPSG:4326", "-o",
+                             str(tmp_path / "r.csv")], capsys)
+    assert status == 0, err
+    # about 320 m: 0.004 deg of longitude at 46 N (78 m each 0.001 deg) and 0.0008 deg of latitude (89 m)
+    assert read_route(tmp_path / "r.csv").length_m == pytest.approx(math.hypot(4 * 77.5, 0.0008 * 111_150), rel=0.02)
+
+
+def test_terrain_crs_without_a_terrain_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    # issue 30 item 8: before, ignored
+    for command in ("route", "plan"):
+        status, _, err = _run([command, str(HEXBIN_TRACK), "--ri", "0.05", "--terrain-crs", "EPSG:32642", "-o",
+                               str(tmp_path / "o.csv")], capsys)
+        _one_line_error(status, err, "--terrain-crs EPSG:32642", "no --terrain")
+
+
+@pytest.mark.parametrize(("name", "kind"), [("cloud.las", "a point cloud (LAS)"), ("cloud.LAZ", "a point cloud (LAZ)"),
+                                            ("dem.tif", "a terrain map (GeoTIFF DEM)"),
+                                            ("road.crg", "a terrain surface (OpenCRG)")])
+def test_a_terrain_file_given_as_the_route_says_to_use_terrain(tmp_path: Path, capsys: pytest.CaptureFixture,
+                                                               name: str, kind: str) -> None:
+    # issue 30 item 17: before, "header 'LASF...' lacks the columns 's,z'"
+    path = tmp_path / name
+    path.write_bytes(b"LASF" + bytes(300))
+    status, _, err = _run(["plan", str(path), "-o", str(tmp_path / "p.csv")], capsys)
+    _one_line_error(status, err, name, f"is {kind}, not a route file", f"--terrain {name}")
+
+
+@pytest.mark.parametrize("text", ["\u0661", "\uff11", "1_0"])
+def test_option_numbers_are_ascii_decimal_notation(tmp_path: Path, capsys: pytest.CaptureFixture, text: str) -> None:
+    with pytest.raises(SystemExit) as raised:
+        main(["route", str(HEXBIN_TRACK), "--spacing", text, "-o", str(tmp_path / "o.csv")])
+    assert raised.value.code == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "is not a number" in err and err.isascii()

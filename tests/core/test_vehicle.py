@@ -211,3 +211,26 @@ def test_the_turning_circle_is_an_optional_key_that_needs_a_lateral_limit(tmp_pa
 
     assert "min_turn_radius_m" not in OPTIONAL_KEYS
     assert load_vehicle("atv").replace(min_turn_radius_m=None).min_turn_radius_m is None
+
+
+@pytest.mark.parametrize("name", ["a" * 5000, "at\x00v", "..", ""])
+def test_a_bare_name_that_is_no_bundled_vehicle_is_one_short_line(name):
+    # issue 30 item 11: before, 5,000 characters were asked of the file system (OSError, exit 1)
+    with pytest.raises(InputError) as exc:
+        load_vehicle(name)
+    message = str(exc.value)
+    assert "\n" not in message and len(message) < 250 and "no bundled vehicle" in message and "atv" in message
+
+
+def test_a_lone_carriage_return_in_a_vehicle_file_is_refused(tmp_path):
+    # issue 30 item 3: before, the text after it became a key ("# note\rmax_speed_mps = 1" set 1 m/s)
+    text = write_vehicle(tmp_path, drop="max_speed_mps").read_text(encoding="utf-8")
+    path = tmp_path / "cr.toml"
+    path.write_bytes((text + "# note\rmax_speed_mps = 1.0\n").encode())
+    with pytest.raises(InputError) as exc:
+        load_vehicle(path)
+    assert_one_line_naming(exc, "cr.toml", f"line {len(TABLE_1)}", "carriage return")
+    for end in ("\r\n", "\r"):  # Windows and classic Mac OS line ends read as they are meant
+        other = tmp_path / "ends.toml"
+        other.write_bytes(write_vehicle(tmp_path).read_text(encoding="utf-8").replace("\n", end).encode())
+        assert load_vehicle(other) == load_vehicle(write_vehicle(tmp_path))
