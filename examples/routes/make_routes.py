@@ -435,15 +435,23 @@ def real_routes(real: Path) -> list[BundledRoute]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--out", type=Path, default=HERE, help="folder for the CSV files (default: beside this script)")
+    parser.add_argument("--out", type=Path, default=HERE, help="folder for the CSV files, created if missing (default: beside this script)")
     parser.add_argument("--real", type=Path, default=DEFAULT_REAL,
                         help="the folder of measured terrain (default: data/real of this repository)")
     parser.add_argument("--no-real", action="store_true", help="write the synthetic routes only")
     parser.add_argument("--quiet", action="store_true", help="do not print the per-section summaries")
     args = parser.parse_args(argv)
 
-    if not args.out.is_dir():  # before any work: one line, not a traceback after it
-        print(f"error: --out {args.out} is not a folder; create it or choose another", file=sys.stderr)
+    # before any work: one line, not a traceback after it; a missing folder is created (as
+    # 'profileopt figures --out' does)
+    if args.out.exists() and not args.out.is_dir():
+        print(f"error: --out {args.out}: exists and is not a folder; give a folder path", file=sys.stderr)
+        return 2
+    try:
+        args.out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        print(f"error: --out {args.out}: cannot create the folder ({exc.strerror}); choose another path",
+              file=sys.stderr)
         return 2
     routes = synthetic_routes()
     if args.no_real:

@@ -11,6 +11,8 @@ from __future__ import annotations
 import argparse
 import json
 
+from .messages import flags_for_parameters
+
 from ..defaults import DEFAULT_REFINE
 
 
@@ -18,12 +20,15 @@ def run(args: argparse.Namespace) -> int:
     """Run ``profileopt compare``: plan and verify with each model, print one table."""
     from ..core.vehicle import load_vehicle
     from ..io.routes import read_route
+    from ..progress import terminal_progress
     from ..studies.compare import compare_models
 
     vehicle = load_vehicle(args.vehicle)
     route = read_route(args.route)
-    rows = [run.to_dict() for run in compare_models(route, vehicle, segment_length_m=args.segment_length,
-                                                    roughness_window_m=args.roughness_window, refine=args.refine)]
+    with terminal_progress("profileopt compare", enabled=not args.quiet) as progress:
+        runs = compare_models(route, vehicle, segment_length_m=args.segment_length,
+                              roughness_window_m=args.roughness_window, refine=args.refine, progress=progress)
+    rows = [run.to_dict() for run in runs]
     if args.json:
         print(json.dumps({"route": args.route, "vehicle": args.vehicle, "segment_length_m": args.segment_length,
                           "roughness_window_m": args.roughness_window, "refine": args.refine, "models": rows},
@@ -46,7 +51,7 @@ def _table(args: argparse.Namespace, length_m: float, rows: list[dict]) -> str:
     for row in rows:
         if "travel_time_s" not in row:
             out.append(f"| {row['label']} | {row['status'].split(':')[0]} | | | | | | | |")
-            notes.append(f"{row['label']}: {row['status']}")
+            notes.append(f"{row['label']}: {flags_for_parameters(row['status'])}")
             continue
         win = row["windows"]
         out.append(
@@ -81,3 +86,4 @@ def arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--roughness-window", type=float, default=5.0, metavar="M",
                         help="roughness window length in m, for the plans and the checks (default: 5)")
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress display on stderr")

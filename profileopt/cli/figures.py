@@ -9,8 +9,10 @@ from .paths import check_folder, folder_outputs, vehicle_input
 
 
 def run(args: argparse.Namespace) -> int:
-    """Write the figures into ``args.out`` (created if missing); print each file written."""
+    """Write the figures into ``args.out`` (created if missing); print ``wrote PATH`` for each
+    file written, as ``plan`` does."""
     from ..core.vehicle import load_vehicle
+    from ..progress import terminal_progress
     from ..viz.figures import (  # matplotlib: only when drawing (0.3 s)
         paper_figure_paths,
         write_paper_figures,
@@ -29,10 +31,10 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--out {out}: cannot create the folder ({exc.strerror}); choose another path") from None
     if outputs is None:
         outputs = folder_outputs("--out", paper_figure_paths(out), inputs)
-    with outputs:
-        written = write_paper_figures(out, vehicle, resonant)
+    with outputs, terminal_progress("profileopt figures", enabled=not args.quiet) as progress:
+        written = write_paper_figures(out, vehicle, resonant, progress=progress)
     for path in written:
-        print(path)
+        print(f"wrote {path}")
     return 0
 
 
@@ -43,6 +45,7 @@ def arguments(parser: argparse.ArgumentParser) -> None:
                         help="vehicle of Fig. 5: a bundled name or a .toml file (default: atv, Table 1)")
     parser.add_argument("--resonant-vehicle", default="atv-resonant", metavar="NAME_OR_TOML",
                         help="vehicle of Fig. 6: a bundled name or a .toml file (default: atv-resonant)")
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress display on stderr")
 
 
 # cli.command reads run.arguments when it registers run, so set it first, then register.

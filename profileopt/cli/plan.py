@@ -68,8 +68,11 @@ def arguments(parser: argparse.ArgumentParser) -> None:
                              "washboard above resonance); 'first': only speeds reachable from rest "
                              "without crossing a force peak; 'largest': only the highest band (default: all)")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="no notes and no progress display on stderr (errors are still said)")
     parser.add_argument("--plot", metavar="PNG",
-                        help="draw speed, allowable speeds, RI, curvature, grade and the binding limit along the route")
+                        help="draw speed, allowable speeds, RI, curvature, grade and the binding limit along the "
+                             "route (PNG, or another format matplotlib writes by the extension: .jpg, .pdf, .svg)")
     parser.add_argument("--map", metavar="PNG",
                         help="draw the route over its terrain, coloured by the planned speed, marking where each "
                              "limit holds it (an x,y route or a track)")
@@ -82,6 +85,7 @@ def run(args: argparse.Namespace) -> int:
         OutputSet,  # imported when the command runs, not for --help (issue 14)
     )
     from ..io.profiles import write_profile
+    from ..progress import terminal_progress
 
     # first, before any work: every output checked (none may be an input, nor both the same
     # file); then written together, all or none
@@ -93,39 +97,47 @@ def run(args: argparse.Namespace) -> int:
     made = track = None
     tolerance = args.path_tolerance
     if is_track(args.route, args):
-        made, track = smoothed_track_route(args.route, args, "profileopt plan")
+        # the track's notes are printed where it is read (cli/route.py): --quiet drops them here
+        with _quiet_stderr(args.quiet):
+            made, track = smoothed_track_route(args.route, args, "profileopt plan")
         route = made.route
         if track.smoothing is not None and track.smoothing.smoothed:
             tolerance = None  # the points are on the path smoothed within it; what is left is estimated
     else:
         refuse_track_options(args.route, args)
         route = _route_file(args)
+    say = _notes(args)
     if args.map is not None and route.x_m is None:
         raise InputError(f"{args.route}: --map draws a route's x,y (or a track's); this route has only s,z: "
                          "drop --map or give an x,y,z route")
-    for note in route.notes:
-        print(f"profileopt plan: note: {note}", file=sys.stderr)
-    profile = plan(
-        route, vehicle, segment_length_m=args.segment_length, roughness_window_m=args.roughness_window,
-        path_tolerance_m=tolerance, model=args.model, smoothing=args.smoothing,
-        max_jerk_mps3=args.max_jerk, v0_mps=args.v0, vend_mps=args.vend, method=args.method,
-        band=args.band, refine=args.refine,
-    )
-    with outputs:
-        if args.output is not None:
-            write_profile(profile, args.output)
-        if args.plot is not None:
-            from ..viz.plots import plot_profile
+    say(route.notes)
+    route_name = Path(args.route).name
+    vehicle_name = Path(vehicle.name).stem if vehicle.name else None
+    with terminal_progress("profileopt plan", enabled=not args.quiet) as progress:
+        profile = plan(
+            route, vehicle, segment_length_m=args.segment_length, roughness_window_m=args.roughness_window,
+            path_tolerance_m=tolerance, model=args.model, smoothing=args.smoothing,
+            max_jerk_mps3=args.max_jerk, v0_mps=args.v0, vend_mps=args.vend, method=args.method,
+            band=args.band, refine=args.refine, progress=progress,
+        )
+        progress.expect(sum(name is not None for name in (args.plot, args.map)))
+        with outputs:
+            if args.output is not None:
+                write_profile(profile, args.output)
+            if args.plot is not None:
+                from ..viz.plots import plot_profile
 
-            plot_profile(profile, args.plot, route=Path(args.route).name,
-                         vehicle=Path(vehicle.name).stem if vehicle.name else None)
-        if args.map is not None:
-            from ..viz.maps import plot_plan_map
+                progress.step(f"drawing {args.plot}")
+                plot_profile(profile, args.plot, route=route_name, vehicle=vehicle_name)
+            if args.map is not None:
+                from ..viz.maps import plot_plan_map
 
-            plot_plan_map(profile, made if made is not None else _plain_map(route), args.map)
-    summary = profile.summary()
-    for note in summary["notes"]:  # the plan's, then each turn sharper than the turning circle
-        print(f"profileopt plan: note: {note}", file=sys.stderr)
+                progress.step(f"drawing {args.map}")
+                plot_plan_map(profile, made if made is not None else _plain_map(route), args.map,
+                              route=route_name, vehicle=vehicle_name)
+    # the route and the vehicle first, as compare's JSON names them
+    summary = {"route": args.route, "vehicle": args.vehicle, **profile.summary()}
+    say(summary["notes"])  # the plan's, then each turn sharper than the turning circle
     smoothing = track.smoothing if track is not None else None
     if smoothing is not None:
         summary["track"] = {"smoothed": smoothing.smoothed, "tolerance_m": smoothing.tolerance_m,
@@ -154,10 +166,32 @@ def _route_file(args: argparse.Namespace):  # noqa: ANN202  (Route)
     assumed = assumed_roughness(args)
     if assumed is not None:
         if route.assumed_roughness is not None:
-            print(f"profileopt plan: note: {args.route}: its assumed roughness ({route.assumed_roughness.label}) is "
-                  f"replaced by {assumed.label}", file=sys.stderr)
+            _notes(args)([f"{args.route}: its assumed roughness ({route.assumed_roughness.label}) is replaced by "
+                          f"{assumed.label}"])
         route = dataclasses.replace(route, assumed_roughness=assumed)
     return route
+
+
+def _notes(args: argparse.Namespace):  # noqa: ANN202  (Callable[[Iterable[str]], None])
+    """What prints notes on stderr, in the command line's words (``--v0``, not ``v0_mps``);
+    nothing with ``--quiet``."""
+    from .messages import flags_for_parameters
+
+    def say(notes) -> None:  # noqa: ANN001
+        if not args.quiet:
+            for note in notes:
+                print(f"profileopt plan: note: {flags_for_parameters(note)}", file=sys.stderr)
+
+    return say
+
+
+def _quiet_stderr(quiet: bool):  # noqa: ANN202  (a context manager)
+    """Drop what is printed on stderr inside the block when ``quiet`` (notes printed by
+    helpers shared with other commands); errors are raised, not printed, so they still tell."""
+    import contextlib
+    import io
+
+    return contextlib.redirect_stderr(io.StringIO()) if quiet else contextlib.nullcontext()
 
 
 def _plain_map(route):  # noqa: ANN001, ANN202

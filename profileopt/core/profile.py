@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..defaults import DEFAULT_MODEL
+from ..defaults import DEFAULT_MODEL, LIMIT_RTOL
 from .binding import binding_shares
 from .kinematics import boundary_jerk_mps3
 from .path import turn_notes
@@ -22,7 +22,7 @@ from .path import turn_notes
 if TYPE_CHECKING:
     from .path import SegmentPath
 
-__all__ = ["Profile", "PROFILE_COLUMNS", "BASE_COLUMNS"]
+__all__ = ["Profile", "PROFILE_COLUMNS", "BASE_COLUMNS", "at_limit"]
 
 #: The first eight columns of a profile CSV: all that files written before turns and hills hold.
 BASE_COLUMNS = ("s_m", "speed_mps", "accel_mps2", "time_s", "ri", "e_max_m", "force_n", "force_limit_n")
@@ -30,6 +30,30 @@ BASE_COLUMNS = ("s_m", "speed_mps", "accel_mps2", "time_s", "ri", "e_max_m", "fo
 #: row and the limit that holds the speed there (``binding``, text; see
 #: :mod:`profileopt.core.binding`).
 PROFILE_COLUMNS = BASE_COLUMNS + ("curvature_1pm", "grade_rad", "binding")
+
+
+def at_limit(margin: dict, rtol: float = LIMIT_RTOL) -> dict:
+    """A margin whose ratio is above 1 by at most ``rtol`` (rounding: the plan keeps the limit
+    within the tolerance it is checked to) read as exactly 1, at the limit.
+
+    Parameters
+    ----------
+    margin : dict
+        ``{"ratio": float or None, "s_m": float or None}`` (a limit's
+        :meth:`~profileopt.planning.limits.Limit.margins` entry).
+    rtol : float, default :data:`~profileopt.defaults.LIMIT_RTOL`
+        The relative tolerance within which a value keeps its limit.
+
+    Returns
+    -------
+    dict
+        ``margin`` with ``ratio`` 1.0 where it was in (1, 1 + rtol]; any other ratio as it is
+        (above the tolerance it is a breach, and reads as one).
+    """
+    ratio = margin.get("ratio")
+    if ratio is not None and 1.0 < ratio <= 1.0 + rtol:
+        return {**margin, "ratio": 1.0}
+    return margin
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -204,7 +228,9 @@ class Profile:
             top speed is held by a limit, the slowest, so not the run-up from rest);
             ``margins`` (from each of :attr:`limits`: the largest ratio of each constrained
             quantity to its limit, and where: force, lateral, friction, accel, decel, power,
-            jerk); ``binding`` (the share of the distance each limit holds the speed, 0 to
+            jerk; a ratio above 1 by no more than the check's tolerance
+            :data:`~profileopt.defaults.LIMIT_RTOL` reads 1, at the limit: :func:`at_limit`);
+            ``binding`` (the share of the distance each limit holds the speed, 0 to
             1, from the ``binding`` column); ``limits_off`` (the limits of turns and hills
             the vehicle file leaves off); ``roughness`` (``source``: ``"measured"`` or
             ``"assumed"``, then its ``label``, the ``ri`` every window got and ``window_m``;
@@ -240,7 +266,7 @@ class Profile:
             reason = "braking at max_decel_mps2 (for a slower point after it)"
         margins: dict[str, dict] = {}
         for limit in self.limits:
-            margins.update(limit.margins(self))
+            margins.update({key: at_limit(margin) for key, margin in limit.margins(self).items()})
         path = self.path_summary()
         path_notes = []
         if self.path is not None and self.path.turns:

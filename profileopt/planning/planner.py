@@ -49,6 +49,7 @@ from ..defaults import (
 from ..errors import InfeasibleError, InputError, PlanningError
 from ..physics.forces import DEFAULT_MODEL, get_model
 from ..physics.speeds import SpeedBands, max_force_over_segments
+from ..progress import NO_PROGRESS, Progress
 from .bands import BandChoice, DrivePower, choose_bands, snap_to_band
 from .fallback import fallback_choice
 from .gate import MAX_GATE_ROUNDS, check_plan, covered_m, gate_applies, gate_caps, merged_caps
@@ -113,6 +114,7 @@ def plan(
     solver_options: SolverOptions | None = None,
     refine: bool = DEFAULT_REFINE,
     simulation_gate: bool = DEFAULT_SIMULATION_GATE,
+    progress: Progress = NO_PROGRESS,
 ) -> Profile:
     """The fastest smooth speed profile along ``route`` that keeps every limit.
 
@@ -183,6 +185,10 @@ def plan(
         the limit, plan again with lower caps there (:mod:`profileopt.planning.gate`; model
         ``sbem_tf``). False returns the model's plan as it is: for studies of the force
         models themselves (:func:`profileopt.studies.safety.safety_study`).
+    progress : Progress, default :data:`profileopt.progress.NO_PROGRESS`
+        Told the steps of the plan as they start (cutting the route, the path, the speed
+        bands, refining, solving, each round of the simulation gate): for a display of
+        progress (:func:`profileopt.progress.terminal_progress`).
 
     Returns
     -------
@@ -210,10 +216,15 @@ def plan(
     _validate_options(vehicle, smoothing, jerk, v0_mps, vend_mps, method, band, refine)
     options = SolverOptions() if solver_options is None else solver_options
     timings: dict[str, float] = {}
+    gate = simulation_gate and gate_applies(model)
+    once_steps = 4 if refine else 2  # the speed bands (again after refining), refining, solving
+    progress.expect(2 + once_steps + (1 if gate else 0))
+    progress.step(f"cutting {route.length_m:.0f} m into segments, measuring their roughness")
     seg = segment_route(route, vehicle, segment_length_m, roughness_window_m=roughness_window_m)
     timings["segment"] = time.perf_counter() - t_start
 
     t = time.perf_counter()
+    progress.step("finding the path's turns and grades")
     from ..terrain.geometry import route_geometry  # scipy: only when a plan is made
 
     geometry = route_geometry(route, tolerance_m=path_tolerance_m, grade_scale_m=2.0 * seg.roughness_window_m,
@@ -225,23 +236,28 @@ def plan(
                           model=model, smoothing=smoothing, v0_mps=v0_mps, vend_mps=vend_mps, method=method,
                           band=band, refine=refine, segment_length_m=segment_length_m,
                           roughness_window_m=roughness_window_m, path_tolerance_m=path_tolerance_m,
-                          timings=timings)
+                          timings=timings, progress=progress)
 
     profile = once(limits)
-    if simulation_gate and gate_applies(model):  # drive it in the exact simulation; cap where it goes over
-        profile = _gate(profile, once, limits, route, vehicle, seg.roughness_window_m, timings)
+    if gate:  # drive it in the exact simulation; cap where it goes over
+        profile = _gate(profile, once, limits, route, vehicle, seg.roughness_window_m, timings, progress,
+                        once_steps)
     timings["total"] = time.perf_counter() - t_start
     return dataclasses.replace(profile, timings_s=dict(timings))
 
 
 def _gate(profile: Profile, once: "Callable[[tuple[Limit, ...]], Profile]", limits: tuple[Limit, ...],
-          route: "Route", vehicle: "Vehicle", window_m: float, timings: dict[str, float]) -> Profile:
+          route: "Route", vehicle: "Vehicle", window_m: float, timings: dict[str, float],
+          progress: Progress = NO_PROGRESS, once_steps: int = 0) -> Profile:
     """Simulate ``profile`` and, while it goes over the force limit, plan again with the
-    gate's caps (:mod:`.gate`); the last profile, with a note when the gate capped anything."""
+    gate's caps (:mod:`.gate`); the last profile, with a note when the gate capped anything.
+    ``progress`` is told each simulation; ``once_steps``: the steps of one plan."""
     caps = None
     first_ratio = first_s = None
     for round_number in range(1, MAX_GATE_ROUNDS + 1):
         t = time.perf_counter()
+        progress.step("simulating the plan" if round_number == 1 else
+                      f"simulating the plan again (round {round_number} of the simulation gate)")
         check = check_plan(route, profile, vehicle, window_m=window_m)
         timings["simulate"] = timings.get("simulate", 0.0) + time.perf_counter() - t
         if check.passes:
@@ -249,6 +265,7 @@ def _gate(profile: Profile, once: "Callable[[tuple[Limit, ...]], Profile]", limi
         if first_ratio is None:
             first_ratio, first_s = check.worst_ratio, check.worst_s_m
         caps = merged_caps(caps, gate_caps(check, vehicle, round_number))
+        progress.expect(once_steps + 1)  # plan again, simulate again
         profile = once((*limits, SimulatedLimit(caps=caps)))
     else:
         check = check_plan(route, profile, vehicle, window_m=window_m)
@@ -269,14 +286,17 @@ def _gate(profile: Profile, once: "Callable[[tuple[Limit, ...]], Profile]", limi
 def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *, seg: Segments,
                geometry: "RouteGeometry", options: SolverOptions, jerk: float, model: str, smoothing: float,
                v0_mps: float, vend_mps: float, method: str, band: str, refine: bool, segment_length_m: float,
-               roughness_window_m: float, path_tolerance_m: float | None, timings: dict[str, float]) -> Profile:
+               roughness_window_m: float, path_tolerance_m: float | None, timings: dict[str, float],
+               progress: Progress = NO_PROGRESS) -> Profile:
     """One plan with ``limits`` on the segments ``seg`` (refined inside) and the route's
     ``geometry``: the steps of :func:`plan` after the route was cut and its geometry found;
-    the other arguments as :func:`plan`'s. Adds to ``timings`` (s)."""
+    the other arguments as :func:`plan`'s. Adds to ``timings`` (s) and tells ``progress``
+    its steps."""
     v0_requested, vend_requested = v0_mps, vend_mps
     refine_note = ""
     while True:  # twice with refine: on the segments asked for, then on the refined ones
         t = time.perf_counter()
+        progress.step(f"speed bands of {seg.count} segments" + (" (refined)" if refine_note else ""))
         path = segment_path(route, seg, geometry)
         timings["path"] = timings.get("path", 0.0) + time.perf_counter() - t
 
@@ -326,6 +346,7 @@ def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *,
         # cut where the profile meets the force's cap and the roughness changes, or a step's
         # or a speed limit's cap (refine.py); then the bands are chosen again
         t = time.perf_counter()
+        progress.step("refining the segments where the plan meets a cap")
         band_top = usable.upper_mps[np.arange(seg.count), chosen.band]
         finer = refined_segments(limits, context, chosen.greatest_b, band_top, cap, cap_source)
         timings["refine"] = time.perf_counter() - t
@@ -342,6 +363,7 @@ def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *,
                      f"{_shortest_exact(power, seg):.3g} m plans it exactly")
 
     iterations = pieces = 0
+    progress.step(f"solving the plan on {seg.count} segments")
     if method == "auto" and smoothing == 0 and not math.isfinite(jerk_bound) and "friction" not in rows:
         b, status, success = chosen.greatest_b, "exact", True
     else:

@@ -30,6 +30,7 @@ import numpy as np
 from ..defaults import DEFAULT_REFINE, DEFAULT_SIMULATION_GATE
 from ..errors import InfeasibleError
 from ..physics.forces import MODELS, get_model
+from ..progress import NO_PROGRESS, Progress
 
 if TYPE_CHECKING:
     from ..core.route import Route
@@ -285,6 +286,7 @@ def compare_models(
     roughness_window_m: float = 5.0,
     refine: bool = DEFAULT_REFINE,
     simulation_gate: bool = DEFAULT_SIMULATION_GATE,
+    progress: Progress = NO_PROGRESS,
 ) -> tuple[ModelRun, ...]:
     """:func:`run_model` for each model on one route (``profileopt compare``).
 
@@ -304,6 +306,8 @@ def compare_models(
     simulation_gate : bool, default True (:data:`profileopt.defaults.DEFAULT_SIMULATION_GATE`)
         Plan with the planner's simulation gate (:mod:`profileopt.planning.gate`); False
         measures the force model's own plan.
+    progress : Progress, default :data:`profileopt.progress.NO_PROGRESS`
+        Expects one step per model and is told each as it starts.
 
     Returns
     -------
@@ -311,6 +315,16 @@ def compare_models(
         One per model, in the order given.
     """
     keys = list(MODELS) if models is None else list(models)
-    return tuple(run_model(route, vehicle, key, segment_length_m=segment_length_m,
-                           roughness_window_m=roughness_window_m, refine=refine, simulation_gate=simulation_gate)
-                 for key in keys)
+    progress.expect(len(keys))
+    runs = []
+    for key in keys:
+        progress.step(f"{_short_source(route)}, {_vehicle_label(vehicle)}: planning and simulating with "
+                      f"{get_model(key).label}")
+        runs.append(run_model(route, vehicle, key, segment_length_m=segment_length_m,
+                              roughness_window_m=roughness_window_m, refine=refine, simulation_gate=simulation_gate))
+    return tuple(runs)
+
+
+def _short_source(route: "Route") -> str:
+    """A route's name for a progress display: its source's last part."""
+    return Path(str(route.source)).name

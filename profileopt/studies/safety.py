@@ -21,6 +21,7 @@ import numpy as np
 
 from ..defaults import DEFAULT_REFINE
 from ..physics.forces import MODELS, get_model
+from ..progress import NO_PROGRESS, Progress
 from .compare import INFEASIBLE, ModelRun, compare_models
 
 if TYPE_CHECKING:
@@ -231,6 +232,16 @@ class SafetyStudy:
         return "\n".join(lines)
 
 
+class _StepsOnly(Progress):
+    """Passes on the steps, not what is expected (the study expected every run at its start)."""
+
+    def __init__(self, inner: Progress) -> None:
+        self._inner = inner
+
+    def step(self, name: str) -> None:
+        self._inner.step(name)
+
+
 def _short(source: str) -> str:
     """A route's file name (its source without folders)."""
     return Path(source).name
@@ -279,6 +290,7 @@ def safety_study(
     reference_model: str = "sbem_tf",
     refine: bool = DEFAULT_REFINE,
     simulation_gate: bool = False,
+    progress: Progress = NO_PROGRESS,
 ) -> SafetyStudy:
     """Plan every route for every vehicle with every model, simulate, and pool the results.
 
@@ -304,6 +316,9 @@ def safety_study(
         Plan with the planner's simulation gate (:mod:`profileopt.planning.gate`). Off by
         default: the study measures the force models themselves, and with the gate SBEM:TF's
         plans keep the limit in simulation by construction (and cost a simulation more each).
+    progress : Progress, default :data:`profileopt.progress.NO_PROGRESS`
+        Expects every (route, vehicle, model) run at the start and is told each as it
+        starts (:func:`profileopt.progress.terminal_progress` shows it).
 
     Returns
     -------
@@ -320,9 +335,12 @@ def safety_study(
     """
     keys = tuple(get_model(m).key for m in (MODELS if models is None else models))
     reference_key = get_model(reference_model).key
+    progress.expect(len(routes) * len(vehicles) * len(keys))  # all at once: the bar's length is the study's
+    steps = _StepsOnly(progress)
     pairs = [
         compare_models(route, vehicle, models=keys, segment_length_m=segment_length_m,
-                       roughness_window_m=roughness_window_m, refine=refine, simulation_gate=simulation_gate)
+                       roughness_window_m=roughness_window_m, refine=refine, simulation_gate=simulation_gate,
+                       progress=steps)
         for route in routes
         for vehicle in vehicles
     ]

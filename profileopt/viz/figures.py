@@ -26,6 +26,7 @@ from ..core.vehicle import Vehicle, load_vehicle
 from ..io.atomic import OutputSet, atomic_path, atomic_write
 from ..physics.forces import MODELS
 from ..physics.speeds import allowable_speed
+from ..progress import NO_PROGRESS, Progress
 from ..terrain.roughness import roughness_index
 from ..terrain.synthetic import washboard
 
@@ -429,6 +430,8 @@ def write_paper_figures(
     out_dir: str | os.PathLike,
     vehicle: Vehicle | None = None,
     resonant_vehicle: Vehicle | None = None,
+    *,
+    progress: Progress = NO_PROGRESS,
 ) -> list[Path]:
     """Write Figs. 1, 5 and 6 (PNG + CSV each) into ``out_dir`` (which must exist).
 
@@ -440,16 +443,21 @@ def write_paper_figures(
         The vehicle of Fig. 5; defaults to the bundled ``atv``.
     resonant_vehicle : Vehicle, optional
         The vehicle of Fig. 6; defaults to the bundled ``atv-resonant``.
+    progress : Progress, default :data:`profileopt.progress.NO_PROGRESS`
+        Told each step (computing the curves, drawing each figure).
 
     Returns
     -------
     list of pathlib.Path
         The six files written, in order.
     """
+    progress.expect(1 + len(PAPER_FIGURE_STEMS))
+    progress.step("computing the curves of Figs. 1, 5 and 6")
     figures = paper_figures(vehicle, resonant_vehicle)
     written = [Path(out_dir) / f"{data.stem}.{ext}" for data in figures for ext in ("png", "csv")]
     with OutputSet([("", path) for path in written]):  # checked first; all six files or none
         for data in figures:
+            progress.step(f"drawing {data.stem}.png")
             write_figure(data, out_dir)
     return written
 

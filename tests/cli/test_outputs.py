@@ -158,8 +158,8 @@ def test_a_failing_second_output_leaves_the_first_untouched(folder: Path, monkey
     before = snapshot(folder)
     status = cli.main(["plan", str(folder / "route.csv"), "-o", str(folder / "out.csv"),
                        "--plot", str(folder / "out.png")])
-    assert status == 1
-    assert "No space left on device" in capsys.readouterr().err
+    assert status == 2  # the user's to fix (issue 30): one line naming the output
+    assert "--plot" in (err := capsys.readouterr().err) and "No space left on device" in err
     assert snapshot(folder) == before
 
 
@@ -359,3 +359,50 @@ def test_export_c_within_the_cap_still_works(folder: Path) -> None:
     assert done.returncode == 0, done.stderr
     assert sorted(p.name for p in (folder / "cout").iterdir()) == ["README.md", "example.c", "profileopt_atv.c",
                                                                    "profileopt_atv.h"]
+
+
+# --------------------------------------------------------------------------------------
+# Output people read (issue 30, items 14 and 17): plan's JSON names the route and the
+# vehicle; a .jpg plot is a JPEG; make_routes.py --out creates its folder as figures does.
+
+
+def test_plan_json_names_route_and_vehicle(capsys: pytest.CaptureFixture) -> None:
+    import json
+
+    from profileopt.cli import main
+
+    assert main(["plan", str(ROUTE), "--vehicle", "atv", "--json"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert (summary["route"], summary["vehicle"]) == (str(ROUTE), "atv")
+    assert list(summary)[:2] == ["route", "vehicle"]  # first, as compare's JSON
+    assert all(m["ratio"] is None or m["ratio"] <= 1.0 for m in summary["margins"].values())
+
+
+@pytest.mark.slow  # a plan and a picture
+def test_a_jpg_plot_is_a_jpeg(tmp_path: Path) -> None:
+    from profileopt.cli import main
+
+    assert main(["plan", str(ROUTE), "--quiet", "--plot", str(tmp_path / "plan.jpg")]) == 0
+    assert (tmp_path / "plan.jpg").read_bytes()[:3] == b"\xff\xd8\xff"  # before: PNG bytes
+
+
+def _make_routes(monkeypatch: pytest.MonkeyPatch):  # noqa: ANN202  (the script's module)
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("make_routes", ROUTES / "make_routes.py")
+    module = importlib.util.module_from_spec(spec)
+    monkeypatch.setitem(sys.modules, "make_routes", module)  # its dataclasses look themselves up there
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_make_routes_creates_its_out_folder(tmp_path: Path, capsys: pytest.CaptureFixture,
+                                            monkeypatch: pytest.MonkeyPatch) -> None:
+    out = tmp_path / "new" / "routes"  # before: refused, "not a folder; create it"
+    make_routes = _make_routes(monkeypatch)
+    assert make_routes.main(["--out", str(out), "--no-real", "--quiet"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["curb.csv", "trail.csv", "washboard.csv"]
+    (tmp_path / "taken").write_text("x")
+    assert make_routes.main(["--out", str(tmp_path / "taken"), "--no-real", "--quiet"]) == 2
+    assert capsys.readouterr().err.splitlines() == [f"error: --out {tmp_path / 'taken'}: exists and is not a folder; "
+                                                    "give a folder path"]

@@ -51,8 +51,10 @@ def test_cli_writes_three_pngs_and_three_csvs(profileopt_command, tmp_path):
         [*profileopt_command, "figures", "--out", str(out)], capture_output=True, text=True, timeout=120
     )
     assert result.returncode == 0, result.stderr
-    printed = result.stdout.split()
-    assert len(printed) == 6 and all(Path(p).exists() for p in printed)
+    # one line per file written, in plan's words ("wrote PATH")
+    printed = result.stdout.splitlines()
+    assert len(printed) == 6 and all(line.startswith("wrote ") for line in printed), printed
+    assert all(Path(line.removeprefix("wrote ")).exists() for line in printed)
     check_outputs(out)
     # the speeds in the CSV are the library's
     header, table = read_csv(out / "fig6_resonance.csv")
