@@ -133,3 +133,26 @@ def write_geotiff(path: Path, cell_m: float = 0.05, *, epsg: int | None = UTM_EP
     with rasterio.open(path, "w", **profile) as dst:
         dst.write(z, 1)
     return path
+
+
+def write_sparse_geotiff(path: Path, cells: int = 50_000, cell_m: float = 0.05, margin_m: float = 5.0) -> Path:
+    """A ``cells`` x ``cells`` GeoTIFF (UTM 33N) of which only the tiles within ``margin_m`` of
+    the track hold the surface (float32, no-data -9999); the rest is never written, so the
+    file is small (a sparse GeoTIFF: 2.5e9 cells in about 7 MB) though it claims 9.3 GiB of
+    float32 cells (issue 30). Its north-west corner lies 1 km west and north of ORIGIN_M."""
+    import rasterio
+    from affine import Affine
+    from rasterio.windows import Window
+
+    west, north = ORIGIN_M[0] - 1000.0, ORIGIN_M[1] + 1000.0
+    profile = dict(driver="GTiff", height=cells, width=cells, count=1, dtype="float32", nodata=-9999.0,
+                   tiled=True, blockxsize=256, blockysize=256, sparse_ok=True, crs=f"EPSG:{UTM_EPSG}",
+                   transform=Affine(cell_m, 0.0, west, 0.0, -cell_m, north))
+    tx, ty = track_utm_m(0.5)
+    c0, c1 = int((tx.min() - margin_m - west) / cell_m), int((tx.max() + margin_m - west) / cell_m)
+    r0, r1 = int((north - ty.max() - margin_m) / cell_m), int((north - ty.min() + margin_m) / cell_m)
+    xc = west + (np.arange(c0, c1) + 0.5) * cell_m
+    yc = north - (np.arange(r0, r1) + 0.5) * cell_m
+    with rasterio.open(path, "w", **profile) as dst:
+        dst.write(surface_m(xc[None, :], yc[:, None]).astype(np.float32), 1, window=Window(c0, r0, c1 - c0, r1 - r0))
+    return path

@@ -43,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
     made = f"profileopt {__version__} route {args.track}" + (f" --terrain {args.terrain}" if args.terrain else "")
     comments = [f"{name}: the ground under the wheels along a track, made by `{made}`", *result.comments,
                 *([f"x, y: {track.smoothing.note(Path(args.track).name)}"] if track.smoothing is not None else []),
-                f"options: spacing {args.spacing:g} m, corridor {args.corridor:g} m, max gap {args.max_gap:g} m"]
+                f"options: spacing {result.spacing_m:g} m, corridor {args.corridor:g} m, max gap {args.max_gap:g} m"]
     with outputs:
         write_route(result.route, args.output, comments=comments)
         if args.plot is not None:
@@ -79,6 +79,7 @@ def smoothed_track_route(track_path: str, args: argparse.Namespace, prog: str) -
     -------
     tuple of (TrackRoute, Track)
     """
+    from ..defaults import DEFAULT_TRACK_SPACING_M
     from ..io.terrain_maps import read_terrain
     from ..io.tracks import check_not_degrees, check_track_samples, read_track
     from ..terrain.ground_track import route_from_track
@@ -89,12 +90,15 @@ def smoothed_track_route(track_path: str, args: argparse.Namespace, prog: str) -
                        path_tolerance_m=args.path_tolerance)
     if args.terrain is None:
         check_not_degrees(track)
-    check_track_samples(track, args.spacing)
-    terrain = read_terrain(args.terrain, terrain_crs=args.terrain_crs) if args.terrain is not None else None
+    # the finest spacing a terrain supports is at least the default: the count is an upper bound
+    check_track_samples(track, DEFAULT_TRACK_SPACING_M if args.spacing is None else args.spacing)
+    terrain = (read_terrain(args.terrain, terrain_crs=args.terrain_crs, track=track, spacing_m=args.spacing,
+                            corridor_m=args.corridor) if args.terrain is not None else None)
     result = route_from_track(track, terrain, spacing_m=args.spacing, corridor_m=args.corridor,
                               max_gap_m=args.max_gap, assumed_roughness=assumed_roughness(args))
-    for note in (*track.notes, *getattr(terrain, "notes", ()), *result.notes):
-        print(f"{prog}: note: {flags_for_parameters(note)}", file=sys.stderr)
+    if not getattr(args, "quiet", False):
+        for note in (*track.notes, *getattr(terrain, "notes", ()), *result.notes):
+            print(f"{prog}: note: {flags_for_parameters(note)}", file=sys.stderr)
     return result, track
 
 
@@ -108,7 +112,7 @@ def _human(result: object, args: argparse.Namespace) -> str:
     frame = result.crs_name or "the track's own frame (no CRS)"
     terrain = args.terrain or "none (the track's own elevations)"
     lines = [
-        f"route {args.track}: {route.length_m:.1f} m, {route.s_m.size} samples every {args.spacing:g} m, "
+        f"route {args.track}: {route.length_m:.1f} m, {route.s_m.size} samples every {result.spacing_m:g} m, "
         f"x, y in {frame}",
         f"  terrain    {terrain} ({result.terrain_kind})",
         f"  roughness  {roughness}",

@@ -7,7 +7,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..defaults import DEFAULT_CORRIDOR_M, DEFAULT_MAX_GAP_M, DEFAULT_TRACK_SPACING_M
+from ..defaults import DEFAULT_CORRIDOR_M, DEFAULT_MAX_GAP_M, DEFAULT_TRACK_SPACING_M, MAX_ROUGHNESS_SPACING_M
 
 #: File name endings that are tracks, never route CSVs.
 TRACK_SUFFIXES = (".gpx", ".geojson", ".json")
@@ -47,9 +47,11 @@ def add_track_arguments(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--terrain", metavar="FILE",
                        help="the ground under the track: a point cloud (.las, .laz), a DEM (.tif) or an OpenCRG "
                             "surface (.crg); without it, a track's own elevations (GPX <ele>)")
-    group.add_argument("--spacing", type=number_argument, default=DEFAULT_TRACK_SPACING_M, metavar="M",
-                       help=f"distance between route samples along the track in m (default: {DEFAULT_TRACK_SPACING_M:g}, "
-                            "half the bundled vehicles' wheel radius)")
+    group.add_argument("--spacing", type=number_argument, default=None, metavar="M",
+                       help="distance between route samples along the track in m (default: the finest the terrain "
+                            f"resolves, from {DEFAULT_TRACK_SPACING_M:g}, half the bundled vehicles' wheel radius, up "
+                            f"to {MAX_ROUGHNESS_SPACING_M:g}, their wheel radius; {DEFAULT_TRACK_SPACING_M:g} without "
+                            "a terrain)")
     group.add_argument("--corridor", type=number_argument, default=DEFAULT_CORRIDOR_M, metavar="M",
                        help="half-width in m of the strip around the wheel path whose ground points give the "
                             f"elevation (default: {DEFAULT_CORRIDOR_M:g}, about one tyre's width in all)")
@@ -115,7 +117,7 @@ def refuse_track_options(route_path: str, args: argparse.Namespace) -> None:
     """
     from ..errors import InputError
 
-    defaults = {"spacing": DEFAULT_TRACK_SPACING_M, "corridor": DEFAULT_CORRIDOR_M, "max_gap": DEFAULT_MAX_GAP_M,
+    defaults = {"spacing": None, "corridor": DEFAULT_CORRIDOR_M, "max_gap": DEFAULT_MAX_GAP_M,
                 "track_crs": None, "terrain_crs": None, "track_index": None}
     given = [name for name, default in defaults.items() if getattr(args, name) != default]
     if given:

@@ -168,12 +168,22 @@ def parse_opencrg(path: str | os.PathLike) -> OpenCrgData:
     if not definitions:
         raise InputError(f"{path}: the $KD_DEFINITION block names no data columns ('D:' lines)")
 
-    rows = int(math.floor((end_u - start_u) / step_u + 0.5)) + 1
     dtype = np.dtype(_CRG_FORMATS[data_format])
-    needed = rows * len(definitions) * dtype.itemsize
-    if len(raw) - data_start < needed:
+    available = max(len(raw) - data_start, 0)
+    span = (end_u - start_u) / step_u  # inf for reference_line_end_u = 1e308 over a small increment
+    if not span < available // (len(definitions) * dtype.itemsize):
+        rows_text = f"{span + 1:.6g}" if math.isfinite(span) else "more than 1e308"
         raise InputError(
-            f"{path}: {len(raw) - data_start} data bytes, but {rows} rows of {len(definitions)} "
+            f"{path}: reference_line_start_u = {start_u:g} to reference_line_end_u = {end_u:g} every "
+            f"reference_line_increment = {step_u:g} m is {rows_text} rows of {len(definitions)} {data_format} "
+            f"values, but the file holds {available} data bytes, enough for "
+            f"{available // (len(definitions) * dtype.itemsize)} rows; the file is truncated or these keys are wrong"
+        )
+    rows = int(math.floor(span + 0.5)) + 1
+    needed = rows * len(definitions) * dtype.itemsize
+    if available < needed:
+        raise InputError(
+            f"{path}: {available} data bytes, but {rows} rows of {len(definitions)} "
             f"{data_format} values need {needed}; the file is truncated"
         )
     values = np.frombuffer(raw, dtype=dtype, count=rows * len(definitions), offset=data_start)

@@ -19,8 +19,14 @@ from typing import Any
 
 from ..errors import InputError
 
-__all__ = ["GEO_EXTRA_HINT", "require_geo", "parse_crs", "length_units_m", "crs_label"]
+__all__ = ["GEO_EXTRA_HINT", "EARTH_RADIUS_M", "UNIT_RANGE_M", "require_geo", "parse_crs", "length_units_m", "crs_label"]
 
+#: The Earth's equatorial radius (m, WGS 84): a CRS whose ellipsoid is more than 2 % from it
+#: (every terrestrial ellipsoid is within 0.2 %) is on another body, or a unit sphere.
+EARTH_RADIUS_M = 6_378_137.0
+#: Lengths (m) a CRS's unit may have: from a micrometre to 100 km (a unit of 1e-300 m or of
+#: NaN is a damaged record, not a unit).
+UNIT_RANGE_M = (1e-6, 1e5)
 #: How to install the optional packages, for the messages that need one of them.
 GEO_EXTRA_HINT = "pip install 'profileopt[geo]'"
 
@@ -70,14 +76,21 @@ def parse_crs(text: str, source: str, option: str) -> Any:
     Raises
     ------
     InputError
-        pyproj is not installed, or ``text`` is not a CRS pyproj knows.
+        pyproj is not installed, ``text`` is not a CRS pyproj knows, or its ellipsoid is
+        not the Earth's (``+proj=longlat +R=1``: pyproj cannot transform it to an Earth CRS).
     """
     pyproj = require_geo("pyproj", "using a coordinate reference system")
+    shown = " ".join(str(text).split())[:80]
     try:
-        return pyproj.CRS.from_user_input(text)
+        crs = pyproj.CRS.from_user_input(text)
     except pyproj.exceptions.CRSError:
-        shown = " ".join(str(text).split())[:80]
         raise InputError(f"{source}: {option} {shown!r} is not a CRS pyproj knows; give e.g. EPSG:32633") from None
+    ellipsoid = crs.ellipsoid
+    radius_m = float(ellipsoid.semi_major_metre) if ellipsoid is not None else EARTH_RADIUS_M
+    if not abs(radius_m - EARTH_RADIUS_M) <= 0.02 * EARTH_RADIUS_M:
+        raise InputError(f"{source}: {option} {shown!r} is a CRS on a body of radius {radius_m:g} m, not on the "
+                         "Earth (PROJ does not transform between them); give an Earth CRS, e.g. EPSG:32633")
+    return crs
 
 
 def crs_label(crs: Any) -> str:
@@ -123,7 +136,7 @@ def length_units_m(crs: Any, source: str) -> tuple[float, float]:
     ------
     InputError
         The CRS is geographic or geocentric (degrees, or no map plane): it cannot give
-        coordinates in metres.
+        coordinates in metres; or its unit is outside :data:`UNIT_RANGE_M`.
     """
     parts = list(crs.sub_crs_list) if crs.is_compound else [crs]
     horizontal = next((p for p in parts if p.is_projected), None)
@@ -135,6 +148,9 @@ def length_units_m(crs: Any, source: str) -> tuple[float, float]:
     horizontal_m = float(axis.unit_conversion_factor)
     vertical = next((p for p in parts if p.is_vertical), None)
     vertical_m = float(vertical.axis_info[0].unit_conversion_factor) if vertical is not None else horizontal_m
-    if not (horizontal_m > 0 and vertical_m > 0):  # pragma: no cover - pyproj gives a factor for every length unit
-        raise InputError(f"{source}: the CRS {crs_label(crs)} states no length unit; give a projected CRS in metres")
+    low, high = UNIT_RANGE_M
+    if not (low <= horizontal_m <= high and low <= vertical_m <= high):  # NaN, 0, 1e-300: not a length unit
+        raise InputError(f"{source}: the CRS {crs_label(crs)} states units of {horizontal_m:g} m (x, y) and "
+                         f"{vertical_m:g} m (z), not length units (they lie between {low:g} and {high:g} m); give a "
+                         "projected CRS in metres, e.g. EPSG:32633")
     return horizontal_m, vertical_m

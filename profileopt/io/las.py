@@ -1,7 +1,10 @@
 """ASPRS LAS and LAZ point clouds, read with laspy (LAZ through its lazrs backend).
 
 :func:`read_las` returns a :class:`PointCloud` in metres; the units come from the file's
-CRS (GeoTIFF keys or WKT). A file that cannot be read raises
+CRS (GeoTIFF keys or WKT). The header is checked against the file before laspy reads what
+it counts, and the points are decoded in chunks, keeping only those a caller selects (near a
+track), so that neither a hostile header nor a huge cloud exhausts memory
+(:data:`MAX_CLOUD_POINTS`). A file that cannot be read raises
 :class:`~profileopt.errors.InputError` whose one-line message names the file, what is wrong
 and what would fix it. laspy (the ``geo`` extra) is imported only when a file is read.
 """
@@ -9,20 +12,22 @@ and what would fix it. laspy (the ``geo`` extra) is imported only when a file is
 from __future__ import annotations
 
 import dataclasses
+import logging
 import math
 import os
 import re
 import struct
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from ..errors import InputError
 from . import inputs
-from .geo import length_units_m, require_geo
+from .geo import UNIT_RANGE_M, length_units_m, require_geo
 
-__all__ = ["LasHeader", "PointCloud", "read_las", "LAS_GROUND", "LINEAR_UNITS_M", "UNCLASSIFIED_CODES"]
+__all__ = ["LasHeader", "PointCloud", "read_las", "LAS_GROUND", "LINEAR_UNITS_M", "UNCLASSIFIED_CODES",
+           "MAX_CLOUD_POINTS", "SCALE_RANGE"]
 
 #: ASPRS standard class code of ground points (LAS 1.4 R15, Table 17).
 LAS_GROUND = 2
@@ -39,6 +44,25 @@ LINEAR_UNITS_M: dict[int, tuple[str, float]] = {
     9003: ("US survey foot", 1200.0 / 3937.0),
 }
 _USER_DEFINED = 32767
+
+#: Most points a :class:`PointCloud` holds (20 million: about 500 MB as x, y, z in float64 and
+#: a class byte, half the 1 GB a run may take, see :mod:`profileopt.io.inputs`). A larger
+#: cloud is read in chunks of :data:`_CHUNK_POINTS` keeping only the points near a track
+#: (``keep``); what is still larger is refused: thin it or cut it to the track.
+MAX_CLOUD_POINTS = 20_000_000
+#: Points decoded at a time (laspy's ``chunk_iterator``): about 100 MB while one chunk is read.
+_CHUNK_POINTS = 2_000_000
+#: The scale factors a LAS file may state (file units per stored integer). Below 1e-7 the
+#: 32-bit integers span less than 430 units (and 5e-324 flattens every coordinate to its
+#: offset); above 1 the coordinates are rounded to whole units, too coarse for a terrain.
+SCALE_RANGE = (1e-7, 1.0)
+#: Deepest nesting of brackets read in a WKT record (real ones nest 6 or 7 deep).
+_MAX_WKT_DEPTH = 64
+#: Bytes of a point record of each point data format, the least its record length may state
+#: (LAS 1.4 R15, Tables 7-17; extra bytes may follow).
+_FORMAT_BYTES = {0: 20, 1: 28, 2: 26, 3: 34, 4: 57, 5: 63, 6: 30, 7: 36, 8: 38, 9: 59, 10: 67}
+#: Bytes of a LAS variable length record's header, and of an extended one's (LAS 1.4 R15, 2.5 and 2.6).
+_VLR_HEADER_BYTES, _EVLR_HEADER_BYTES = 54, 60
 
 
 @dataclasses.dataclass(frozen=True)
@@ -111,6 +135,15 @@ class PointCloud:
         The file's coordinate reference system as laspy parses it (GeoTIFF keys or WKT), or
         the one the caller supplied (:func:`~profileopt.io.terrain_maps.read_terrain`'s
         ``terrain_crs``); None if neither states one or pyproj cannot parse it.
+    notes : tuple of str
+        What the reader noticed or did (records beyond the header's count, points kept only
+        near a track), one line each.
+    file_extent_m : tuple of float or None
+        (xmin, xmax, ymin, ymax) (m) of every point in the file, also of those not kept
+        (``keep``); None: the points held.
+    kept_within_m : float or None
+        Only the points within this distance (m) of a track were kept
+        (:func:`~profileopt.io.terrain_maps.read_terrain`'s ``track``); None: all of them.
     """
 
     x_m: np.ndarray
@@ -119,6 +152,16 @@ class PointCloud:
     classification: np.ndarray
     header: LasHeader
     crs: Any = None
+    notes: tuple[str, ...] = ()
+    file_extent_m: tuple[float, float, float, float] | None = None
+    kept_within_m: float | None = None
+
+    def extent_m(self) -> tuple[float, float, float, float]:
+        """(xmin, xmax, ymin, ymax) (m) of the points in the file (all of them, also where
+        only those near a track were kept)."""
+        if self.file_extent_m is not None:
+            return self.file_extent_m
+        return (float(self.x_m.min()), float(self.x_m.max()), float(self.y_m.min()), float(self.y_m.max()))
 
     @property
     def is_classified(self) -> bool:
@@ -156,12 +199,17 @@ class _Bad(Exception):
     """A problem with a LAS file; :func:`read_las` prefixes the path and raises InputError."""
 
 
-def read_las(path: str | os.PathLike, units_m: float | tuple[float, float] | None = None) -> PointCloud:
+def read_las(path: str | os.PathLike, units_m: float | tuple[float, float] | None = None, *,
+             crs: Any = None, keep: Callable[[Any, float | None], Any] | None = None) -> PointCloud:
     """Read an ASPRS LAS 1.0-1.4 point cloud, uncompressed (``.las``) or compressed (``.laz``).
 
-    laspy reads the file (``laspy.read``; LAZ through the lazrs backend): the public header
-    block gives the point format, record length, point count, scale factors, offsets and
-    bounds, and ``x = X * scale + offset`` (likewise y, z) is converted to metres.
+    The public header block is checked against the file first (with ``struct``, before laspy
+    reads anything it counts): the variable length records must fit between the header and
+    the point data, and an uncompressed file must hold the point records its header counts.
+    laspy then decodes the points in chunks (``LasReader.chunk_iterator``; LAZ through the
+    lazrs backend), and ``x = X * scale + offset`` (likewise y, z) is converted to metres.
+    With ``keep``, only the points it selects are held (those near a track), so a cloud of
+    any size is read in bounded memory; at most :data:`MAX_CLOUD_POINTS` are held.
 
     Units. LAS itself does not fix a unit: the CRS in the variable length records does.
     Without ``units_m`` they are taken from the CRS that the header's global encoding
@@ -175,8 +223,8 @@ def read_las(path: str | os.PathLike, units_m: float | tuple[float, float] | Non
     * WKT (version 1 or 2): the UNIT / LENGTHUNIT of the projected CRS and of a vertical
       CRS (compound CRS), with the same rule for a missing vertical CRS.
 
-    A geographic (degrees) or geocentric CRS, an unknown unit code or no CRS at all is an
-    error unless ``units_m`` is given.
+    A geographic (degrees) or geocentric CRS, an unknown unit code, a unit outside
+    :data:`~profileopt.io.geo.UNIT_RANGE_M` or no CRS at all is an error unless ``units_m`` is given.
 
     Parameters
     ----------
@@ -186,86 +234,219 @@ def read_las(path: str | os.PathLike, units_m: float | tuple[float, float] | Non
         Metres per file unit, for all three axes or as (horizontal, vertical), e.g.
         ``1200 / 3937`` for US survey feet. If given, the file's CRS is not consulted for
         the units (:attr:`PointCloud.crs` is still what the file states).
+    crs : pyproj.CRS, optional
+        The cloud's CRS instead of the one the file states (:attr:`PointCloud.crs`).
+    keep : callable, optional
+        Called once as ``keep(crs, density_per_m2)`` with the cloud's CRS (``crs``, else the
+        file's, or None) and its mean density over the header's bounds (points per m^2, None
+        if the bounds enclose no area); returns None (keep every point) or a function of the
+        x and y (m) of a chunk of points returning a boolean mask of those to keep.
 
     Returns
     -------
     PointCloud
-        Coordinates (m) and classification of every point record, the header and the CRS.
+        Coordinates (m) and classification of the point records kept, the header, the CRS,
+        the extent of every point in the file, and notes (records beyond the header's count).
 
     Raises
     ------
     InputError
-        Not a LAS file, an unsupported version, a truncated or damaged file (what laspy
-        says), fewer point records than the header counts, zero or non-finite scale
-        factors, units that cannot be established, or laspy missing (each names the file
-        and the fix).
+        Not a LAS file, an unsupported version, a header that contradicts the file (more
+        variable length records than fit, fewer point records than it counts), a file
+        laspy cannot decode, no point records, more than :data:`MAX_CLOUD_POINTS` points to
+        hold, scale factors outside :data:`SCALE_RANGE`, units that cannot be established,
+        or laspy missing (each names the file, what is wrong and the fix).
     """
     path = Path(path)
     try:
-        return _read_las(path, units_m)
+        return _read_las(path, units_m, crs, keep)
     except _Bad as exc:
         raise InputError(f"{path}: {exc}") from None
 
 
-def _read_las(path: Path, units_m: float | tuple[float, float] | None) -> PointCloud:
+def _check_layout(head: bytes, size: int) -> tuple[int, int | None]:
+    """The point count of a LAS public header block and the number of point records the file
+    stores (None when compressed: only decoding tells), after checking that the header fits
+    the file: its variable length records between the header and the point data, its
+    extended ones after them (LAS 1.4 R15, Table 4; fields named as there)."""
+    if len(head) < 227:
+        raise _Bad(f"is {size} bytes long, shorter than the 227-byte LAS public header block; the file is cut short")
+    minor = head[25]
+    header_size, offset, vlr_count = struct.unpack_from("<HII", head, 94)
+    compressed = bool(head[104] & 0xC0)  # LAZ sets bit 7 (or 6) of the point data format
+    record_bytes, legacy_count = struct.unpack_from("<HI", head, 105)
+    if minor >= 4 and header_size >= 375 and len(head) >= 375:
+        evlr_start, evlr_count, count = struct.unpack_from("<QIQ", head, 235)
+        count = count or legacy_count
+    else:
+        evlr_start, evlr_count, count = 0, 0, legacy_count
+    if not 227 <= header_size <= offset <= size:
+        raise _Bad(f"its header says the header is {header_size} bytes and the point data start at byte {offset}, "
+                   f"but the file is {size} bytes: the header ('header size', 'offset to point data') is damaged")
+    room = (offset - header_size) // _VLR_HEADER_BYTES
+    if vlr_count > room:
+        raise _Bad(f"its header counts {vlr_count} variable length records, but at most {room} fit between the header "
+                   f"(byte {header_size}) and the point data (byte {offset}): the header ('number of variable length "
+                   "records', bytes 100-103) is damaged")
+    if evlr_count and not (offset <= evlr_start and evlr_count <= (size - evlr_start) // _EVLR_HEADER_BYTES):
+        raise _Bad(f"its header counts {evlr_count} extended variable length records from byte {evlr_start}, "
+                   f"which do not fit in the file of {size} bytes: the header (bytes 235-246) is damaged")
+    point_format = head[104] & 0x3F
+    if point_format not in _FORMAT_BYTES or record_bytes < _FORMAT_BYTES[point_format]:
+        least = f" (records of at least {_FORMAT_BYTES[point_format]} bytes)" if point_format in _FORMAT_BYTES else ""
+        raise _Bad(f"its header states point data format {point_format}{least} and records of {record_bytes} bytes: "
+                   "the header ('point data format', 'point data record length', bytes 104-106) is damaged or the "
+                   "format is not LAS 1.0-1.4's")
+    if count == 0:
+        raise _Bad("holds no points (its header counts 0 point records): a terrain needs measured points")
+    if compressed or record_bytes == 0:
+        return count, None
+    end = evlr_start if evlr_count and evlr_start else size
+    if minor >= 3 and head[6] & 0x02:  # waveform data packets inside the file, after the points
+        end = min(end, struct.unpack_from("<Q", head, 227)[0] or end)
+    stored = max(end - offset, 0) // record_bytes
+    if stored < count:
+        raise _Bad(f"is cut short: its header counts {count} point records of {record_bytes} bytes from byte "
+                   f"{offset}, {count * record_bytes} bytes, but only {end - offset} follow ({stored} records)")
+    return count, stored
+
+
+def _read_las(path: Path, units_m: float | tuple[float, float] | None, crs_given: Any,
+              keep: Callable[[Any, float | None], Any] | None) -> PointCloud:
     laspy = require_geo("laspy", "reading LAS/LAZ")
     try:
         # a regular file only (not /dev/zero, not a FIFO): laspy would read it until memory runs out
         if os.path.exists(path):
             inputs.check_regular_input(path, "LAS file")
         with open(path, "rb") as handle:
-            head = handle.read(26)
+            head = handle.read(375)
+            size = os.fstat(handle.fileno()).st_size
     except OSError as exc:
         raise _Bad(f"cannot read the LAS file ({exc.strerror}); check the path") from None
     if head[:4] != b"LASF":
         raise _Bad("does not start with 'LASF'; is this an ASPRS LAS or LAZ file?")
-    if len(head) == 26 and (head[24] != 1 or head[25] > 4):
+    if len(head) >= 26 and (head[24] != 1 or head[25] > 4):
         raise _Bad(f"LAS version {head[24]}.{head[25]} is not supported; this reader handles 1.0-1.4")
+    count, stored = _check_layout(head, size)
+    if keep is None and count > MAX_CLOUD_POINTS:
+        raise _Bad(f"holds {count:,} points, more than the {MAX_CLOUD_POINTS:,} read at once; read only the points "
+                   "near a track (read_terrain's track, as profileopt route and plan do) or thin the cloud first "
+                   "(e.g. 'pdal translate in.laz out.laz sample --filters.sample.radius=0.02')")
+    quiet = logging.getLogger("laspy")
+    level = quiet.level
+    quiet.setLevel(logging.CRITICAL)  # laspy logs the errors it raises; the raised one becomes one line here
     try:
-        las = laspy.read(path)
-    except Exception as exc:  # laspy, lazrs, struct and numpy errors alike: the file is not whole
-        reason = " ".join(str(exc).split())[:160] or type(exc).__name__
-        if "LazBackend" in reason or "lazrs" in reason.lower() and "install" in reason.lower():
-            raise _Bad("reading LAZ needs the lazrs backend of the geo extra: pip install 'profileopt[geo]'") from None
-        raise _Bad(f"is truncated or damaged (laspy: {reason}); download it again") from None
-    head = las.header
-    count = int(head.point_count)
-    if len(las.points) != count:
-        raise _Bad(f"holds {len(las.points)} point records, the header says {count}; it is truncated, "
-                   "download it again")
-    scale, offset = tuple(map(float, head.scales)), tuple(map(float, head.offsets))
-    if not (all(math.isfinite(v) and v != 0.0 for v in scale) and all(math.isfinite(v) for v in offset)):
-        raise _Bad(f"scale factors {scale} must be finite and non-zero and offsets {offset} finite")
-    vlrs = {(v.user_id, v.record_id): v.record_data_bytes() for v in list(head.vlrs) + list(las.evlrs or [])}
-    minor = int(head.version.minor)
-    if units_m is None:
-        wkt_first = minor >= 4 and bool(head.global_encoding.wkt)
-        horizontal_m, vertical_m, crs, source = _las_units(vlrs, wkt_first)
-    else:
-        pair = (units_m, units_m) if isinstance(units_m, (int, float)) else tuple(units_m)
-        if len(pair) != 2 or not all(math.isfinite(float(u)) and float(u) > 0 for u in pair):
-            raise _Bad(f"units_m = {units_m!r} must be a number > 0 or a pair (horizontal, vertical) of them")
-        horizontal_m, vertical_m = (float(u) for u in pair)
-        crs, source = "", f"units_m argument ({horizontal_m:g} m, {vertical_m:g} m per file unit)"
-    try:
-        parsed = head.parse_crs()
-    except Exception:  # pyproj missing, or keys it cannot turn into a CRS: the units above still hold
-        parsed = None
+        return _decode(laspy, path, count, stored, units_m, crs_given, keep)
+    finally:
+        quiet.setLevel(level)
 
+
+def _decode(laspy: Any, path: Path, count: int, stored: int | None, units_m: float | tuple[float, float] | None,
+            crs_given: Any, keep: Callable[[Any, float | None], Any] | None) -> PointCloud:
+    """The points of a LAS file whose layout was checked (:func:`_check_layout`), decoded by laspy."""
+    try:
+        reader = laspy.open(path)
+    except Exception as exc:  # laspy, lazrs, struct and numpy errors alike
+        raise _Bad(_laspy_failure(exc)) from None
+    with reader:
+        head = reader.header
+        if int(head.point_count) != count:  # a LAS 1.4 file whose two counts differ: laspy's decides
+            count = int(head.point_count)
+            if stored is not None and stored < count:
+                raise _Bad(f"is cut short: its header counts {count} point records, the file holds {stored}")
+        scale, offset = tuple(map(float, head.scales)), tuple(map(float, head.offsets))
+        for axis, value in zip("xyz", scale):
+            if not (math.isfinite(value) and SCALE_RANGE[0] <= abs(value) <= SCALE_RANGE[1]):
+                raise _Bad(f"its {axis} scale factor {value:g} is outside {SCALE_RANGE[0]:g} to {SCALE_RANGE[1]:g} "
+                           "(file units per stored integer), so its coordinates cannot be recovered: the header "
+                           "('x, y, z scale factor', bytes 131-154) is damaged or was written wrongly")
+        if not all(math.isfinite(v) for v in offset):
+            raise _Bad(f"its offsets {offset} must be finite: the header ('x, y, z offset', bytes 155-178) is damaged")
+        vlrs = {(v.user_id, v.record_id): v.record_data_bytes()
+                for v in list(head.vlrs) + list(getattr(reader, "evlrs", None) or [])}
+        minor = int(head.version.minor)
+        if units_m is None:
+            wkt_first = minor >= 4 and bool(head.global_encoding.wkt)
+            horizontal_m, vertical_m, crs_name, source = _las_units(vlrs, wkt_first)
+        else:
+            pair = (units_m, units_m) if isinstance(units_m, (int, float)) else tuple(units_m)
+            if len(pair) != 2 or not all(math.isfinite(float(u)) and float(u) > 0 for u in pair):
+                raise _Bad(f"units_m = {units_m!r} must be a number > 0 or a pair (horizontal, vertical) of them")
+            horizontal_m, vertical_m = (float(u) for u in pair)
+            crs_name, source = "", f"units_m argument ({horizontal_m:g} m, {vertical_m:g} m per file unit)"
+        try:
+            parsed = head.parse_crs()
+        except Exception:  # pyproj missing, or keys it cannot turn into a CRS: the units above still hold
+            parsed = None
+        crs = crs_given if crs_given is not None else parsed
+        area_m2 = float(np.prod((np.asarray(head.maxs) - np.asarray(head.mins))[:2])) * horizontal_m**2
+        density = count / area_m2 if math.isfinite(area_m2) and area_m2 > 0 else None
+        select = keep(crs, density) if keep is not None else None
+        columns: tuple[list[np.ndarray], ...] = ([], [], [], [])  # x, y, z, class of each chunk kept
+        held = decoded = 0
+        low, high = np.full(2, np.inf), np.full(2, -np.inf)
+        try:
+            for points in reader.chunk_iterator(_CHUNK_POINTS):
+                x = np.asarray(points.x, dtype=float) * horizontal_m
+                y = np.asarray(points.y, dtype=float) * horizontal_m
+                decoded += x.size
+                if x.size == 0:
+                    break
+                low = np.minimum(low, [x.min(), y.min()])
+                high = np.maximum(high, [x.max(), y.max()])
+                mask = slice(None) if select is None else np.asarray(select(x, y), dtype=bool)
+                part = (x[mask], y[mask], np.asarray(points.z, dtype=float)[mask] * vertical_m,
+                        np.asarray(points.classification, dtype=np.uint8)[mask])
+                held += part[0].size
+                if held > MAX_CLOUD_POINTS:
+                    raise _Bad(f"holds more than {MAX_CLOUD_POINTS:,} points near the track (of {count:,}); thin "
+                               "the cloud first (e.g. 'pdal translate in.laz out.laz sample "
+                               "--filters.sample.radius=0.02') or cut it to the track")
+                for column, values in zip(columns, part):
+                    column.append(values)
+        except _Bad:
+            raise
+        except Exception as exc:  # lazrs and laspy errors while decoding: the data end or are corrupt
+            raise _Bad(f"its point data cannot be decoded after {decoded:,} of the {count:,} points the header "
+                       f"counts ({_reason(exc)}): the file is cut short or its compressed data are damaged") from None
+    if decoded < count:
+        raise _Bad(f"holds {decoded:,} point records, its header counts {count:,}: the file is cut short")
+    notes = []
+    if stored is not None and stored > count:
+        notes.append(f"{path.name}: holds {stored:,} point records, but its header counts {count:,}: the first "
+                     f"{count:,} were read, the other {stored - count:,} ignored (the header's count is wrong or records "
+                     "were appended); set the count in its header to read them all")
+    x, y, z, classes = (_join(column) for column in columns)
     header = LasHeader(
         path=str(path), version=(int(head.version.major), minor), point_format=int(head.point_format.id),
         record_length_bytes=int(head.point_format.size), point_count=count, scale=scale, offset=offset,
         min_xyz=tuple(map(float, head.mins)), max_xyz=tuple(map(float, head.maxs)),
-        horizontal_unit_m=horizontal_m, vertical_unit_m=vertical_m, crs=crs, units_source=source,
+        horizontal_unit_m=horizontal_m, vertical_unit_m=vertical_m, crs=crs_name, units_source=source,
     )
-    return PointCloud(
-        x_m=np.asarray(las.x, dtype=float) * horizontal_m,
-        y_m=np.asarray(las.y, dtype=float) * horizontal_m,
-        z_m=np.asarray(las.z, dtype=float) * vertical_m,
-        classification=np.asarray(las.classification, dtype=np.uint8),
-        header=header,
-        crs=parsed,
-    )
+    extent = (float(low[0]), float(high[0]), float(low[1]), float(high[1]))
+    return PointCloud(x_m=x, y_m=y, z_m=z, classification=classes, header=header, crs=crs,
+                      notes=tuple(notes), file_extent_m=extent)
+
+
+def _join(chunks: list[np.ndarray]) -> np.ndarray:
+    """One column from its chunks, freeing them as it goes: the peak is the chunks and one
+    column, not twice the cloud."""
+    whole = np.concatenate(chunks)
+    chunks.clear()
+    return whole
+
+
+def _reason(exc: BaseException) -> str:
+    """What laspy or lazrs said, on one line."""
+    return " ".join(str(exc).split())[:160] or type(exc).__name__
+
+
+def _laspy_failure(exc: BaseException) -> str:
+    """The message for a file laspy cannot open: the LAZ backend missing, or what laspy says."""
+    reason = _reason(exc)
+    if "LazBackend" in reason or "lazrs" in reason.lower() and "install" in reason.lower():
+        return "reading LAZ needs the lazrs backend of the geo extra: pip install 'profileopt[geo]'"
+    return f"cannot be read as LAS/LAZ (laspy: {reason}); check that it is a whole LAS 1.0-1.4 or LAZ file"
 
 
 def _las_units(vlrs: dict[tuple[str, int], bytes], wkt_first: bool) -> tuple[float, float, str, str]:
@@ -281,6 +462,14 @@ def _las_units(vlrs: dict[tuple[str, int], bytes], wkt_first: bool) -> tuple[flo
         return _geokey_units(payload, vlrs.get(("LASF_Projection", 34736), b""))
     raise _Bad("names no coordinate reference system (no GeoKeyDirectory or WKT record), so its units "
                "are unknown; pass units_m (metres per file unit, e.g. 1200/3937 for US survey feet)")
+
+
+def _check_unit(value: float, what: str) -> float:
+    """``value`` (m per unit), if within :data:`~profileopt.io.geo.UNIT_RANGE_M`; else one line naming ``what``."""
+    if not (math.isfinite(value) and UNIT_RANGE_M[0] <= value <= UNIT_RANGE_M[1]):
+        raise _Bad(f"{what} states a unit of {value:g} m, not a length unit (they lie between {UNIT_RANGE_M[0]:g} "
+                   f"and {UNIT_RANGE_M[1]:g} m): the record is damaged; pass units_m (metres per file unit)")
+    return value
 
 
 def _unit_m(code: int, what: str) -> tuple[str, float]:
@@ -320,7 +509,9 @@ def _geokey_units(directory: bytes, doubles: bytes) -> tuple[float, float, str, 
         if size is None or size[0] != 34736 or 8 * (size[2] + 1) > len(doubles):
             raise _Bad("ProjLinearUnitsGeoKey (3076) is user-defined but ProjLinearUnitSizeGeoKey (3077) "
                        "is missing; pass units_m (metres per file unit)")
-        h_name, horizontal_m = "user-defined", struct.unpack_from("<d", doubles, 8 * size[2])[0]
+        h_name = "user-defined"
+        horizontal_m = _check_unit(struct.unpack_from("<d", doubles, 8 * size[2])[0],
+                                   "ProjLinearUnitSizeGeoKey (3077)")
     else:
         h_name, horizontal_m = _unit_m(code, "ProjLinearUnitsGeoKey (3076)")
     v_code = value(4099)
@@ -351,17 +542,20 @@ def _parse_wkt(text: str) -> tuple[str, list]:
     tokens = [t for t in _WKT_TOKEN.findall(text)]
     position = 0
 
-    def node() -> tuple[str, list] | str:
+    def node(depth: int) -> tuple[str, list] | str:
         nonlocal position
         token = tokens[position]
         position += 1
         if token.startswith('"'):
             return token[1:-1].replace('""', '"')
         if position < len(tokens) and tokens[position] in "[(":
+            if depth >= _MAX_WKT_DEPTH:
+                raise _Bad(f"the WKT coordinate system record nests brackets more than {_MAX_WKT_DEPTH} deep (a "
+                           "real CRS nests fewer than 10): it is damaged; pass units_m (metres per file unit)")
             position += 1
             args: list = []
             while tokens[position] not in "])":
-                args.append(node())
+                args.append(node(depth + 1))
                 if tokens[position] == ",":
                     position += 1
             position += 1
@@ -369,7 +563,7 @@ def _parse_wkt(text: str) -> tuple[str, list]:
         return token
 
     try:
-        root = node()
+        root = node(0)
     except IndexError:
         raise _Bad("the WKT coordinate system record is malformed; pass units_m (metres per file unit)") from None
     if not isinstance(root, tuple):
@@ -411,7 +605,9 @@ def _wkt_units(text: str) -> tuple[float, float, str, str]:
         vertical_m = _wkt_unit(vertical) if vertical is not None else horizontal_m
     except ValueError:  # a unit factor that is not a number
         horizontal_m = vertical_m = None
-    if horizontal_m is None or vertical_m is None or not (horizontal_m > 0 and vertical_m > 0):
+    if horizontal_m is None or vertical_m is None:
         raise _Bad(f"the WKT CRS {name!r} states no usable length unit; pass units_m (metres per file unit)")
+    _check_unit(horizontal_m, f"the WKT CRS {name!r}")
+    _check_unit(vertical_m, f"the WKT CRS {name!r} (vertical)")
     note = "vertical CRS unit" if vertical is not None else "no vertical CRS, z taken in the same unit"
     return horizontal_m, vertical_m, name, f"WKT: {horizontal_m:g} m per unit, {note}"

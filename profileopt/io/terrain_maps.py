@@ -6,6 +6,11 @@
 surfaces answer :meth:`elevation_at` by bilinear interpolation between samples, NaN
 outside or where a needed sample has no data; nothing is extrapolated.
 
+Memory is bounded: given the track the terrain will be sampled along, :func:`read_terrain`
+reads only what sampling needs (a cloud's points near the track, in chunks; a raster's window
+around it). Without one, a cloud of more than :data:`~profileopt.io.las.MAX_CLOUD_POINTS`
+points or a raster of more than :data:`MAX_GRID_CELLS` cells is refused.
+
 Every problem is one :class:`~profileopt.errors.InputError` line naming the file, what is
 wrong and how to fix it. rasterio, laspy and pyproj (the ``geo`` extra) are imported only
 when a file needs them.
@@ -18,7 +23,7 @@ import math
 import os
 import re
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -28,10 +33,18 @@ from .elevation import parse_opencrg
 from .geo import crs_label, length_units_m, parse_crs, require_geo
 from .las import PointCloud, read_las
 
-__all__ = ["ElevationGrid", "CrgSurface", "read_geotiff", "read_crg_surface", "read_terrain", "TERRAIN_SUFFIXES"]
+__all__ = ["ElevationGrid", "CrgSurface", "read_geotiff", "read_crg_surface", "read_terrain", "TERRAIN_SUFFIXES",
+           "MAX_GRID_CELLS", "BAND_SCALE_RANGE"]
 
 #: File name endings :func:`read_terrain` accepts, and the kind of terrain each holds.
 TERRAIN_SUFFIXES = {".las": "LAS", ".laz": "LAZ", ".tif": "GeoTIFF", ".tiff": "GeoTIFF", ".crg": "OpenCRG"}
+
+#: Most cells of a raster read (25 million: about 200 MB of elevations in float64, with the band
+#: read and its mask about 350 MB at the peak); a larger raster is read only in the window
+#: around a track (:func:`read_terrain`'s ``track``).
+MAX_GRID_CELLS = 25_000_000
+#: The band scale factors a DEM may state: 0 (or 1e-300) would make every elevation the offset.
+BAND_SCALE_RANGE = (1e-6, 1e6)
 
 #: Band unit names (GDAL's unit type) and their length in metres.
 _BAND_UNITS_M = {"": 1.0, "m": 1.0, "metre": 1.0, "meter": 1.0, "metres": 1.0, "meters": 1.0,
@@ -87,6 +100,9 @@ class ElevationGrid:
         (dx, |dy|): the cell's width and height (m).
     notes : tuple of str
         What was done on the way (units converted, CRS supplied), one line each.
+    file_extent_m : tuple of float or None
+        (xmin, xmax, ymin, ymax) (m) of the cell centres of the whole raster, where only a
+        window around a track was read; None: those of :attr:`z_m` (:meth:`extent_m`).
     """
 
     z_m: np.ndarray
@@ -95,6 +111,7 @@ class ElevationGrid:
     source: str
     cell_size_m: tuple[float, float]
     notes: tuple[str, ...] = ()
+    file_extent_m: tuple[float, float, float, float] | None = None
 
     def elevation_at(self, x_m: np.ndarray, y_m: np.ndarray) -> np.ndarray:
         """Bilinear interpolation between the four cell centres around each point.
@@ -202,16 +219,21 @@ class CrgSurface:
         return float(x.min()), float(x.max()), float(y.min()), float(y.max())
 
 
-def read_geotiff(path: str | os.PathLike, *, terrain_crs: str | None = None) -> ElevationGrid:
+def read_geotiff(path: str | os.PathLike, *, terrain_crs: str | None = None,
+                 near: Callable[[Any], tuple[float, float, float, float] | None] | None = None) -> ElevationGrid:
     """Read band 1 of a GeoTIFF DEM (with rasterio) as an :class:`ElevationGrid` in metres.
 
     Cells whose value is the band's nodata value (or NaN) become NaN; the band's scale and
-    offset, if it states them, are applied. Horizontal coordinates are converted to metres
+    offset, if it states them, are applied (a scale outside :data:`BAND_SCALE_RANGE` is
+    refused: 0 would make every elevation the offset). Horizontal coordinates are converted to metres
     by the unit of the CRS's axes (a DEM in US survey feet gives metres all the same).
     Elevations are taken in metres unless the band's unit (GDAL unit type: ``ft``,
     ``US survey foot``) or a compound CRS's vertical part says otherwise; then they are
     converted. (A horizontal CRS in feet says nothing about z: unlike LAS, where z is then
     taken in the horizontal unit, a DEM's elevations stay metres.) Rotated or sheared rasters are refused.
+    With ``near``, only the window of cells around the box it gives is read (rasterio
+    windows), so a raster of any size is read in bounded memory; at most
+    :data:`MAX_GRID_CELLS` cells are read.
 
     Parameters
     ----------
@@ -220,6 +242,9 @@ def read_geotiff(path: str | os.PathLike, *, terrain_crs: str | None = None) -> 
     terrain_crs : str, optional
         The CRS of the raster (``EPSG:32633``): supplies one the file lacks, or overrides
         the file's (with a note).
+    near : callable, optional
+        Called once with the raster's CRS; returns the box (xmin, xmax, ymin, ymax) (m, in
+        that CRS) whose cells are needed, or None for all of them.
 
     Returns
     -------
@@ -229,8 +254,9 @@ def read_geotiff(path: str | os.PathLike, *, terrain_crs: str | None = None) -> 
     ------
     InputError
         Not a readable GeoTIFF, no CRS and no ``terrain_crs``, a geographic CRS, a rotated
-        or sheared raster, fewer than 2 x 2 cells, an unknown band unit, or rasterio
-        missing (each one line).
+        or sheared raster, fewer than 2 x 2 cells, more than :data:`MAX_GRID_CELLS` cells
+        to read, a band scale outside :data:`BAND_SCALE_RANGE` or an offset that is not
+        finite, an unknown band unit, or rasterio missing (each one line).
     """
     path = Path(path)
     rasterio = require_geo("rasterio", "reading GeoTIFF")
@@ -238,27 +264,37 @@ def read_geotiff(path: str | os.PathLike, *, terrain_crs: str | None = None) -> 
     notes: list[str] = []
     try:
         with rasterio.open(path) as dataset:
-            band = dataset.read(1, masked=True)
             transform, stated, unit = dataset.transform, dataset.crs, (dataset.units[0] or "")
             scale, offset = float(dataset.scales[0]), float(dataset.offsets[0])
+            crs = _geotiff_crs(path, stated, terrain_crs, notes)
+            if transform.b != 0 or transform.d != 0:
+                raise InputError(f"{path}: the raster is rotated or sheared (geotransform {tuple(transform)[:6]}); "
+                                 "warp it north-up first, e.g. 'gdalwarp in.tif out.tif'")
+            if not (math.isfinite(scale) and BAND_SCALE_RANGE[0] <= abs(scale) <= BAND_SCALE_RANGE[1]
+                    and math.isfinite(offset)):
+                raise InputError(f"{path}: band 1's scale {scale:g} and offset {offset:g} would make its elevations "
+                                 f"meaningless (a scale must lie between {BAND_SCALE_RANGE[0]:g} and "
+                                 f"{BAND_SCALE_RANGE[1]:g}, an offset be finite): the file's metadata are wrong; set "
+                                 "them right (e.g. 'gdal_edit.py -scale 1 -offset 0 FILE')")
+            horizontal_m = length_units_m(crs, str(path))[0]
+            window = _window(dataset, near(crs) if near is not None else None, horizontal_m)
+            rows, cols = (dataset.height, dataset.width) if window is None else (window.height, window.width)
+            if rows * cols > MAX_GRID_CELLS:
+                raise InputError(f"{path}: the raster has {rows:,} x {cols:,} cells to read, more than the "
+                                 f"{MAX_GRID_CELLS:,} read at once; read only the window around a track "
+                                 "(read_terrain's track, as profileopt route and plan do) or cut it first (e.g. "
+                                 "'gdal_translate -projwin XMIN YMAX XMAX YMIN in.tif out.tif')")
+            band = dataset.read(1, masked=True, window=window)
+            full = _cell_centre_extent(transform, dataset.height, dataset.width, horizontal_m)
+            if window is not None:  # the window's own geotransform (north-up: b = d = 0)
+                transform = type(transform)(transform.a, 0.0, transform.c + window.col_off * transform.a,
+                                            0.0, transform.e, transform.f + window.row_off * transform.e)
     except rasterio.errors.RasterioError as exc:
         reason = " ".join(str(exc).split())[:160]
         raise InputError(f"{path}: is not a readable GeoTIFF (rasterio: {reason}); check the file") from None
-    crs = parse_crs(stated.to_wkt(), str(path), "the file's CRS") if stated is not None else None
-    if terrain_crs is not None:
-        given = parse_crs(terrain_crs, str(path), "--terrain-crs")
-        if crs is not None and crs != given:
-            notes.append(f"{path.name}: CRS {crs_label(given)} (--terrain-crs) instead of the file's {crs_label(crs)}")
-        crs = given
-    if crs is None:
-        raise InputError(f"{path}: the GeoTIFF states no CRS; pass --terrain-crs (e.g. EPSG:32633)")
-    if transform.b != 0 or transform.d != 0:
-        raise InputError(f"{path}: the raster is rotated or sheared (geotransform {tuple(transform)[:6]}); "
-                         "warp it north-up first, e.g. 'gdalwarp in.tif out.tif'")
     rows, cols = band.shape
     if rows < 2 or cols < 2:
         raise InputError(f"{path}: the raster has {rows} x {cols} cells; interpolation needs at least 2 x 2")
-    horizontal_m = length_units_m(crs, str(path))[0]
     vertical = next((p for p in crs.sub_crs_list if p.is_vertical), None) if crs.is_compound else None
     vertical_m = float(vertical.axis_info[0].unit_conversion_factor) if vertical is not None else 1.0
     if unit.strip().lower() not in _BAND_UNITS_M:
@@ -280,10 +316,64 @@ def read_geotiff(path: str | os.PathLike, *, terrain_crs: str | None = None) -> 
     x0 = (transform.c + 0.5 * transform.a) * horizontal_m  # the centre of cell (0, 0)
     y0 = (transform.f + 0.5 * transform.e) * horizontal_m
     return ElevationGrid(z_m=z * vertical_m, transform=(x0, dx, y0, dy), crs=crs, source=str(path),
-                         cell_size_m=(abs(dx), abs(dy)), notes=tuple(notes))
+                         cell_size_m=(abs(dx), abs(dy)), notes=tuple(notes), file_extent_m=full)
 
 
-_V_AT = re.compile(r"^long section at v\s*=\s*([-+0-9.eE]+)", re.IGNORECASE)
+def _geotiff_crs(path: Path, stated: Any, terrain_crs: str | None, notes: list[str]) -> Any:
+    """The raster's CRS: ``terrain_crs`` (with a note where it overrides the file's), else the file's."""
+    crs = parse_crs(stated.to_wkt(), str(path), "the file's CRS") if stated is not None else None
+    if terrain_crs is not None:
+        given = parse_crs(terrain_crs, str(path), "--terrain-crs")
+        if crs is not None and crs != given:
+            notes.append(f"{path.name}: CRS {crs_label(given)} (--terrain-crs) instead of the file's {crs_label(crs)}")
+        crs = given
+    if crs is None:
+        raise InputError(f"{path}: the GeoTIFF states no CRS; pass --terrain-crs (e.g. EPSG:32633)")
+    return crs
+
+
+def _cell_centre_extent(transform: Any, rows: int, cols: int, unit_m: float) -> tuple[float, float, float, float]:
+    """(xmin, xmax, ymin, ymax) (m) of the centres of a north-up raster's cells."""
+    xs = (transform.c + 0.5 * transform.a) * unit_m, (transform.c + (cols - 0.5) * transform.a) * unit_m
+    ys = (transform.f + 0.5 * transform.e) * unit_m, (transform.f + (rows - 0.5) * transform.e) * unit_m
+    return min(xs), max(xs), min(ys), max(ys)
+
+
+def _window(dataset: Any, box_m: tuple[float, float, float, float] | None, unit_m: float) -> Any:
+    """The rasterio window of the cells around ``box_m`` (m), widened by a cell each side for
+    the interpolation and clipped to the raster, at least 2 x 2 cells; None: the whole raster."""
+    if box_m is None:
+        return None
+    from rasterio.windows import Window
+
+    transform = dataset.transform
+    x0, x1, y0, y1 = (v / unit_m for v in box_m)
+    cols = sorted(((x0 - transform.c) / transform.a, (x1 - transform.c) / transform.a))
+    rows = sorted(((y0 - transform.f) / transform.e, (y1 - transform.f) / transform.e))
+
+    def span(low: float, high: float, size: int) -> tuple[int, int]:
+        start = int(np.clip(math.floor(low) - 1, 0, max(size - 2, 0)))
+        stop = int(np.clip(math.ceil(high) + 1, start + 2, size))
+        return start, stop
+
+    c0, c1 = span(*cols, dataset.width)
+    r0, r1 = span(*rows, dataset.height)
+    return Window(c0, r0, c1 - c0, r1 - r0)
+
+
+_V_AT = re.compile(r"^long section at v\s*=\s*([^,]*)", re.IGNORECASE)
+
+
+def _lateral_m(path: Path, text: str) -> float:
+    """The v (m) of a ``D:long section at v = ...`` line, or one line naming it."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value):
+        raise InputError(f"{path}: 'D:long section at v = {text.strip()}' does not state a lateral position in m; "
+                         "write a finite number there (e.g. 'D:long section at v = -1.500,m')")
+    return value
 
 
 def read_crg_surface(path: str | os.PathLike, *, terrain_crs: str | None = None) -> CrgSurface:
@@ -339,7 +429,7 @@ def read_crg_surface(path: str | os.PathLike, *, terrain_crs: str | None = None)
     count = len(names)
     stated = [_V_AT.match(text) for text in crg.columns]
     if all(stated):
-        v = np.array([float(m.group(1)) for m in stated])
+        v = np.array([_lateral_m(path, m.group(1)) for m in stated])
     elif any(stated):
         raise InputError(f"{path}: some 'D:' lines state 'long section at v = ...' and some do not; state all or none")
     else:
@@ -361,7 +451,9 @@ def read_crg_surface(path: str | os.PathLike, *, terrain_crs: str | None = None)
                       y0_m=crg.number("reference_line_start_y", 0.0), phi_rad=start_phi, crs=crs, source=str(path))
 
 
-def read_terrain(path: str | os.PathLike, *, terrain_crs: str | None = None) -> PointCloud | ElevationGrid | CrgSurface:
+def read_terrain(path: str | os.PathLike, *, terrain_crs: str | None = None, track: Any = None,
+                 spacing_m: float | None = None, corridor_m: float | None = None
+                 ) -> PointCloud | ElevationGrid | CrgSurface:
     """Read a terrain map, the reader chosen by the file name's ending.
 
     ``.las`` / ``.laz``: :func:`~profileopt.io.las.read_las`. With ``terrain_crs`` the
@@ -370,12 +462,23 @@ def read_terrain(path: str | os.PathLike, *, terrain_crs: str | None = None) -> 
     without it, a file without a CRS is refused as by ``read_las``.
     ``.tif`` / ``.tiff``: :func:`read_geotiff`. ``.crg``: :func:`read_crg_surface`.
 
+    With a ``track``, only the part of the terrain that sampling along it needs is read: a
+    cloud's points within :func:`~profileopt.terrain.ground_track.cloud_margin_m` of the
+    track (read in chunks, so a cloud of any size fits in memory), a raster's window of cells
+    around the track's box and that margin. The track is placed on the terrain as
+    :func:`~profileopt.terrain.ground_track.route_from_track` places it.
+
     Parameters
     ----------
     path : str or os.PathLike
         The terrain file.
     terrain_crs : str, optional
         The terrain's CRS (``EPSG:32633``), for a file that states none or states a wrong one.
+    track : Track, optional
+        The track the terrain will be sampled along (:func:`profileopt.io.read_track`).
+    spacing_m, corridor_m : float, optional
+        The ``spacing_m`` and ``corridor_m`` it will be sampled with (m); None: the
+        defaults of :func:`~profileopt.terrain.ground_track.route_from_track`.
 
     Returns
     -------
@@ -391,20 +494,77 @@ def read_terrain(path: str | os.PathLike, *, terrain_crs: str | None = None) -> 
     if kind is None:
         raise InputError(f"{path}: a terrain file must end in {', '.join(TERRAIN_SUFFIXES)} (LAS/LAZ point cloud, "
                          f"GeoTIFF DEM or OpenCRG), not {path.suffix or 'no ending'!r}; rename or convert it")
+    from ..defaults import DEFAULT_CORRIDOR_M
+
+    corridor = DEFAULT_CORRIDOR_M if corridor_m is None else float(corridor_m)
     if kind == "GeoTIFF":
-        return read_geotiff(path, terrain_crs=terrain_crs)
+        near = None if track is None else (lambda crs: _track_box_m(track, crs, str(path), None, spacing_m, corridor))
+        return read_geotiff(path, terrain_crs=terrain_crs, near=near)
     if kind == "OpenCRG":
         return read_crg_surface(path, terrain_crs=terrain_crs)
+    keep = None if track is None else _Near(track, str(path), spacing_m, corridor)
     if terrain_crs is None:
         try:
-            return read_las(path)
+            return _kept(read_las(path, keep=keep), keep)
         except InputError as exc:  # read_las's fix names its API argument; here the CRS is the fix
             message = re.sub(r"pass units_m \(metres per file unit[^)]*\)",
                              "give its CRS with terrain_crs (e.g. EPSG:32633)", str(exc))
             raise InputError(message) from None
     crs = parse_crs(terrain_crs, str(path), "--terrain-crs")
     units = length_units_m(crs, str(path))
-    cloud = read_las(path, units_m=units)
+    cloud = _kept(read_las(path, units_m=units, crs=crs, keep=keep), keep)
     header = dataclasses.replace(cloud.header, crs=crs_label(crs),
                                  units_source=f"--terrain-crs {crs_label(crs)} ({units[0]:g} m, {units[1]:g} m per unit)")
     return dataclasses.replace(cloud, header=header, crs=crs)
+
+
+def _track_box_m(track: Any, crs: Any, source: str, density: float | None, spacing_m: float | None,
+                 corridor_m: float) -> tuple[float, float, float, float]:
+    """The box (m) around the track that sampling it needs: its own box widened by the margin."""
+    from ..terrain.ground_track import cloud_margin_m, track_on_terrain_m
+
+    x, y = track_on_terrain_m(track, crs, source)
+    margin = cloud_margin_m(density, spacing_m, corridor_m)
+    return float(x.min()) - margin, float(x.max()) + margin, float(y.min()) - margin, float(y.max()) + margin
+
+
+class _Near:
+    """The points of a cloud within ``margin_m`` of a track: the ``keep`` of read_las."""
+
+    def __init__(self, track: Any, source: str, spacing_m: float | None, corridor_m: float) -> None:
+        self.track, self.source, self.spacing_m, self.corridor_m = track, source, spacing_m, corridor_m
+        self.margin_m: float | None = None
+
+    def __call__(self, crs: Any, density: float | None) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+        from scipy.spatial import cKDTree
+
+        from ..core.route import path_distance_m
+        from ..terrain.ground_track import cloud_margin_m, track_on_terrain_m
+
+        x, y = track_on_terrain_m(self.track, crs, self.source)
+        self.margin_m = margin = cloud_margin_m(density, self.spacing_m, self.corridor_m)
+        # nodes every half margin along the track: a point within the margin of the track is
+        # within hypot(margin, margin / 4) of a node
+        along = path_distance_m(x, y)
+        nodes_s = np.linspace(0.0, along[-1], max(int(math.ceil(along[-1] / (0.5 * margin))) + 1, 2))
+        nodes = np.column_stack([np.interp(nodes_s, along, x), np.interp(nodes_s, along, y)])
+        tree = cKDTree(nodes)
+        reach = math.hypot(margin, 0.25 * margin) * (1 + 1e-9)
+        box = (x.min() - reach, x.max() + reach, y.min() - reach, y.max() + reach)
+
+        def select(px: np.ndarray, py: np.ndarray) -> np.ndarray:
+            mask = (px >= box[0]) & (px <= box[1]) & (py >= box[2]) & (py <= box[3])
+            inside = np.flatnonzero(mask)
+            if inside.size:
+                distance, _ = tree.query(np.column_stack([px[inside], py[inside]]), distance_upper_bound=reach)
+                mask[inside] = np.isfinite(distance)
+            return mask
+
+        return select
+
+
+def _kept(cloud: PointCloud, keep: _Near | None) -> PointCloud:
+    """The cloud, with the distance from the track within which its points were kept."""
+    if keep is None or keep.margin_m is None:
+        return cloud
+    return dataclasses.replace(cloud, kept_within_m=keep.margin_m)

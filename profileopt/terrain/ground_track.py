@@ -7,7 +7,9 @@ and a terrain (a LAS/LAZ :class:`~profileopt.io.las.PointCloud`, a GeoTIFF
 returns the :class:`~profileopt.core.route.Route` the planner reads:
 
 1. The track is projected into the terrain's CRS (metres) and resampled every
-   ``spacing_m`` along its horizontal length (straight lines between its points).
+   ``spacing_m`` along its horizontal length (straight lines between its points). Without a
+   ``spacing_m``, the finest the terrain resolves is chosen, from half the wheel radius up to
+   the wheel radius (:func:`supported_spacing_m`, :func:`cloud_spacing_m`), with a note.
 2. Each sample's elevation:
 
    - point cloud: the ground points (class 2 where the cloud is classified) within
@@ -22,7 +24,8 @@ returns the :class:`~profileopt.core.route.Route` the planner reads:
    with :data:`~profileopt.defaults.MIN_POINTS_PER_BIN` ground points expected per bin
    (density x 2 corridor x spacing), a grid whose cells are no larger than the spacing. A
    coarser terrain (airborne LiDAR at about one point per m^2, a 1 m DEM, a GPS track) is
-   refused for roughness with one line giving the resolution found and the one needed,
+   refused for roughness with one line giving the resolution found, the one needed and the
+   spacing that would measure it (or that none up to the wheel radius does),
    unless an assumed roughness is given (an ISO 8608 class or an RI,
    :class:`~profileopt.terrain.assumed.AssumedRoughness`): then the terrain gives the
    route's geometry and grade, and the assumption its roughness. A sparse cloud then gives
@@ -49,12 +52,14 @@ from ..defaults import (
     MIN_POINTS_PER_BIN,
 )
 from ..errors import InputError
+from ..io.inputs import max_route_samples
 
 if TYPE_CHECKING:
     from ..io.tracks import Track
 
 __all__ = ["TrackRoute", "route_from_track", "resample_polyline", "corridor_bins", "smooth_track_elevations",
-           "UNCLASSIFIED_QUANTILE", "GPS_ELEVATION_SCALE_M", "MAX_TRACK_SAMPLES"]
+           "supported_spacing_m", "cloud_spacing_m", "cloud_margin_m", "track_on_terrain_m", "GAP_RISK", "UNCLASSIFIED_QUANTILE", "GPS_ELEVATION_SCALE_M",
+           "SPACING_STEP_M", "SPARSE_NEIGHBOURHOOD_M"]
 
 #: Quantile of the points in a bin taken as the ground when the cloud is not classified:
 #: vegetation and other objects lie above the ground, so a low quantile, not the median.
@@ -66,10 +71,16 @@ UNCLASSIFIED_QUANTILE = 0.1
 #: (50 m) are averaged; a hill's grade over 50 m survives, a 5 m error no longer reads as a 50 %
 #: grade over the 10 m that the planner measures grades on.
 GPS_ELEVATION_SCALE_M = 50.0
-#: Most samples a track is cut into (1e7: 500 km at 0.05 m, about 1 GB of route in memory).
-MAX_TRACK_SAMPLES = 10_000_000
 #: ASPRS class codes of ground (LAS 1.4 R15, Table 17).
 _GROUND = 2
+#: A spacing chosen for a terrain's resolution is rounded up to a whole number of these (m).
+SPACING_STEP_M = 0.01
+#: Expected number of stretches without ground points longer than ``max_gap_m`` (refused) that
+#: a spacing chosen for a cloud may leave along the route (:func:`cloud_spacing_m`).
+GAP_RISK = 0.05
+#: Least distance (m) from the track of the ground points whose triangulation gives a sparse
+#: cloud's elevations (at least 3 point spacings, 3 / sqrt(density), where that is more).
+SPARSE_NEIGHBOURHOOD_M = 5.0
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -102,6 +113,9 @@ class TrackRoute:
         Remarks for the user (decisions taken, gaps bridged).
     terrain : PointCloud, ElevationGrid, CrgSurface or None
         The terrain sampled (for maps).
+    spacing_m : float or None
+        The spacing the samples were taken at (m): the one given, or the one chosen
+        (:func:`supported_spacing_m`).
     """
 
     route: Route
@@ -116,6 +130,7 @@ class TrackRoute:
     comments: tuple[str, ...]
     notes: tuple[str, ...]
     terrain: Any = None
+    spacing_m: float | None = None
 
 
 def resample_polyline(x_m: np.ndarray, y_m: np.ndarray, spacing_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -139,16 +154,18 @@ def resample_polyline(x_m: np.ndarray, y_m: np.ndarray, spacing_m: float) -> tup
     Raises
     ------
     InputError
-        More than :data:`MAX_TRACK_SAMPLES` samples.
+        More than :func:`profileopt.io.inputs.max_route_samples` samples (the memory of the
+        largest route file).
     """
     x = np.asarray(x_m, dtype=float)
     y = np.asarray(y_m, dtype=float)
     along = path_distance_m(x, y)
     length = float(along[-1])
     count = int(math.floor(length / spacing_m + 1e-9)) + 1
-    if count > MAX_TRACK_SAMPLES:
+    most = max_route_samples()
+    if count > most:
         raise InputError(f"spacing_m = {spacing_m:g} m cuts the {length:.6g} m track into {count:.3g} samples, more "
-                         f"than {MAX_TRACK_SAMPLES:.0e}; give a larger spacing or a shorter track")
+                         f"than the {most:,} a route may have; give a larger spacing or a shorter track")
     s = spacing_m * np.arange(count)
     if length - s[-1] > 1e-9:
         if s.size > 1 and length - s[-1] < 0.5 * spacing_m:
@@ -199,6 +216,132 @@ def corridor_bins(points_xy_m: np.ndarray, stations_xy_m: np.ndarray, corridor_m
     across = offset[:, 0] * tangent[nearest, 1] - offset[:, 1] * tangent[nearest, 0]
     keep = (np.abs(across) <= corridor_m) & (np.abs(along) <= half * (1 + 1e-12))
     return inside[keep], nearest[keep]
+
+
+def supported_spacing_m(resolution_m: float) -> float | None:
+    """The finest along-track spacing a terrain of the given resolution measures roughness at.
+
+    The one rule shared by point clouds and grids: the spacing must be at least the terrain's
+    resolution (a cloud's: the length of corridor that holds
+    :data:`~profileopt.defaults.MIN_POINTS_PER_BIN` ground points; a grid's: its cell) and no
+    coarser than :data:`~profileopt.defaults.MAX_ROUGHNESS_SPACING_M` (the wheel radius). It
+    is :data:`~profileopt.defaults.DEFAULT_TRACK_SPACING_M` (half the wheel radius) when the
+    terrain resolves that, else the resolution rounded up to :data:`SPACING_STEP_M`.
+
+    Parameters
+    ----------
+    resolution_m : float
+        The terrain's resolution along the track (m), > 0 (inf: none).
+
+    Returns
+    -------
+    float or None
+        The spacing (m), or None if no spacing up to the wheel radius is fine enough.
+    """
+    if not resolution_m <= MAX_ROUGHNESS_SPACING_M * (1 + 1e-9):
+        return None
+    if resolution_m <= DEFAULT_TRACK_SPACING_M * (1 + 1e-9):
+        return DEFAULT_TRACK_SPACING_M
+    steps = math.ceil(resolution_m / SPACING_STEP_M * (1 - 1e-9))
+    return min(round(steps * SPACING_STEP_M, 10), MAX_ROUGHNESS_SPACING_M)
+
+
+def cloud_spacing_m(density_per_m2: float, corridor_m: float, length_m: float,
+                    max_gap_m: float = DEFAULT_MAX_GAP_M) -> float | None:
+    """The finest along-track spacing a point cloud of this density measures roughness at.
+
+    The spacings from :data:`~profileopt.defaults.DEFAULT_TRACK_SPACING_M` to
+    :data:`~profileopt.defaults.MAX_ROUGHNESS_SPACING_M` (the wheel radius) in steps of
+    :data:`SPACING_STEP_M` whose bins expect at least
+    :data:`~profileopt.defaults.MIN_POINTS_PER_BIN` ground points (the rule of
+    :func:`supported_spacing_m`, lambda = density x 2 corridor x spacing) are candidates.
+    Empty bins are bridged, but a run of ``floor(max_gap_m / spacing)`` of them in a row is
+    a gap longer than ``max_gap_m`` and is refused; with points scattered at random (Poisson)
+    such runs are expected ``(length / spacing) exp(-lambda floor(max_gap_m / spacing))``
+    times. The finest candidate that expects at most :data:`GAP_RISK` of them is chosen;
+    if none does, the candidate that expects the fewest (the coarsest).
+
+    Parameters
+    ----------
+    density_per_m2 : float
+        Ground points per m^2 within the corridor.
+    corridor_m : float
+        The corridor's half-width (m).
+    length_m : float
+        The route's length (m).
+    max_gap_m : float
+        The longest stretch without data bridged (m).
+
+    Returns
+    -------
+    float or None
+        The spacing (m), or None if no spacing up to the wheel radius expects enough points.
+    """
+    finest = supported_spacing_m(_cloud_resolution_m(density_per_m2, corridor_m))
+    if finest is None:
+        return None
+    steps = int(round((MAX_ROUGHNESS_SPACING_M - finest) / SPACING_STEP_M))
+    candidates = [round(finest + k * SPACING_STEP_M, 10) for k in range(steps + 1)] or [finest]
+
+    def risk(spacing: float) -> float:
+        expected = _points_per_bin(density_per_m2, corridor_m, spacing)
+        run = max(math.floor(max_gap_m / spacing + 1e-9), 1)
+        return length_m / spacing * math.exp(-expected * run)
+
+    return next((c for c in candidates if risk(c) <= GAP_RISK), min(candidates, key=risk))
+
+
+def _points_per_bin(density_per_m2: float, corridor_m: float, spacing_m: float) -> float:
+    """Points a bin expects: density x (2 corridor x spacing), the bin's area (m^2)."""
+    return density_per_m2 * 2.0 * corridor_m * spacing_m
+
+
+def _cloud_resolution_m(density_per_m2: float, corridor_m: float) -> float:
+    """The length of a corridor ``corridor_m`` each side that holds MIN_POINTS_PER_BIN points
+    at the density (m): the finest spacing such a cloud is binned at."""
+    per_metre = _points_per_bin(density_per_m2, corridor_m, 1.0)
+    return MIN_POINTS_PER_BIN / per_metre if per_metre > 0 else math.inf
+
+
+def _sparse_neighbourhood_m(density_per_m2: float | None) -> float:
+    """Distance (m) from the track of the ground points triangulated for a sparse cloud."""
+    if not density_per_m2 or not density_per_m2 > 0:
+        return SPARSE_NEIGHBOURHOOD_M
+    return max(3.0 / math.sqrt(density_per_m2), SPARSE_NEIGHBOURHOOD_M)
+
+
+def cloud_margin_m(density_per_m2: float | None, spacing_m: float | None = None,
+                   corridor_m: float = DEFAULT_CORRIDOR_M) -> float:
+    """How far from a track the points of a cloud are needed to sample it (m): those read
+    (:func:`~profileopt.io.terrain_maps.read_terrain`'s ``track``) and no others.
+
+    A cloud dense enough to measure roughness in the corridor is binned: it needs the points
+    within ``corridor_m`` across and half a (last, up to 1.5 times longer) step along the
+    path, all within ``corridor_m + spacing_m``. A sparser one is
+    triangulated over its ground points within :data:`SPARSE_NEIGHBOURHOOD_M` (or 3 point
+    spacings). The margin is the larger of the two where the density (over the cloud's
+    bounding box, which underestimates a strip's) might be sparse, plus 1 m for the track's
+    own smoothing.
+
+    Parameters
+    ----------
+    density_per_m2 : float or None
+        The cloud's mean density (points per m^2), None if unknown.
+    spacing_m : float, optional
+        The sampling spacing (m); None: the coarsest chosen automatically
+        (:data:`~profileopt.defaults.MAX_ROUGHNESS_SPACING_M`).
+    corridor_m : float
+        The corridor's half-width (m).
+
+    Returns
+    -------
+    float
+        The distance (m).
+    """
+    spacing = MAX_ROUGHNESS_SPACING_M if spacing_m is None else float(spacing_m)
+    binned = corridor_m + spacing
+    dense = density_per_m2 is not None and _cloud_resolution_m(0.5 * density_per_m2, corridor_m) <= spacing
+    return (binned if dense else max(binned, _sparse_neighbourhood_m(density_per_m2))) + 1.0
 
 
 def smooth_track_elevations(s_m: np.ndarray, z_m: np.ndarray, *, scale_m: float = GPS_ELEVATION_SCALE_M) -> Any:
@@ -278,8 +421,9 @@ def _fill_gaps(s: np.ndarray, z: np.ndarray, max_gap_m: float, source: str, what
     return filled, np.array(gaps)
 
 
-def _check_options(spacing_m: float, corridor_m: float, max_gap_m: float) -> None:
-    for name, value in (("spacing_m", spacing_m), ("corridor_m", corridor_m)):
+def _check_options(spacing_m: float | None, corridor_m: float, max_gap_m: float) -> None:
+    for name, value in (("spacing_m", DEFAULT_TRACK_SPACING_M if spacing_m is None else spacing_m),
+                        ("corridor_m", corridor_m)):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
             raise InputError(f"{name} = {value!r} m: must be a number > 0")
     if not (isinstance(max_gap_m, (int, float)) and math.isfinite(max_gap_m) and max_gap_m >= 0):
@@ -328,7 +472,36 @@ def _project(track: "Track", terrain: Any, terrain_source: str) -> tuple[np.ndar
     return moved.x, moved.y, crs, notes
 
 
-def route_from_track(track: "Track", terrain: Any = None, *, spacing_m: float = DEFAULT_TRACK_SPACING_M,
+def track_on_terrain_m(track: "Track", crs: Any, source: str) -> tuple[np.ndarray, np.ndarray]:
+    """The track's x, y (m) on a terrain in ``crs``, placed as :func:`route_from_track` places
+    it (projected into the terrain's CRS; a track without a CRS taken in the terrain's).
+
+    Parameters
+    ----------
+    track : Track
+        The track (:func:`profileopt.io.read_track`).
+    crs : pyproj.CRS or None
+        The terrain's CRS (None: it states none).
+    source : str
+        The terrain file, for messages.
+
+    Returns
+    -------
+    x_m, y_m : numpy.ndarray, shape (K,)
+        The track's points (m).
+
+    Raises
+    ------
+    InputError
+        The track has a CRS and the terrain none.
+    """
+    from types import SimpleNamespace
+
+    x, y, _, _ = _project(track, SimpleNamespace(crs=crs), source)
+    return np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+
+
+def route_from_track(track: "Track", terrain: Any = None, *, spacing_m: float | None = None,
                      corridor_m: float = DEFAULT_CORRIDOR_M, max_gap_m: float = DEFAULT_MAX_GAP_M,
                      assumed_roughness: Any = None) -> TrackRoute:
     """The route a vehicle drives along ``track``: samples every ``spacing_m`` with the
@@ -341,8 +514,14 @@ def route_from_track(track: "Track", terrain: Any = None, *, spacing_m: float = 
     terrain : PointCloud, ElevationGrid, CrgSurface or None, default None
         The ground (:func:`profileopt.io.read_terrain`); None takes the track's own
         elevations (GPX ``<ele>``), which never measure roughness.
-    spacing_m : float, default :data:`~profileopt.defaults.DEFAULT_TRACK_SPACING_M`
-        Distance between samples along the track (m), > 0.
+    spacing_m : float, optional
+        Distance between samples along the track (m), > 0. None (the default) chooses the
+        finest spacing the terrain resolves (:func:`supported_spacing_m`): a cloud's density
+        in the corridor or a grid's cells, from
+        :data:`~profileopt.defaults.DEFAULT_TRACK_SPACING_M` up to
+        :data:`~profileopt.defaults.MAX_ROUGHNESS_SPACING_M` (the wheel radius), with a note
+        when it is not the former; a terrain too coarse for any of them, and no terrain,
+        get :data:`~profileopt.defaults.DEFAULT_TRACK_SPACING_M`.
     corridor_m : float, default :data:`~profileopt.defaults.DEFAULT_CORRIDOR_M`
         Half-width of the strip around the wheel path whose ground points a point cloud
         contributes (m), > 0.
@@ -368,15 +547,22 @@ def route_from_track(track: "Track", terrain: Any = None, *, spacing_m: float = 
     _check_options(spacing_m, corridor_m, max_gap_m)
     terrain_source = getattr(terrain, "source", None) or getattr(getattr(terrain, "header", None), "path", "terrain")
     tx, ty, crs, notes = _project(track, terrain, terrain_source)
+    chosen = spacing_m is None
+    spacing_m = DEFAULT_TRACK_SPACING_M if chosen else float(spacing_m)
     s, x, y = resample_polyline(tx, ty, spacing_m)
     if s.size < 2:
         raise InputError(f"{track.source}: the track is {s[-1]:.3g} m long; a route needs at least two samples")
-    frame = _crs_label(crs) or "the track's own frame (no CRS)"
-    comments = [f"track: {track.source} ({tx.size} points, {s[-1]:.1f} m)", f"x, y: {frame}, in metres; z in metres"]
-    density = None
     if terrain is not None:
         _check_extent(terrain, terrain_source, track.source, s, x, y, crs,
                       track.crs is not None and track.crs.to_epsg() == 4326, max_gap_m)
+        if chosen:
+            spacing_m, note = _choose_spacing(terrain, terrain_source, s, x, y, corridor_m, max_gap_m)
+            if note:
+                notes.append(note)
+                s, x, y = resample_polyline(tx, ty, spacing_m)
+    frame = _crs_label(crs) or "the track's own frame (no CRS)"
+    comments = [f"track: {track.source} ({tx.size} points, {s[-1]:.1f} m)", f"x, y: {frame}, in metres; z in metres"]
+    density = None
     if terrain is None:
         kind = "track"
         if track.z_m is None:
@@ -397,7 +583,7 @@ def route_from_track(track: "Track", terrain: Any = None, *, spacing_m: float = 
     elif hasattr(terrain, "classification"):
         kind = "point cloud"
         z, measured, density, resolution, more = _sample_cloud(terrain, terrain_source, s, x, y, spacing_m,
-                                                               corridor_m, assumed_roughness is not None)
+                                                               corridor_m, assumed_roughness is not None, max_gap_m)
         comments += more
         if not terrain.is_classified:
             notes.append(f"{terrain_source}: the cloud is not classified (no ground class): each sample takes the "
@@ -446,15 +632,39 @@ def route_from_track(track: "Track", terrain: Any = None, *, spacing_m: float = 
     return TrackRoute(route=route, crs_name=_crs_label(crs), track_x_m=np.asarray(tx), track_y_m=np.asarray(ty),
                       terrain_kind=kind, roughness_measured=measured, density_per_m2=density, resolution=resolution,
                       gaps_m=gaps.reshape(-1, 2), comments=tuple(comments), notes=tuple(notes),
-                      terrain=terrain)
+                      terrain=terrain, spacing_m=spacing_m)
 
 
 def _extent(terrain: Any) -> tuple[float, float, float, float]:
-    """(x min, x max, y min, y max) of a terrain's data (m)."""
+    """(x min, x max, y min, y max) of a terrain's data in its file (m), also where only the
+    part around the track was read."""
+    whole = getattr(terrain, "file_extent_m", None)
+    return tuple(float(v) for v in (whole if whole is not None else terrain.extent_m()))
+
+
+def _choose_spacing(terrain: Any, source: str, s: np.ndarray, x: np.ndarray, y: np.ndarray,
+                    corridor_m: float, max_gap_m: float) -> tuple[float, str | None]:
+    """The spacing to sample a terrain at when none is given (:func:`supported_spacing_m`) and a
+    note saying which when it is not the default."""
     if hasattr(terrain, "classification"):
-        return (float(terrain.x_m.min()), float(terrain.x_m.max()), float(terrain.y_m.min()),
-                float(terrain.y_m.max()))
-    return tuple(float(v) for v in terrain.extent_m())
+        _, _, density = _corridor_points(terrain, source, s, x, y, DEFAULT_TRACK_SPACING_M, corridor_m)
+        spacing = cloud_spacing_m(density, corridor_m, float(s[-1]), max_gap_m)
+        if spacing is None or spacing == DEFAULT_TRACK_SPACING_M:
+            return DEFAULT_TRACK_SPACING_M, None
+        return spacing, (f"{source}: samples every {spacing:g} m, the finest spacing at which its {density:.3g} "
+                         f"ground points per m^2 (within {corridor_m:g} m of the track) measure the roughness "
+                         f"({MIN_POINTS_PER_BIN:g} or more per bin, few gaps over max_gap_m {max_gap_m:g}); "
+                         "spacing_m sets another")
+    if hasattr(terrain, "u_m"):
+        resolution = float(terrain.u_m[1] - terrain.u_m[0])
+        what = f"its cells ({resolution:g} m along the reference line)"
+    else:
+        resolution = float(max(terrain.cell_size_m))
+        what = f"its cells ({terrain.cell_size_m[0]:g} m x {terrain.cell_size_m[1]:g} m)"
+    spacing = supported_spacing_m(resolution)
+    if spacing is None or spacing == DEFAULT_TRACK_SPACING_M:
+        return DEFAULT_TRACK_SPACING_M, None
+    return spacing, f"{source}: samples every {spacing:g} m, the finest spacing {what} resolve; spacing_m sets another"
 
 
 def _check_extent(terrain: Any, source: str, track_source: str, s: np.ndarray, x: np.ndarray, y: np.ndarray,
@@ -492,35 +702,65 @@ def _coarser_than_wheel_scale(spacing_m: float, corridor_m: float | None) -> str
     return "; ".join(reasons) or None
 
 
-def _sample_cloud(cloud: Any, source: str, s: np.ndarray, x: np.ndarray, y: np.ndarray, spacing_m: float,
-                  corridor_m: float, assumed: bool) -> tuple[np.ndarray, bool, float, str, list[str]]:
-    """Elevation of each sample from a point cloud: (z, roughness measured, density, resolution, comments)."""
+def _ground(cloud: Any, source: str) -> tuple[bool, np.ndarray, np.ndarray, np.ndarray]:
+    """Whether the cloud is classified, and x, y, z (m) of its ground points (all its points
+    if it is not classified)."""
+    if len(cloud) == 0:
+        within = getattr(cloud, "kept_within_m", None)
+        raise InputError(f"{source}: the cloud has no points " + (f"within {within:.3g} m of the track" if within
+                                                                   else "at all")
+                         + "; check that it covers the track (and the CRS of both)")
     classified = bool(cloud.is_classified)
     ground = cloud.classification == _GROUND if classified else np.ones(len(cloud), dtype=bool)
     if classified and not ground.any():
         raise InputError(f"{source}: the cloud is classified but has no ground points (class 2); classify its ground "
                          "(e.g. PDAL filters.smrf)")
-    gx, gy, gz = cloud.x_m[ground], cloud.y_m[ground], cloud.z_m[ground]
-    reach = corridor_m + spacing_m
+    return classified, cloud.x_m[ground], cloud.y_m[ground], cloud.z_m[ground]
+
+
+def _corridor_points(cloud: Any, source: str, s: np.ndarray, x: np.ndarray, y: np.ndarray, spacing_m: float,
+                     corridor_m: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """The ground points in each sample's bin: their z (m), their sample index, and the density
+    of ground points within the corridor (per m^2)."""
+    within = getattr(cloud, "kept_within_m", None)
+    reach = corridor_m + spacing_m  # a bin's points lie within the corridor and half a (last, longer) step
+    if within is not None and reach > within * (1 + 1e-9):
+        raise InputError(f"{source}: only the points within {within:g} m of the track were read, and spacing_m "
+                         f"{spacing_m:g} with corridor_m {corridor_m:g} needs more; read the terrain with the same "
+                         "spacing_m and corridor_m (read_terrain)")
+    _, gx, gy, gz = _ground(cloud, source)
     near = ((gx >= x.min() - reach) & (gx <= x.max() + reach) & (gy >= y.min() - reach) & (gy <= y.max() + reach))
-    px, py, pz = gx[near], gy[near], gz[near]
+    kept, bins = corridor_bins(np.column_stack([gx[near], gy[near]]), np.column_stack([x, y]), corridor_m)
+    return gz[near][kept], bins, kept.size / (2.0 * corridor_m * s[-1])
+
+
+def _sample_cloud(cloud: Any, source: str, s: np.ndarray, x: np.ndarray, y: np.ndarray, spacing_m: float,
+                  corridor_m: float, assumed: bool, max_gap_m: float = DEFAULT_MAX_GAP_M
+                  ) -> tuple[np.ndarray, bool, float, str, list[str]]:
+    """Elevation of each sample from a point cloud: (z, roughness measured, density, resolution, comments)."""
+    classified, gx, gy, gz = _ground(cloud, source)
+    binned_z, bins, density = _corridor_points(cloud, source, s, x, y, spacing_m, corridor_m)
     stations = np.column_stack([x, y])
-    kept, bins = corridor_bins(np.column_stack([px, py]), stations, corridor_m)
-    density = kept.size / (2.0 * corridor_m * s[-1])
-    needed = MIN_POINTS_PER_BIN / (2.0 * corridor_m * spacing_m)
-    dense = density >= needed
+    needed = MIN_POINTS_PER_BIN / _points_per_bin(1.0, corridor_m, spacing_m)  # per m^2
+    dense = _points_per_bin(density, corridor_m, spacing_m) >= MIN_POINTS_PER_BIN * (1 - 1e-12)
     coarse = _coarser_than_wheel_scale(spacing_m, corridor_m)
     measured = dense and coarse is None
     statistic = "median" if classified else f"{100 * UNCLASSIFIED_QUANTILE:g}th percentile"
     which = "ground points (class 2)" if classified else "points (the cloud is not classified)"
     found = (f"{density:.3g} {which} per m^2 within {corridor_m:g} m of the track; roughness at {spacing_m:g} m "
              f"needs {needed:.3g} per m^2 ({MIN_POINTS_PER_BIN:g} per {2 * corridor_m:g} m x {spacing_m:g} m bin)")
+    if not dense:
+        resolution_m = _cloud_resolution_m(density, corridor_m)
+        works = cloud_spacing_m(density, corridor_m, float(s[-1]), max_gap_m)
+        found += (f"; spacing_m {works:g} measures it" if works is not None else
+                  f"; no spacing up to the wheel scale ({MAX_ROUGHNESS_SPACING_M:g} m) measures it ("
+                  f"{MIN_POINTS_PER_BIN:g} per bin need {resolution_m:.2g} m)")
     resolution = "; ".join(([] if dense else [found]) + ([coarse] if coarse else [])) or found
     if not measured and not assumed:  # refused by the caller with this resolution
         return np.full(s.size, np.nan), False, density, resolution, []
     if dense:
         quantile = 0.5 if classified else UNCLASSIFIED_QUANTILE
-        z, _ = _bin_quantile(bins, pz[kept], s.size, quantile)
+        z, _ = _bin_quantile(bins, binned_z, s.size, quantile)
         comments = [f"z: {statistic} of the {which} within {corridor_m:g} m of the wheel path, in bins of "
                     f"{spacing_m:g} m along it; {found}"]
         return z, measured, density, resolution, comments
@@ -534,14 +774,14 @@ def _sample_cloud(cloud: Any, source: str, s: np.ndarray, x: np.ndarray, y: np.n
 
     # the ground points within a few point spacings (at least 5 m) of the track: enough to
     # surround every sample with triangles
-    spread = 3.0 / math.sqrt(max(gz.size / max(np.ptp(gx) * np.ptp(gy), 1e-9), 1e-9))
-    distance, _ = cKDTree(stations).query(np.column_stack([gx, gy]), distance_upper_bound=max(spread, 5.0))
+    spread = _sparse_neighbourhood_m(gz.size / max(np.ptp(gx) * np.ptp(gy), 1e-9))
+    distance, _ = cKDTree(stations).query(np.column_stack([gx, gy]), distance_upper_bound=spread)
     wide = np.flatnonzero(np.isfinite(distance))
     if wide.size < 3:
         return np.full(s.size, np.nan), False, density, resolution, []
     surface = LinearNDInterpolator(np.column_stack([gx[wide], gy[wide]]), gz[wide])
     z = surface(x, y)
-    comments = [f"z: linear over the triangulation of the {which} within {max(spread, 5.0):.3g} m of the track"]
+    comments = [f"z: linear over the triangulation of the {which} within {spread:.3g} m of the track"]
     return z, False, density, resolution, comments
 
 

@@ -114,3 +114,19 @@ def test_iri_profile_matches_readme():
     # README: 544 m at 0.25 m spacing, absolute elevations 582-583 m
     assert s[-1] - s[0] == pytest.approx(544.0) and np.allclose(np.diff(s), 0.25)
     assert 582.0 <= z.min() and z.max() <= 583.2
+
+
+@pytest.mark.parametrize("end_u, words", [
+    # (1e308 - 0) / 0.5 overflows to inf: int(inf) was an OverflowError (exit 1)
+    ("1e308", "reference_line_end_u = 1e+308 every reference_line_increment = 0.5 m is more than 1e308 rows"),
+    # finite but far beyond the data: named before any array of that size is made
+    ("1e15", "is 2e+15 rows of 2 KRBI values, but the file holds 80 data bytes, enough for 10 rows"),
+])
+def test_a_reference_line_end_beyond_the_data_is_one_line(tmp_path, end_u: str, words: str) -> None:
+    path = tmp_path / "far.crg"
+    write_crg(path, np.zeros((4, 2)))  # 4 rows x 2 values x 4 bytes = 32 bytes, padded to 80
+    path.write_bytes(path.read_bytes().replace(b"reference_line_end_u = 1.5", f"reference_line_end_u = {end_u}".encode()))
+    with pytest.raises(InputError) as raised:
+        read_opencrg(path)
+    message = str(raised.value)
+    assert message.startswith(f"{path}: ") and "\n" not in message and words in message, message

@@ -343,7 +343,8 @@ def test_truncated_laz_is_one_line(tmp_path: Path) -> None:
     path.write_bytes(data[: len(data) // 2])
     with pytest.raises(InputError) as raised:
         read_las(path)
-    one_line(raised, str(path), "truncated or damaged (laspy:", "download it again")
+    one_line(raised, str(path), "cannot be decoded after", "the file is cut short or its compressed data are damaged")
+    assert "download it again" not in str(raised.value)  # the file is damaged: say what is wrong (issue 30)
 
 
 def test_read_terrain_supplies_the_crs_and_its_units(tmp_path: Path) -> None:
@@ -586,3 +587,211 @@ def test_a_noisy_gps_track_is_moved_onto_its_path_within_the_tolerance(tmp_path:
     kept = read_track(path)
     assert not kept.smoothing.smoothed
     np.testing.assert_array_equal(kept.x, read_track(path, smooth=False).x)
+
+
+# ----------------------------------------- hostile terrain files (issue 30, items 8, 10 and 11)
+
+
+def test_an_empty_las_or_laz_is_one_line(tmp_path: Path) -> None:
+    # laspy writes a cloud without points; a terrain made of it was an internal error (zero-size array)
+    for name in ("empty.las", "empty.laz"):
+        las = laspy.create(point_format=3, file_version="1.2")
+        las.header.add_crs(pyproj.CRS("EPSG:32633"))
+        las.write(tmp_path / name)
+        with pytest.raises(InputError) as raised:
+            read_terrain(tmp_path / name)
+        one_line(raised, name, "holds no points (its header counts 0 point records)")
+
+
+def _cloud_track(tmp_path: Path) -> tuple[Path, object, np.ndarray]:
+    """A 2,000-point LAZ (write_laz: x 400000-400050, y 5100000-5100050) and a CSV track
+    across it (UTM 33N), straight from (400005, 5100025) to (400045, 5100025)."""
+    from profileopt.io import read_track
+
+    path = tmp_path / "cloud.laz"
+    xyz, _ = write_laz(path)
+    track_path = tmp_path / "track.csv"
+    track_path.write_text("x,y\n400005,5100025\n400025,5100025\n400045,5100025\n")
+    return path, read_track(track_path, track_crs="EPSG:32633"), xyz
+
+
+def test_a_cloud_is_read_in_chunks_keeping_the_points_near_the_track(tmp_path: Path, monkeypatch) -> None:
+    from profileopt.io import las
+    from profileopt.terrain.ground_track import cloud_margin_m
+
+    path, track, xyz = _cloud_track(tmp_path)
+    # chunks of 300 points, at most 1,000 held: the 2,000-point cloud is refused whole ...
+    monkeypatch.setattr(las, "_CHUNK_POINTS", 300)
+    monkeypatch.setattr(las, "MAX_CLOUD_POINTS", 1000)
+    with pytest.raises(InputError) as raised:
+        read_terrain(path)
+    one_line(raised, "holds 2,000 points, more than the 1,000 read at once", "near a track")
+    # ... and read near the track: exactly the points within the margin of the segment (distance
+    # to a straight segment by hand: across it |y - 5100025|, beyond its ends the distance to the end)
+    cloud = read_terrain(path, track=track, spacing_m=0.05, corridor_m=0.15)
+    margin = cloud_margin_m(2000 / (50 * 50), 0.05, 0.15)  # the density over the header's bounds
+    assert cloud.kept_within_m == margin
+    beyond = np.clip(xyz[:, 0], 400005, 400045)
+    distance = np.hypot(xyz[:, 0] - beyond, xyz[:, 1] - 5100025)
+    near = distance <= margin
+    assert 0 < near.sum() < 1000
+    got = cloud.xyz_m()
+    # the kept points include every point within the margin, and none beyond margin * 1.04
+    # (the nodes every half margin along the track)
+    assert {tuple(p) for p in np.round(xyz[near], 3)} <= {tuple(p) for p in np.round(got, 3)}
+    assert len(got) <= (distance <= margin * 1.04).sum()
+    # the extent is the whole file's, for the check that the track lies on the terrain
+    np.testing.assert_allclose(cloud.extent_m(), (xyz[:, 0].min(), xyz[:, 0].max(), xyz[:, 1].min(),
+                                                  xyz[:, 1].max()), atol=1e-6)
+    # more points near the track than may be held: refused, naming the fix
+    monkeypatch.setattr(las, "MAX_CLOUD_POINTS", 50)
+    with pytest.raises(InputError) as raised:
+        read_terrain(path, track=track)
+    one_line(raised, "more than 50 points near the track (of 2,000); thin the cloud")
+
+
+def test_a_geotiff_band_scale_of_zero_is_refused(tmp_path: Path) -> None:
+    # band scale 0 made every elevation the offset: flat 0 m terrain, exit 0 (issue 30, item 8)
+    path = tmp_path / "dem.tif"
+    write_tif(path, "EPSG:32633")
+    for scale in (0.0, 1e-300, float("nan")):
+        with rasterio.open(path, "r+") as dataset:
+            dataset.scales = (scale,)
+        with pytest.raises(InputError) as raised:
+            read_geotiff(path)
+        one_line(raised, str(path), f"band 1's scale {scale:g} and offset 0", "metadata are wrong")
+    with rasterio.open(path, "r+") as dataset:  # a real scale is applied (decimetres in the file)
+        dataset.scales = (0.1,)
+    x, y = np.array([400003.0]), np.array([5100097.0])
+    assert read_geotiff(path).elevation_at(x, y)[0] == pytest.approx(0.1 * plane(x, y)[0], abs=2e-5)
+
+
+def test_a_50000_by_50000_geotiff_is_read_in_the_window_around_the_track(tmp_path: Path) -> None:
+    # 2.5e9 cells claimed (9.3 GiB of float32) in a sparse file of a few MB: reading it whole was a
+    # MemoryError; only the window around the track is read
+    from geo_data import surface_m, track_utm_m, write_gpx, write_sparse_geotiff
+
+    from profileopt.io import read_track
+    from profileopt.io.terrain_maps import MAX_GRID_CELLS
+    from profileopt.terrain.ground_track import route_from_track
+
+    path = write_sparse_geotiff(tmp_path / "big.tif")
+    assert path.stat().st_size < 20e6
+    with pytest.raises(InputError) as raised:
+        read_terrain(path)
+    one_line(raised, "50,000 x 50,000 cells to read, more than the 25,000,000", "window around a track")
+    track = read_track(write_gpx(tmp_path / "t.gpx", *track_utm_m(2.0)))
+    grid = read_terrain(path, track=track)
+    assert grid.z_m.size < MAX_GRID_CELLS / 10
+    assert grid.file_extent_m == pytest.approx((429000.025, 431499.975, 5098500.025, 5100999.975))
+    result = route_from_track(track, grid)
+    truth = surface_m(result.route.x_m, result.route.y_m)
+    assert np.max(np.abs(result.route.z_m - truth)) < 2e-3  # float32 cells, bilinear over 5 cm
+    assert result.roughness_measured
+
+
+def test_a_window_read_agrees_with_the_whole_raster(tmp_path: Path) -> None:
+    # the window's cells are the raster's own: same elevation at every sample
+    from profileopt.io import read_track
+
+    path = tmp_path / "dem.tif"
+    write_tif(path, "EPSG:32633", nodata_cell=(5, 7))
+    track_path = tmp_path / "t.csv"
+    track_path.write_text("x,y\n400003,5100097\n400006,5100096\n")
+    whole = read_terrain(path)
+    part = read_terrain(path, track=read_track(track_path, track_crs="EPSG:32633"))
+    assert part.file_extent_m == whole.extent_m()
+    x, y = np.linspace(400003, 400006, 7), np.linspace(5100097, 5100096, 7)
+    np.testing.assert_array_equal(part.elevation_at(x, y), whole.elevation_at(x, y))
+
+
+@pytest.mark.parametrize("options, words", [
+    ({"v_keys": "", "v_lines": ["D:long section at v = -,m", "D:long section at v = 1.0,m", "D:long section at v = 2,m"]},
+     ["'D:long section at v = -' does not state a lateral position"]),
+    ({"v_keys": "", "v_lines": ["D:long section at v = nan,m", "D:long section at v = 1.0,m",
+                                "D:long section at v = 2,m"]}, ["'D:long section at v = nan'"]),
+])
+def test_bad_crg_lateral_positions_are_one_line(tmp_path: Path, options: dict, words: list[str]) -> None:
+    path = tmp_path / "bad.crg"
+    write_crg(path, np.zeros((5, 3)), **options)
+    with pytest.raises(InputError) as raised:
+        read_crg_surface(path)
+    one_line(raised, str(path), *words)
+
+
+def test_a_crg_end_of_1e308_is_one_line(tmp_path: Path) -> None:
+    # (end - start) / increment overflowed to inf, then int(inf): OverflowError (exit 1)
+    path = tmp_path / "far.crg"
+    write_crg(path, np.zeros((5, 3)))
+    path.write_bytes(path.read_bytes().replace(b"reference_line_end_u = 2.0", b"reference_line_end_u = 1e308"))
+    for read in (read_crg_surface, read_opencrg):
+        with pytest.raises(InputError) as raised:
+            read(path)
+        one_line(raised, str(path), "reference_line_end_u = 1e+308", "more than 1e308 rows",
+                 "enough for 6 rows; the file is truncated or these keys are wrong")  # 80 bytes (padded) / 12
+
+
+@pytest.mark.parametrize("text", ["+proj=longlat +R=1", "+proj=utm +zone=33 +a=3396190 +b=3376200"])
+def test_a_crs_off_the_earth_is_one_line(tmp_path: Path, text: str) -> None:
+    # pyproj refuses to transform between bodies (ProjError, exit 1): refused where the CRS is read
+    from profileopt.cli import main
+    from profileopt.io.geo import parse_crs
+
+    with pytest.raises(InputError) as raised:
+        parse_crs(text, "t.csv", "--track-crs")
+    one_line(raised, "t.csv: --track-crs", "not on the Earth", "EPSG:32633")
+    track = tmp_path / "t.csv"
+    track.write_text("x,y\n14.1,46.0\n14.1005,46.0005\n14.101,46.001\n")
+    dem = tmp_path / "dem.tif"
+    write_tif(dem, "EPSG:32633")
+    assert main(["route", str(track), "--track-crs", text, "--terrain", str(dem), "-o", str(tmp_path / "r.csv")]) == 2
+    assert not (tmp_path / "r.csv").exists()
+
+
+@pytest.mark.slow
+def test_a_laz_bomb_is_read_in_bounded_memory(tmp_path: Path, monkeypatch) -> None:
+    # 3 million identical points compress to a few kB (60 million made a 600 kB LAZ that peaked
+    # at 3.2 GB): read in chunks of 100,000 near a track that passes 400 m away, the numpy arrays
+    # held at once stay below 40 MB, where reading them whole takes 3e6 x (30-byte record + 25 bytes
+    # of x, y, z, class) = 165 MB
+    import tracemalloc
+
+    from profileopt.io import las
+
+    n = 3_000_000
+    header = laspy.LasHeader(point_format=6, version="1.4")
+    header.offsets, header.scales = [400000.0, 5100000.0, 0.0], [0.001, 0.001, 0.001]
+    header.add_crs(pyproj.CRS("EPSG:32633"))
+    path = tmp_path / "bomb.laz"
+    with laspy.open(path, mode="w", header=header) as writer:
+        points = laspy.ScaleAwarePointRecord.zeros(n, header=header)
+        points.x[:], points.y[:], points.z[:], points.classification[:] = 400500.0, 5100025.0, 300.0, 2
+        writer.write_points(points)
+    del points
+    assert path.stat().st_size < 100_000
+    track_path = tmp_path / "track.csv"
+    track_path.write_text("x,y\n400005,5100025\n400045,5100025\n")
+    track = read_track(track_path, track_crs="EPSG:32633")
+    monkeypatch.setattr(las, "_CHUNK_POINTS", 100_000)
+    tracemalloc.start()
+    try:
+        cloud = read_terrain(path, track=track)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert len(cloud) == 0 and cloud.extent_m() == pytest.approx((400500.0, 400500.0, 5100025.0, 5100025.0))
+    assert peak < 40e6
+
+
+@pytest.mark.parametrize("unit, words", [("1e-300", "not length units (they lie between 1e-06 and 100000 m)"),
+                                         ("0", "not length units"), ("-1", "not length units"),
+                                         ("nan", "is not a CRS pyproj knows")])  # pyproj refuses NaN itself
+def test_a_geotiff_whose_crs_unit_is_no_length_is_one_line(tmp_path: Path, unit: str, words: str) -> None:
+    # a CRS unit of 1e-300 m (or 0, negative, NaN: in the file's GeoKeys or given) shrank the raster to a point
+    wkt = ('PROJCS["p",GEOGCS["g",DATUM["d",SPHEROID["s",6378137,298.257]],PRIMEM["G",0],UNIT["degree",'
+           f'0.0174532925199433]],PROJECTION["Transverse_Mercator"],UNIT["odd",{unit}]]')
+    path = tmp_path / "dem.tif"
+    write_tif(path, "EPSG:32633")
+    with pytest.raises(InputError) as raised:
+        read_terrain(path, terrain_crs=wkt)
+    one_line(raised, str(path), words)

@@ -252,8 +252,8 @@ def test_hand_built_las_14_format_6_with_wkt(tmp_path: Path) -> None:
     [
         ({"signature": b"LASX"}, "LASF"),
         ({"point_format": 0x80}, "damaged"),  # the LAZ bit without LAZ data: laspy finds no LasZip record
-        ({"point_count": 9}, "truncated"),
-        ({"scale": (0.0, 0.01, 0.01)}, "scale factors"),
+        ({"point_count": 9}, "is cut short: its header counts 9 point records"),
+        ({"scale": (0.0, 0.01, 0.01)}, "x scale factor 0 is outside"),
         ({"vlrs": ()}, "units_m"),
         ({"vlrs": (("LASF_Projection", 34735, _geokeys((1024, 0, 1, 2), (2048, 0, 1, 4326))),)}, "geographic"),
         ({"vlrs": (("LASF_Projection", 34735, _geokeys((1024, 0, 1, 1), (3076, 0, 1, 9036))),)}, "9036"),
@@ -314,3 +314,100 @@ def test_units_m_reads_a_file_without_crs(tmp_path: Path) -> None:
 
 def test_atv_clearance_is_the_h_used_here() -> None:
     assert load_vehicle("atv").ground_clearance_m == H_M
+
+
+# ------------------------------------------- hostile headers (issue 30, items 8, 10 and 11)
+
+
+def _user_unit(size_m: float) -> tuple[tuple[str, int, bytes], ...]:
+    """GeoKeys with a user-defined linear unit (3076 = 32767) of ``size_m`` metres (3077 in the doubles)."""
+    return (("LASF_Projection", 34735, _geokeys((1024, 0, 1, 1), (3076, 0, 1, 32767), (3077, 34736, 1, 0))),
+            ("LASF_Projection", 34736, struct.pack("<d", size_m)))
+
+
+def _wkt(text: str) -> tuple[tuple[str, int, bytes], ...]:
+    return (("LASF_Projection", 2112, text.encode() + b"\0"),)
+
+
+_PROJCS = 'PROJCS["p",GEOGCS["g",DATUM["d",SPHEROID["s",6378137,298.257]]],PROJECTION["Transverse_Mercator"],'
+
+
+@pytest.mark.geo
+@pytest.mark.parametrize(
+    "options, words",
+    [
+        # 5e-324 (the smallest double) turns every stored z into the offset: flat terrain
+        ({"scale": (0.01, 0.01, 5e-324)}, "z scale factor 4.94066e-324 is outside 1e-07 to 1"),
+        ({"scale": (0.01, 0.01, 1e-9)}, "z scale factor 1e-09 is outside"),
+        ({"scale": (0.01, 0.01, 10.0)}, "z scale factor 10 is outside"),
+        ({"vlrs": _user_unit(float("nan"))}, "ProjLinearUnitSizeGeoKey (3077) states a unit of nan m"),
+        ({"vlrs": _user_unit(0.0)}, "states a unit of 0 m"),
+        ({"vlrs": _user_unit(-0.3048)}, "states a unit of -0.3048 m"),
+        ({"vlrs": _wkt(_PROJCS + 'UNIT["tiny",1e-300]]'), "minor": 4, "point_format": 6, "global_encoding": 0x10},
+         "the WKT CRS 'p' states a unit of 1e-300 m, not a length unit"),
+        # brackets nested 2,000 deep: Python's recursion limit (1,000) would end a recursive parser
+        ({"vlrs": _wkt("PROJCS[" * 2000 + "]" * 2000), "minor": 4, "point_format": 6, "global_encoding": 0x10},
+         "nests brackets more than 64 deep"),
+        ({"point_count": 0}, "holds no points (its header counts 0 point records)"),
+    ],
+)
+def test_hostile_headers_are_one_line(tmp_path: Path, options: dict, words: str) -> None:
+    path = tmp_path / "bad.las"
+    _write_las(path, COUNTS, [2, 2, 2, 2], **{"vlrs": FEET, **options})
+    with pytest.raises(InputError) as raised:
+        read_las(path)
+    message = str(raised.value)
+    assert message.startswith(f"{path}: ") and "\n" not in message and words in message, message
+    assert "download it again" not in message
+
+
+@pytest.mark.geo
+def test_a_user_defined_unit_in_range_is_used(tmp_path: Path) -> None:
+    # the check of the unit's size refuses only what is not a length: a Clarke's foot is read
+    path = tmp_path / "clarke.las"
+    _write_las(path, COUNTS, [2, 2, 2, 2], vlrs=_user_unit(0.3047972654))
+    cloud = read_las(path)
+    expected = (COUNTS * np.array([0.01, 0.01, 0.001]) + np.array([1000.0, 2000.0, 100.0])) * 0.3047972654
+    np.testing.assert_allclose(cloud.xyz_m(), expected, rtol=1e-15)
+
+
+@pytest.mark.geo
+def test_a_vlr_count_of_4294967295_is_refused_at_once(tmp_path: Path) -> None:
+    # 422 bytes claiming 0xFFFFFFFF variable length records (bytes 100-103): laspy would try to
+    # read them all (a hang, then MemoryError); at most (offset to points - header size) / 54 fit
+    path = tmp_path / "vlrs.las"
+    _write_las(path, COUNTS, [2, 2, 2, 2], vlrs=FEET)
+    raw = bytearray(path.read_bytes())
+    struct.pack_into("<I", raw, 100, 0xFFFFFFFF)
+    path.write_bytes(bytes(raw[:422]))
+    offset = struct.unpack_from("<I", raw, 96)[0]
+    fit = (offset - 227) // 54  # 227-byte LAS 1.2 header, 54-byte VLR headers (LAS 1.2, 2.4)
+    with pytest.raises(InputError) as raised:
+        read_las(path)
+    message = str(raised.value)
+    assert "\n" not in message and f"counts 4294967295 variable length records, but at most {fit} fit" in message
+
+
+@pytest.mark.geo
+def test_records_beyond_the_header_count_get_a_note(tmp_path: Path) -> None:
+    # 4 records stored, the header counts 2: laspy reads 2; the other 2 are named in a note
+    path = tmp_path / "more.las"
+    _write_las(path, COUNTS, [2, 2, 2, 2], vlrs=FEET, point_count=2)
+    cloud = read_las(path)
+    assert len(cloud) == 2
+    assert len(cloud.notes) == 1 and "holds 4 point records, but its header counts 2" in cloud.notes[0]
+    assert "the other 2 ignored" in cloud.notes[0]
+    # a whole file has none
+    _write_las(path, COUNTS, [2, 2, 2, 2], vlrs=FEET)
+    assert read_las(path).notes == ()
+
+
+@pytest.mark.geo
+def test_a_record_length_below_the_format_is_named(tmp_path: Path) -> None:
+    path = tmp_path / "fmt.las"
+    _write_las(path, COUNTS, [2, 2, 2, 2], vlrs=FEET)
+    raw = bytearray(path.read_bytes())
+    raw[104] = 4  # point format 4 (57-byte records, LAS 1.4 Table 11) with the 20-byte records of format 0
+    path.write_bytes(bytes(raw))
+    with pytest.raises(InputError, match=r"point data format 4 \(records of at least 57 bytes\) and records of 20 "):
+        read_las(path)

@@ -275,3 +275,105 @@ def test_a_label_reads_back_as_the_assumed_roughness() -> None:
         assert AssumedRoughness.from_label(assumed.label.replace(" ", "_")) == assumed
     with pytest.raises(InputError, match="neither"):
         AssumedRoughness.from_label("class C")
+
+
+# ------------------------------------- the spacing a cloud's density supports (issue 30, item 16)
+
+
+def test_the_finest_supported_spacing_by_hand() -> None:
+    from profileopt.terrain.ground_track import cloud_spacing_m, supported_spacing_m
+
+    # a terrain resolving 0.05 m or finer: half the wheel radius; coarser: rounded up to a cm,
+    # up to the wheel radius (0.1 m); beyond it none
+    assert [supported_spacing_m(r) for r in (0.01, 0.05, 0.0501, 0.074, 0.1, 0.1001)] == [0.05, 0.05, 0.06, 0.08,
+                                                                                        0.1, None]
+    # lambda = density x 0.3 m x spacing points per bin must be >= 3; runs of floor(0.2 / spacing)
+    # empty bins in a row (a gap over 0.2 m) expected (length / spacing) exp(-lambda run) times, <= 0.05:
+    # 135 per m^2 over 60 m: 0.08 expects 750 e^-6.48 = 1.15, 0.09 0.46, 0.1 0.18: none, so the fewest (0.1)
+    assert cloud_spacing_m(135.0, 0.15, 60.0) == 0.1
+    # 150 per m^2 over 10 m: 0.07 expects 143 e^-6.3 = 0.26, 0.08 0.093, 0.09 111 e^-8.1 = 0.034
+    assert cloud_spacing_m(150.0, 0.15, 10.0) == 0.09
+    # 300 per m^2: 0.05 (lambda 4.5, runs of 4: 1200 e^-18) as before
+    assert cloud_spacing_m(300.0, 0.15, 60.0) == 0.05
+    # 60 per m^2 needs 3 / (0.3 x 60) = 0.167 m: coarser than the wheel radius
+    assert cloud_spacing_m(60.0, 0.15, 60.0) is None
+
+
+def test_a_uav_density_cloud_is_sampled_at_the_spacing_it_supports(tmp_path: Path) -> None:
+    # 135 ground points per m^2 (plus 16 % vegetation and noise): refused at 0.05 m before
+    # (200 per m^2 needed); by default now sampled every 0.1 m with a note, and the RI in 5 m
+    # windows is within 5 % (median) of the true ground's under the same samples
+    from profileopt.io import read_terrain, read_track
+
+    x, y, z, classes = cloud_points(seed=5, density_per_m2=135.0)
+    laz = write_laz(tmp_path / "uav.laz", x, y, z, classes)
+    track = read_track(write_gpx(tmp_path / "t.gpx", *track_utm_m(2.0)))
+    cloud = read_terrain(laz, track=track)
+    result = route_from_track(track, cloud)
+    assert result.spacing_m == 0.1 and result.roughness_measured
+    assert np.diff(result.route.s_m)[:-1] == pytest.approx(0.1, abs=1e-5)  # chords of the arc, 1e-7 shorter
+    assert any("samples every 0.1 m, the finest spacing at which its 13" in note for note in result.notes)
+    errors = _ri_errors(result)
+    assert np.median(errors) < 0.05 and np.percentile(errors, 95) < 0.1
+    # a spacing given is kept; too fine for the density, the message names the one that works
+    with pytest.raises(InputError, match=r"roughness at 0.05 m needs 200 per m\^2 .*; spacing_m 0.1 measures it"):
+        route_from_track(track, cloud, spacing_m=0.05)
+
+
+def test_a_cloud_too_sparse_for_any_spacing_names_the_one_it_would_take(tmp_path: Path) -> None:
+    from profileopt.io import read_terrain, read_track
+
+    x, y, z, classes = cloud_points(seed=6, density_per_m2=60.0)
+    track = read_track(write_gpx(tmp_path / "t.gpx", *track_utm_m(2.0)))
+    cloud = read_terrain(write_laz(tmp_path / "sparse.laz", x, y, z, classes), track=track)
+    with pytest.raises(InputError) as raised:
+        route_from_track(track, cloud)
+    message = str(raised.value)
+    # 3 / (0.3 m x about 60 per m^2) = about 0.17 m
+    assert "no spacing up to the wheel scale (0.1 m) measures it (3 per bin need 0.1" in message
+    assert "give an assumed roughness" in message and "\n" not in message
+
+
+def test_a_cloud_read_near_the_track_refuses_a_wider_corridor(tmp_path: Path) -> None:
+    from profileopt.io import read_terrain, read_track
+
+    x, y, z, classes = cloud_points(seed=7)
+    track = read_track(write_gpx(tmp_path / "t.gpx", *track_utm_m(2.0)))
+    cloud = read_terrain(write_laz(tmp_path / "c.laz", x, y, z, classes), track=track, spacing_m=0.05)
+    assert cloud.kept_within_m is not None
+    with pytest.raises(InputError, match=r"only the points within .* m of the track were read"):
+        route_from_track(track, cloud, corridor_m=cloud.kept_within_m, spacing_m=0.05)
+
+
+def test_no_points_near_the_track_is_one_line(tmp_path: Path) -> None:
+    # the cloud's box covers the track, but its points lie 30 m away from it: nothing is kept
+    from profileopt.io import read_terrain, read_track
+
+    x, y, z, classes = cloud_points(seed=8, density_per_m2=50.0)
+    far = np.concatenate([x, [x.min() - 40.0, x.max() + 40.0]]), np.concatenate([y, [y.min() - 40, y.max() + 40]])
+    shifted_y = far[1] + 30.0
+    laz = write_laz(tmp_path / "far.laz", far[0], shifted_y, np.concatenate([z, z[:2]]),
+                    np.concatenate([classes, classes[:2]]))
+    track = read_track(write_gpx(tmp_path / "t.gpx", *track_utm_m(2.0)))
+    cloud = read_terrain(laz, track=track)
+    with pytest.raises(InputError) as raised:
+        route_from_track(track, cloud)
+    assert f"the cloud has no points within {cloud.kept_within_m:.3g} m of the track; check that it covers" in str(
+        raised.value)
+
+
+def test_a_dem_is_sampled_at_its_cell_size_up_to_the_wheel_radius(tmp_path: Path) -> None:
+    # the one rule for grids: cells of 0.08 m are sampled every 0.08 m (not refused at 0.05 m);
+    # cells of 0.2 m measure no roughness at any spacing up to 0.1 m, so the default stays
+    from profileopt.io import read_terrain, read_track
+    from profileopt.terrain.assumed import AssumedRoughness
+
+    track = read_track(write_gpx(tmp_path / "t.gpx", *track_utm_m(2.0)))
+    fine = route_from_track(track, read_terrain(write_geotiff(tmp_path / "g8.tif", 0.08)))
+    assert fine.spacing_m == 0.08 and fine.roughness_measured
+    assert any("samples every 0.08 m, the finest spacing its cells (0.08 m x 0.08 m) resolve" in n for n in fine.notes)
+    truth = surface_m(fine.route.x_m, fine.route.y_m)
+    assert np.max(np.abs(fine.route.z_m - truth)) < 0.01  # bilinear over 8 cm cells of a surface with 0.6 m waves
+    coarse = route_from_track(track, read_terrain(write_geotiff(tmp_path / "g20.tif", 0.2)),
+                              assumed_roughness=AssumedRoughness(road_class="B"))
+    assert coarse.spacing_m == 0.05 and not coarse.roughness_measured
