@@ -97,9 +97,7 @@ def run(args: argparse.Namespace) -> int:
     made = track = None
     tolerance = args.path_tolerance
     if is_track(args.route, args):
-        # the track's notes are printed where it is read (cli/route.py): --quiet drops them here
-        with _quiet_stderr(args.quiet):
-            made, track = smoothed_track_route(args.route, args, "profileopt plan")
+        made, track = smoothed_track_route(args.route, args, "profileopt plan")  # its notes: not with --quiet
         route = made.route
         if track.smoothing is not None and track.smoothing.smoothed:
             tolerance = None  # the points are on the path smoothed within it; what is left is estimated
@@ -123,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
         progress.expect(sum(name is not None for name in (args.plot, args.map)))
         with outputs:
             if args.output is not None:
-                write_profile(profile, args.output)
+                write_profile(profile, args.output, route=route)
             if args.plot is not None:
                 from ..viz.plots import plot_profile
 
@@ -183,15 +181,6 @@ def _notes(args: argparse.Namespace):  # noqa: ANN202  (Callable[[Iterable[str]]
                 print(f"profileopt plan: note: {flags_for_parameters(note)}", file=sys.stderr)
 
     return say
-
-
-def _quiet_stderr(quiet: bool):  # noqa: ANN202  (a context manager)
-    """Drop what is printed on stderr inside the block when ``quiet`` (notes printed by
-    helpers shared with other commands); errors are raised, not printed, so they still tell."""
-    import contextlib
-    import io
-
-    return contextlib.redirect_stderr(io.StringIO()) if quiet else contextlib.nullcontext()
 
 
 def _plain_map(route):  # noqa: ANN001, ANN202

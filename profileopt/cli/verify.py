@@ -7,33 +7,96 @@ window's own prediction (recomputed from the speeds) and the limit; the same per
 Its exit status is a verdict a script or CI can gate on (:data:`VERIFY_EXIT_STATUSES`). It
 prints only numbers that do not depend on the machine, so the same input gives the same
 output bytes on every run.
+
+It trusts nothing the profile says of itself (issue 30). The bounds are the vehicle's and the
+project's defaults (:mod:`profileopt.defaults`), or verify's own ``--max-jerk``,
+``--path-tolerance`` and ``--roughness-window`` (as plan's); where the profile's settings line
+records others, a note says so, and the verdict names every bound checked, with its value and
+source, and every bound not checked. The vehicle is the one the settings line records (an
+absolute path or a bundled name), refused when its bytes are not the ones planned with
+(``vehicle_sha256``), and counted among the inputs no output may replace. Memory grows with
+the route (:func:`profileopt.verification.verify.estimated_peak_bytes`: about 1.4 kB per route
+sample and 0.42 kB per time step of the simulation, on top of 0.16 GB); a route that would
+need more than ``--max-memory`` (1.5 GB by default) is refused before any work.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
+import math
 import sys
 from pathlib import Path
 
-from ..defaults import MODEL_KEYS
+from ..defaults import DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M, MODEL_KEYS
 from ..errors import InputError
 from .paths import vehicle_input
+from .route import PATH_TOLERANCE_HELP
+from .track import number_argument
 
 
-def _vehicle_of(args: argparse.Namespace, profile) -> str:
-    """The vehicle to verify with: the one the profile records, unless --vehicle names it."""
+def _vehicle_files(args: argparse.Namespace, profile) -> list[str]:
+    """Every vehicle file verify may read: --vehicle's, and the one the profile records (a
+    bundled name's file too), whether or not it is then used or refused."""
+    files = [vehicle_input(args.vehicle)]
     recorded = str(profile.settings.get("vehicle", ""))
+    if recorded not in ("", "unnamed"):
+        if vehicle_input(recorded) is not None:
+            files.append(recorded)
+        else:
+            from ..core.vehicle import load_vehicle
+
+            try:
+                files.append(load_vehicle(recorded).name)
+            except InputError:
+                pass  # no such bundled vehicle: refused when it is looked for
+    return files
+
+
+def _vehicle_of(args: argparse.Namespace, profile) -> tuple[str, str | None, list[str]]:
+    """The vehicle to verify with, the file it reads, and notes.
+
+    The one the profile records (an absolute path or a bundled name, with the SHA-256 of the
+    file planned with: another file there is refused), unless --vehicle names it (a file of
+    another name is refused; one of other content is used, with a note).
+    """
+    from ..io.profiles import vehicle_file_sha256
+
+    recorded = str(profile.settings.get("vehicle", ""))
+    digest = profile.settings.get("vehicle_sha256")
+    notes = []
     if recorded in ("", "unnamed"):
         if args.vehicle is None:
             raise InputError(f"{args.profile}: the profile does not record its vehicle; pass --vehicle")
-        return args.vehicle
-    if args.vehicle is not None and Path(args.vehicle).stem != Path(recorded).stem:
-        raise InputError(f"{args.profile}: the profile was planned for vehicle '{recorded}' but --vehicle is "
-                         f"'{args.vehicle}'; pass --vehicle {recorded} (or leave it out), or plan again")
-    args.vehicle = args.vehicle or recorded
-    return args.vehicle
+        return args.vehicle, vehicle_input(args.vehicle), notes
+    if args.vehicle is not None:
+        if Path(args.vehicle).stem != Path(recorded).stem:
+            raise InputError(f"{args.profile}: the profile was planned for vehicle '{recorded}' but --vehicle is "
+                             f"'{args.vehicle}'; pass --vehicle {recorded} (or leave it out), or plan again")
+        found, sha = vehicle_file_sha256(args.vehicle)
+        if digest is not None and sha != digest:
+            notes.append(f"--vehicle {args.vehicle} is not the file the profile was planned with (its content "
+                         f"differs from that of {recorded}): verified with --vehicle {args.vehicle}")
+        return args.vehicle, found, notes
+    if vehicle_input(recorded) is not None and not Path(recorded).exists():
+        raise InputError(f"{args.profile}: the profile was planned with the vehicle file {recorded}, which is not "
+                         "there; pass --vehicle FILE with that vehicle, or plan again")
+    found, sha = vehicle_file_sha256(recorded)
+    if digest is None:
+        notes.append(f"the profile records no SHA-256 of its vehicle (written by an older profileopt): {found} is "
+                     "used as found (a relative path from the current folder); pass --vehicle to choose another")
+    elif sha != digest:
+        raise InputError(f"{args.profile}: the vehicle file {found} is not the one the profile was planned with "
+                         "(its SHA-256 differs from the vehicle_sha256 its settings line records: it was changed "
+                         "or replaced since); plan again, or pass --vehicle FILE to verify against it anyway")
+    args.vehicle = recorded
+    return recorded, found, notes
 
+
+#: The default of ``--max-memory`` (GB): :data:`profileopt.verification.verify.MAX_VERIFY_PEAK_BYTES`,
+#: written here so that ``--help`` imports no numerical package (a test holds them equal).
+MAX_MEMORY_GB = 1.5
 
 #: The exit status of ``profileopt verify``: the plan keeps every limit of the vehicle and no
 #: roughness window's (nor segment's) simulated force exceeds the limit.
@@ -45,8 +108,9 @@ EXIT_BREAKS_LIMITS = 3
 EXIT_OVER_IN_SIMULATION = 4
 #: Every exit status of ``profileopt verify`` and its meaning (also in its ``--help``).
 VERIFY_EXIT_STATUSES = {
-    EXIT_PASSES: "the plan keeps every limit of the vehicle (speed, acceleration, jerk, predicted force) and no "
-                 "roughness window's (nor segment's) simulated force exceeds the force limit",
+    EXIT_PASSES: "the plan keeps every limit checked (the verdict names each, with its value: the vehicle's, or "
+                 "an option of verify's) and no roughness window's (nor segment's) simulated force exceeds the "
+                 "force limit",
     1: "internal error",
     2: "bad input (one line on stderr), e.g. a profile that does not cover its route exactly",
     EXIT_BREAKS_LIMITS: "the profile breaks one of the vehicle's own limits (speed, acceleration, jerk or "
@@ -58,19 +122,21 @@ VERIFY_EXIT_STATUSES = {
 
 def _verdict(check, result=None) -> tuple[int, str]:
     """The exit status and the verdict line (``result`` None: not simulated)."""
+    unchecked = f"; not checked: {', '.join(check.unchecked)}" if check.unchecked else ""
     if check.breaches:
         kinds = ", ".join(dict.fromkeys(b.quantity for b in check.breaches))
-        return EXIT_BREAKS_LIMITS, (f"  verdict: the profile breaks the vehicle's limits ({kinds}); "
-                                    f"exit {EXIT_BREAKS_LIMITS}")
+        return EXIT_BREAKS_LIMITS, (f"  verdict: the profile breaks the vehicle's limits ({kinds}); checked: "
+                                    f"{', '.join(check.checked)}{unchecked}; exit {EXIT_BREAKS_LIMITS}")
     if result is not None and not result.passes:
         win = result.windows
         return EXIT_OVER_IN_SIMULATION, (
-            f"  verdict: the profile keeps the vehicle's limits on paper, but in simulation {win.over_count} of "
-            f"{win.count} roughness windows ({win.window_m:g} m) and {result.over_count} of {result.ratio.size} "
-            f"segments exceed the force limit; exit {EXIT_OVER_IN_SIMULATION}")
-    return EXIT_PASSES, ("  verdict: the profile keeps every limit of the vehicle (speed, acceleration, jerk, "
-                         "predicted force) and no roughness window or segment exceeds the force limit in "
-                         f"simulation; exit {EXIT_PASSES}")
+            f"  verdict: the profile keeps every limit checked on paper ({', '.join(check.checked)}), but in "
+            f"simulation {win.over_count} of {win.count} roughness windows ({win.window_m:g} m) and "
+            f"{result.over_count} of {result.ratio.size} segments exceed the force limit{unchecked}; "
+            f"exit {EXIT_OVER_IN_SIMULATION}")
+    return EXIT_PASSES, (f"  verdict: the profile keeps every limit checked ({', '.join(check.checked)}) and no "
+                         f"roughness window or segment exceeds the force limit in simulation{unchecked}; "
+                         f"exit {EXIT_PASSES}")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -83,27 +149,36 @@ def run(args: argparse.Namespace) -> int:
     )
     from ..physics.forces import get_model
     from ..verification.limit_check import check_limits
-    from ..verification.verify import verify
+    from ..verification.verify import check_memory, estimated_peak_bytes, verify
     from ..viz.plots import plot_verification
 
-    # first, before any work: every output checked (none may be an input, nor both the same
-    # file); then written together, all or none
-    outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot)],
-                        inputs=[args.route, args.profile, vehicle_input(args.vehicle)])
     from .track import TRACK_SUFFIXES
 
+    _check_bounds(args)
     if Path(args.route).suffix.lower() in TRACK_SUFFIXES:
         raise InputError(f"{args.route}: verify drives a route file, not a track: make one with 'profileopt route "
                          f"{args.route} --terrain TERRAIN -o route.csv', plan and verify that")
-    route = read_route(args.route)
+    # the profile first (small beside the route): it names the vehicle file, which is an input
+    # as much as one typed on the command line
     profile = read_profile(args.profile)
-    vehicle = load_vehicle(_vehicle_of(args, profile))
-    check = check_limits(route, profile, vehicle, model=args.model)
+    # then, before any other check or work: every output checked (none may be an input, nor
+    # both the same file); then written together, all or none
+    outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot)],
+                        inputs=[args.route, args.profile, *_vehicle_files(args, profile)])
+    reference, _, vehicle_notes = _vehicle_of(args, profile)
+    route = read_route(args.route)
+    vehicle = load_vehicle(reference)
+    check_memory(route, profile, vehicle, None if math.isinf(args.max_memory) else args.max_memory * 1e9,
+                 fix=f"pass --max-memory GB (about {math.ceil(estimated_peak_bytes(route, profile, vehicle)[0] / 1e8) / 10:g})")
+    check = check_limits(route, profile, vehicle, model=args.model, max_jerk_mps3=args.max_jerk,
+                         path_tolerance_m=args.path_tolerance, roughness_window_m=args.roughness_window)
+    check = dataclasses.replace(check, notes=(*vehicle_notes, *check.notes))
     model = get_model(check.model)
     header = (f"verified {args.profile} on {args.route} with vehicle {args.vehicle}, "
               f"model {model.label} ({model.quantity} force, limit {check.limit_n:g} N)")
     try:
-        result = verify(route, profile, vehicle, model=args.model, check=check, roughness_seed=args.seed)
+        result = verify(route, profile, vehicle, model=args.model, check=check, roughness_seed=args.seed,
+                        max_peak_bytes=None)  # checked above
     except InputError as exc:
         if not check.breaches:
             raise
@@ -154,6 +229,17 @@ def run(args: argparse.Namespace) -> int:
     return status
 
 
+def _check_bounds(args: argparse.Namespace) -> None:
+    """Refuse a bound option that is not a number > 0 (finite, but for --max-jerk inf)."""
+    for flag, value, unit, finite in (("--max-jerk", args.max_jerk, "m/s^3", False),
+                                      ("--max-memory", args.max_memory, "GB", False),
+                                      ("--path-tolerance", args.path_tolerance, "m", True),
+                                      ("--roughness-window", args.roughness_window, "m", True)):
+        if value is not None and not (value > 0 and (math.isfinite(value) or not finite)):
+            also = " ('inf' turns the check off)" if flag == "--max-jerk" else ""
+            raise InputError(f"{flag} {value:g}: must be a number > 0 in {unit}{also}")
+
+
 def _report_unsimulated(args: argparse.Namespace, check, header: str, reason: str) -> int:
     """The verdict of a profile that breaks the limits and cannot be simulated; nothing is written."""
     status, verdict = _verdict(check)
@@ -161,6 +247,7 @@ def _report_unsimulated(args: argparse.Namespace, check, header: str, reason: st
     if args.json:
         print(json.dumps({"route": str(args.route), "vehicle": str(args.vehicle), "model": check.model,
                           "segments": int(check.predicted_n.size), "keeps_limits": False,
+                          "checked": list(check.checked), "not_checked": list(check.unchecked),
                           "breaches": [b.to_dict() for b in check.breaches], "simulated": False,
                           "not_simulated": reason, "notes": list(check.notes), "exit_status": status}, indent=2))
         return status
@@ -183,11 +270,25 @@ def arguments(parser: argparse.ArgumentParser) -> None:
                              "records; a different one is refused)")
     parser.add_argument("--model", default=None, choices=list(MODEL_KEYS),
                         help="force model to check against (default: the model the profile records)")
+    # the bounds are verify's own, never read from the profile's settings line (a note says
+    # where that differs): the vehicle's and the project's defaults unless given here
+    parser.add_argument("--max-jerk", type=number_argument, default=None, metavar="MPS3",
+                        help="jerk bound in m/s^3 to check (default: the vehicle file's; 'inf': not checked)")
+    parser.add_argument("--path-tolerance", type=number_argument, default=DEFAULT_PATH_TOLERANCE_M, metavar="M",
+                        help=PATH_TOLERANCE_HELP + "; as plan's")
+    parser.add_argument("--roughness-window", type=number_argument, default=DEFAULT_ROUGHNESS_WINDOW_M, metavar="M",
+                        help="roughness window in m: the segments' RI and the windows judged (default: "
+                             f"{DEFAULT_ROUGHNESS_WINDOW_M:g}, as plan's)")
     parser.add_argument("-o", "--output", metavar="CSV",
                         help="write one row per segment to this CSV, with the worst roughness window that meets "
                              "it ('-': standard output, the summary then goes to stderr)")
     parser.add_argument("--plot", metavar="PNG", help="write forces along s and simulated vs predicted per window")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    parser.add_argument("--max-memory", type=number_argument, default=MAX_MEMORY_GB, metavar="GB",
+                        help="refuse, before any work, a route whose verification needs more memory than this, in "
+                             "GB ('inf': no bound; default: %(default)g, what planning the largest route needs). "
+                             "It needs about 1.4 kB per route sample and 0.42 kB per time step of the simulation, "
+                             "on top of 0.16 GB: 1 GB for about 550,000 samples (a 10 MB s,z file), 3.5 GB for 40 MB")
     parser.add_argument("--seed", type=_seed, default=0, metavar="N",
                         help="for a route with an assumed roughness (a '# roughness_class' or '# roughness_ri' "
                              "line): the seed of the random ISO 8608 profile added to its elevation for the "

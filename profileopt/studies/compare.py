@@ -258,7 +258,7 @@ def run_model(route: "Route", vehicle: "Vehicle", model: str, *, segment_length_
         return ModelRun(**common, outcome=INFEASIBLE, status=str(exc))
     except PlanningError as exc:
         return ModelRun(**common, outcome=SOLVER_FAILED, status=str(exc))
-    result = verify(route, profile, vehicle, model=force_model.key)
+    result = verify(route, profile, vehicle, model=force_model.key, roughness_window_m=roughness_window_m)
     return ModelRun(
         **common,
         outcome=PLANNED,

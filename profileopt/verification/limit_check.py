@@ -22,7 +22,7 @@ from ..core.kinematics import boundary_jerk_mps3, segment_accel_mps2
 from ..core.path import segment_path
 from ..core.segments import Segments, route_roughness_windows, segments_at
 from ..core.stations import segment_samples
-from ..defaults import DEFAULT_ROUGHNESS_WINDOW_M, LIMIT_RTOL
+from ..defaults import CRAWL_SPEED_MPS, DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M, LIMIT_RTOL
 from ..errors import InputError
 from ..physics.forces import get_model
 from ..physics.motion import STANDARD_GRAVITY_MPS2 as G
@@ -55,8 +55,10 @@ if TYPE_CHECKING:
 __all__ = ["check_limits", "route_as_planned", "LimitCheck", "LimitBreach", "STALE_FORCE_RTOL"]
 
 #: The profile's force_n column counts as stale when it differs from the forces its speeds
-#: give by more than this share of the limit (the file's 17 digits give them back exactly).
-STALE_FORCE_RTOL = 1e-9
+#: give by more than this share of the limit: the file's 9 digits give a force back within
+#: 5e-9 of it, and its 12-digit speeds the force within 1e-11 of it (2 x 5e-12, the force
+#: growing at most as fast as v^2 between resonance peaks); an edited force is far beyond.
+STALE_FORCE_RTOL = 1e-7
 
 
 @dataclasses.dataclass(frozen=True)
@@ -139,8 +141,14 @@ class LimitCheck:
     notes : tuple of str
         Remarks (a stale force column, a force limit in the file that is not the vehicle's).
     windows : RoughnessWindows
-        The route's roughness windows, of the length the profile records (the segments' RI
-        comes from them; :func:`profileopt.verification.window_check.check_windows` judges by them).
+        The route's roughness windows, of the length checked with (``roughness_window_m`` of
+        :func:`check_limits`; the segments' RI comes from them;
+        :func:`profileopt.verification.window_check.check_windows` judges by them).
+    checked : tuple of str
+        The bounds checked, in words with their values and where they come from
+        (``"jerk (the vehicle's 5 m/s^3)"``).
+    unchecked : tuple of str
+        The bounds not checked, and why (``"jerk (--max-jerk inf)"``).
     """
 
     model: str
@@ -150,6 +158,8 @@ class LimitCheck:
     breaches: tuple[LimitBreach, ...]
     notes: tuple[str, ...]
     windows: RoughnessWindows
+    checked: tuple[str, ...] = ()
+    unchecked: tuple[str, ...] = ()
 
 
 def _check_coverage(route: "Route", s: np.ndarray) -> None:
@@ -166,34 +176,50 @@ def _check_coverage(route: "Route", s: np.ndarray) -> None:
             )
 
 
-def _roughness_window_m(profile: "Profile") -> float:
-    """The roughness window the profile records in its settings (else the default), in m."""
-    recorded = profile.settings.get("roughness_window_m")
-    if recorded is None:
-        return DEFAULT_ROUGHNESS_WINDOW_M
+def _recorded(profile: "Profile", key: str) -> tuple[str | None, float]:
+    """A value the profile's settings line records, as text and as a number (NaN when it is
+    not one; text None when it records none)."""
+    text = profile.settings.get(key)
+    if text is None:
+        return None, math.nan
     try:
-        window = float(recorded)
+        return str(text), float(text)
     except (TypeError, ValueError):
-        window = math.nan
-    if not (math.isfinite(window) and window > 0):
-        raise InputError(f"profile: roughness_window_m={recorded} in its settings line is not a number > 0; "
-                         "write the profile with 'profileopt plan -o'")
-    return window
+        return str(text), math.nan
 
 
-def _jerk_bound_mps3(profile: "Profile", vehicle: "Vehicle") -> tuple[float, str]:
-    """The jerk bound the profile records in its settings (else the vehicle's), and its name."""
-    recorded = profile.settings.get("max_jerk_mps3")
-    if recorded is None:
-        return vehicle.max_jerk_mps3, "the vehicle's jerk limit"
-    try:
-        bound = float(recorded)
-    except (TypeError, ValueError):
-        bound = math.nan
-    if not bound > 0:
-        raise InputError(f"profile: max_jerk_mps3={recorded} in its settings line is not a number > 0; write "
-                         "the profile with 'profileopt plan -o'")
-    return bound, "the jerk bound the profile was planned with"
+def _differs(recorded: float, used: float) -> bool:
+    return not (recorded == used or abs(recorded - used) <= 1e-9 * abs(used))
+
+
+def _planned_with_notes(profile: "Profile", *, jerk_mps3: float, jerk_words: str, window_m: float) -> list[str]:
+    """What the profile's settings line records of the jerk bound and the roughness window
+    where it differs from what is checked: reported, never obeyed."""
+    notes = []
+    text, recorded = _recorded(profile, "max_jerk_mps3")
+    if text is not None and _differs(recorded, jerk_mps3):
+        shown = f"{recorded:g} m/s^3" if math.isfinite(recorded) else ("inf" if recorded > 0 else text)
+        notes.append(f"the profile was planned with --max-jerk {shown} (its settings line); verified against "
+                     f"{jerk_words}")
+    text, recorded = _recorded(profile, "roughness_window_m")
+    if text is not None and _differs(recorded, window_m):
+        notes.append(f"the profile was planned with --roughness-window {text} m (its settings line); verified with "
+                     f"roughness windows of {window_m:g} m, and its ri column is not compared with the route's (pass "
+                     f"--roughness-window {text} to verify with its own)")
+    return notes
+
+
+def _path_note(profile: "Profile", geometry) -> str | None:  # noqa: ANN001  (RouteGeometry)
+    """A note when the path tolerance the profile records is not the one checked with."""
+    if not geometry.tolerance_source:  # no x, y: the tolerance plays no part
+        return None
+    text, recorded = _recorded(profile, "path_tolerance_m")
+    if text is None or not _differs(recorded, geometry.tolerance_m):
+        return None
+    how = ("estimated from the route's x, y, as plan does by default" if geometry.tolerance_source == "estimated"
+           else "--path-tolerance")
+    return (f"the profile was planned with a path tolerance of {text} m (its settings line); verified with "
+            f"{geometry.tolerance_m:.3g} m ({how}), which finds the route's curvature")
 
 
 def _first_breach(quantity: str, limit_name: str, values: np.ndarray, limit: np.ndarray, where_m: np.ndarray,
@@ -210,15 +236,6 @@ def _first_breach(quantity: str, limit_name: str, values: np.ndarray, limit: np.
     return LimitBreach(quantity=quantity, limit_name=limit_name, segment=int(segments[k]), s_m=float(where_m[k]),
                        value=float(values[k]), limit=float(limit[k]), unit=unit,
                        count=int(np.count_nonzero(broken)), of=int(values.size), worst_ratio=worst)
-
-
-def _setting_m(profile: "Profile", key: str, default: float | None) -> float | None:
-    """A length the profile records in its settings (m), else ``default``."""
-    try:
-        value = float(profile.settings[key])
-    except (KeyError, TypeError, ValueError):
-        return default
-    return value if math.isfinite(value) and value > 0 else default
 
 
 def route_as_planned(route: "Route", profile: "Profile") -> tuple["Route", str | None]:
@@ -269,6 +286,9 @@ def check_limits(
     vehicle: "Vehicle",
     *,
     model: str | None = None,
+    max_jerk_mps3: float | None = None,
+    path_tolerance_m: float | None = DEFAULT_PATH_TOLERANCE_M,
+    roughness_window_m: float = DEFAULT_ROUGHNESS_WINDOW_M,
 ) -> LimitCheck:
     """Check a profile against the vehicle's own limits, on paper, from its speeds alone.
 
@@ -279,11 +299,13 @@ def check_limits(
     that gives their keys, the lateral and friction caps of turns and the crawl through a
     turn sharper than its ``min_turn_radius_m``, with the path's curvature found as the planner
     finds it (:func:`profileopt.terrain.geometry.route_geometry`: a reversal is a turn of the
-    sharpest radius, never a straight) with the profile's recorded ``path_tolerance_m``, or
-    estimated from the route when the profile records none), the acceleration and
+    sharpest radius, never a straight) with ``path_tolerance_m``, by default estimated from
+    the route as the planner estimates it by default), the acceleration and
     deceleration bounds (on the route's grades, for such a vehicle), the friction circle and
-    the drive power, the jerk bound the profile records in its settings (else the
-    vehicle's), and the model's force limit. The predicted force of each segment is recomputed from the speeds:
+    the drive power, the jerk bound (by default the vehicle's), and the model's force limit.
+    What the profile's settings line records (its jerk bound, path tolerance, roughness
+    window) is never used: where it differs from what is checked, a note says so, so that an
+    edited settings line cannot loosen a limit. The predicted force of each segment is recomputed from the speeds:
     the largest force over every speed between its two boundary speeds, resonance peaks
     included (:func:`profileopt.physics.speeds.max_force_over_segments`). The file's
     ``force_n`` column is not used (a note says so when it differs). A limit counts as kept
@@ -299,6 +321,14 @@ def check_limits(
         The vehicle and its limits.
     model : str, optional
         Force model key; default ``profile.model``.
+    max_jerk_mps3 : float, optional
+        The jerk bound (m/s^3, > 0; ``inf``: not checked); default the vehicle's
+        ``max_jerk_mps3``.
+    path_tolerance_m : float or None, default None (estimate it from the route's x, y)
+        The path tolerance the curvature of turns is found with (m, > 0), as ``plan``'s.
+    roughness_window_m : float, default DEFAULT_ROUGHNESS_WINDOW_M (5 m)
+        The roughness window (m, > 0): the segments' RI and the windows judged. The profile's
+        RI column is compared with the route's only when the profile records this window.
 
     Returns
     -------
@@ -308,8 +338,8 @@ def check_limits(
     ------
     InputError
         The profile does not cover the route exactly, its RI column does not match the
-        route's segments, its recorded jerk bound is not a number > 0, or the model is
-        unknown.
+        route's segments (with the roughness window it records), a bound given is not a
+        number > 0, or the model is unknown.
     """
     key = profile.model if model is None else model
     force_model = get_model(key)
@@ -318,12 +348,21 @@ def check_limits(
     v = np.asarray(profile.speed_mps, dtype=float)
     _check_coverage(route, s)
     starts, stops = segment_samples(route.s_m, s)
-    window_m = _roughness_window_m(profile)
+    jerk_bound = vehicle.max_jerk_mps3 if max_jerk_mps3 is None else float(max_jerk_mps3)
+    for name, value in (("max_jerk_mps3", jerk_bound), ("roughness_window_m", roughness_window_m),
+                        ("path_tolerance_m", path_tolerance_m)):
+        if value is not None and not value > 0:
+            raise InputError(f"{name} = {value!r}: must be a number > 0")
+    jerk_words = (f"the vehicle's {jerk_bound:g} m/s^3" if max_jerk_mps3 is None
+                  else f"--max-jerk {jerk_bound:g} m/s^3")
+    window_m = float(roughness_window_m)
+    window_text, recorded_window = _recorded(profile, "roughness_window_m")
+    same_windows = window_text is None or not _differs(recorded_window, window_m)
     windows = route_roughness_windows(route, vehicle, window_m=window_m)
     segments = segments_at(s, windows, vehicle, starts=starts, stops=stops)
     ri_here = segments.ri
     mismatch = np.flatnonzero(~np.isclose(np.asarray(profile.ri, dtype=float)[:-1], ri_here, rtol=1e-6, atol=1e-9))
-    if mismatch.size:
+    if mismatch.size and same_windows:
         i = mismatch[0]
         raise InputError(
             f"{route.source}: segment {i} ({s[i]:g} to {s[i + 1]:g} m) has RI {ri_here[i]:.4g} on this route "
@@ -332,6 +371,7 @@ def check_limits(
             "it again"
         )
     notes = [planned_with] if planned_with else []
+    notes += _planned_with_notes(profile, jerk_mps3=jerk_bound, jerk_words=jerk_words, window_m=window_m)
     limit = force_model.limit_n(vehicle)
     profile_limit = np.asarray(profile.force_limit_n, dtype=float)[:-1]
     if np.any(np.abs(profile_limit - limit) > 1e-9 * limit):
@@ -340,19 +380,22 @@ def check_limits(
             f"{vehicle.name or 'the vehicle'}'s {force_model.limit_key} = {limit:g} N: was it planned with "
             "another vehicle or model? The vehicle's limit is used"
         )
-    jerk_bound, jerk_name = _jerk_bound_mps3(profile, vehicle)
+    jerk_name = "the vehicle's jerk limit" if max_jerk_mps3 is None else "the jerk bound given (--max-jerk)"
     length = np.diff(s)
     from ..terrain.geometry import (
         route_geometry,  # scipy: only when a profile is checked
     )
 
-    tolerance = _setting_m(profile, "path_tolerance_m", None)  # None: estimated, as the planner does
-    path = segment_path(route, segments, route_geometry(route, tolerance_m=tolerance,
-                                                        grade_scale_m=2.0 * segments.roughness_window_m,
-                                                        min_turn_radius_m=vehicle.min_turn_radius_m))
+    geometry = route_geometry(route, tolerance_m=path_tolerance_m, grade_scale_m=2.0 * segments.roughness_window_m,
+                              min_turn_radius_m=vehicle.min_turn_radius_m)
+    path_note = _path_note(profile, geometry)
+    if path_note:
+        notes.append(path_note)
+    path = segment_path(route, segments, geometry)
     caps = _speed_caps(route, vehicle, segments, path, force_model.key)
     decel_bound, accel_bound = _accel_bounds(vehicle, path)
     bands = speed_bands(ri_here, vehicle, model=force_model.key, ri_min=segments.ri_min)
+    row_data = _row_data(vehicle, path, decel_bound, accel_bound)
     n = s.size - 1
     index = np.arange(n)
     breaches: list[LimitBreach | None] = []
@@ -379,7 +422,7 @@ def check_limits(
         breaches.append(_first_breach("deceleration", "the vehicle's deceleration limit" + words.replace(
             "drive", "braking").replace("a + g", "-(a + g").replace("theta))", "theta)))"), -(accel + lift_lo),
             decel_bound - lift_lo, s[:-1], index, "m/s^2"))
-        for family, data in _row_data(vehicle, path, decel_bound, accel_bound):  # the friction circle, the drive power
+        for family, data in row_data:  # the friction circle, the drive power
             usage = exact_row_values(family, b, length, data).max(axis=0)
             breaches.append(_first_breach(family, ROW_FAMILIES[family].description, usage, np.array(1.0), s[:-1], index, "of the limit"))
         if n >= 2 and math.isfinite(jerk_bound):
@@ -392,15 +435,53 @@ def check_limits(
                                       s[:-1], index, "N"))
         recorded = np.asarray(profile.force_n, dtype=float)[:-1]
         stale = np.flatnonzero(~(np.abs(recorded - predicted) <= STALE_FORCE_RTOL * limit))
-    if stale.size:
+    if stale.size and same_windows:  # other windows: other forces, by design
         i = stale[0]
         notes.append(
             f"the profile's force_n column is stale in {stale.size} of {n} segments (first at s = {s[i]:g} m: "
             f"{recorded[i]:.6g} N recorded, {predicted[i]:.6g} N from its speeds): the predicted forces were "
             "recomputed from the speeds"
         )
+    checked, unchecked = _checked_words(vehicle, caps, [family for family, _ in row_data],
+                                        jerk_bound if n >= 2 else None, jerk_words, force_model, limit, geometry)
     return LimitCheck(model=force_model.key, ri=ri_here, predicted_n=predicted, limit_n=float(limit),
-                      breaches=tuple(b for b in breaches if b is not None), notes=tuple(notes), windows=windows)
+                      breaches=tuple(b for b in breaches if b is not None), notes=tuple(notes), windows=windows,
+                      checked=checked, unchecked=unchecked)
+
+
+#: Short names of the speed caps of :func:`_speed_caps`, by the first words of their names.
+_CAP_WORDS = {"the step limit": "steps (SBEM:TF)", "the route's speed_limit": "the route's speed_limit",
+              "the lateral acceleration limit": "turns (the vehicle's {lateral:g} m/s^2 lateral{path})",
+              "the crawl through": "{crawl:g} m/s through turns sharper than the vehicle's {radius:g} m turning circle",
+              "the friction limit": "friction in turns (the vehicle's friction_coefficient {mu:g})"}
+
+
+def _checked_words(vehicle: "Vehicle", caps: list, families: list[str], jerk_mps3: float | None, jerk_words: str,
+                   force_model, limit_n: float, geometry) -> tuple[tuple[str, ...], tuple[str, ...]]:  # noqa: ANN001
+    """The bounds checked, in words with their values and sources, and those not checked."""
+    how = {"estimated": "estimated from the route", "given": "--path-tolerance"}.get(geometry.tolerance_source)
+    values = {"lateral": lateral_limit_mps2(vehicle), "crawl": CRAWL_SPEED_MPS, "radius": vehicle.min_turn_radius_m,
+              "mu": vehicle.friction_coefficient,
+              "path": f", path tolerance {geometry.tolerance_m:.3g} m {how}" if how else ""}
+    speed = [f"the vehicle's top speed {vehicle.max_speed_mps:g} m/s"]
+    speed += [short.format(**values) for name, cap in caps for start, short in _CAP_WORDS.items()
+              if name.startswith(start) and np.any(cap < vehicle.max_speed_mps)]  # those that cap somewhere
+    checked = [f"speed ({', '.join(speed)})",
+               f"acceleration (the vehicle's {vehicle.max_accel_mps2:g} m/s^2)",
+               f"deceleration (the vehicle's {vehicle.max_decel_mps2:g} m/s^2)"]
+    if "friction" in families:
+        checked.append(f"friction circle (the vehicle's friction_coefficient {vehicle.friction_coefficient:g})")
+    if "power" in families:
+        checked.append(f"drive power (the vehicle's {vehicle.max_power_w:g} W)")
+    unchecked = []
+    if jerk_mps3 is None:
+        unchecked.append("jerk (the profile has no interior boundary)")
+    elif math.isfinite(jerk_mps3):
+        checked.append(f"jerk ({jerk_words})")
+    else:
+        unchecked.append(f"jerk ({jerk_words.replace(' m/s^3', '')})")
+    checked.append(f"predicted force ({force_model.label}, the vehicle's {force_model.limit_key} {limit_n:g} N)")
+    return tuple(checked), tuple(unchecked)
 
 
 def _speed_caps(route: "Route", vehicle: "Vehicle", segments: Segments, path: "SegmentPath",

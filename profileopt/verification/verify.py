@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -29,6 +30,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..core.stations import segment_index
+from ..errors import InputError
+from ..defaults import DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M
 from ..io.atomic import atomic_write
 from ..physics.forces import get_model
 from ..core.route import with_assumed_roughness
@@ -41,7 +44,25 @@ if TYPE_CHECKING:
     from ..core.route import Route
     from ..core.vehicle import Vehicle
 
-__all__ = ["Verification", "verify", "VERIFICATION_COLUMNS", "STANDARD_GRAVITY_MPS2"]
+__all__ = ["Verification", "verify", "VERIFICATION_COLUMNS", "STANDARD_GRAVITY_MPS2", "estimated_peak_bytes",
+           "check_memory", "MAX_VERIFY_PEAK_BYTES", "VERIFY_BASE_BYTES", "VERIFY_BYTES_PER_SAMPLE",
+           "VERIFY_BYTES_PER_STEP"]
+
+#: The memory ``verify`` needs (bytes), measured as the peak resident set of ``profileopt
+#: verify`` on rough ``s,z`` routes of 40,000 to 400,000 samples 5 cm apart (issue 30): a fixed
+#: part (the interpreter and the numerical packages), a part per route sample (the wheel's
+#: path and the simulation's knots, about 4 per sample on rough ground, with their
+#: temporaries: the peak is the simulation's; the roughness windows need about half as much)
+#: and a part per time step of the simulation's uniform grid. A 40 MB route (2.3 million
+#: samples) needs about 3.4 GB.
+VERIFY_BASE_BYTES = 160e6
+VERIFY_BYTES_PER_SAMPLE = 1_400
+VERIFY_BYTES_PER_STEP = 420
+#: The largest peak (bytes) ``verify`` starts by default: the 1.5 GB the documentation promises
+#: for planning the largest route on rough ground (docs/guide/bad-input.md), so that a vehicle
+#: computer with 2 GB that plans a route verifies it, or is told beforehand that it cannot.
+#: About 820,000 samples (a 14 MB ``s,z`` file, 41 km at 5 cm) driven at 10 m/s.
+MAX_VERIFY_PEAK_BYTES = 1.5e9
 
 #: Standard gravity (m/s^2), for the static wheel load m g.
 STANDARD_GRAVITY_MPS2 = 9.80665
@@ -64,7 +85,8 @@ class Verification:
     speed_mps : numpy.ndarray, shape (N+1,)
         The profile's speeds at the boundaries (m/s).
     ri : numpy.ndarray, shape (N,)
-        Each segment's RI (dimensionless), from the profile.
+        Each segment's RI (dimensionless), measured on the route (:attr:`LimitCheck.ri`;
+        the profile's own, which it is compared with, when the windows are the profile's).
     predicted_n : numpy.ndarray, shape (N,)
         The model's largest predicted force over the speeds driven in the segment (N),
         recomputed from the profile's speeds (:func:`check_limits`).
@@ -104,6 +126,9 @@ class Verification:
     breaches : tuple of LimitBreach
         Where the profile breaks the vehicle's own limits on paper (:func:`check_limits`);
         empty when it keeps them all.
+    checked, unchecked : tuple of str
+        The bounds checked on paper and those not checked, in words
+        (:attr:`LimitCheck.checked`, :attr:`LimitCheck.unchecked`).
     """
 
     s_m: np.ndarray
@@ -128,6 +153,8 @@ class Verification:
     timings_s: dict
     notes: tuple[str, ...] = ()
     breaches: tuple[LimitBreach, ...] = ()
+    checked: tuple[str, ...] = ()
+    unchecked: tuple[str, ...] = ()
 
     @property
     def keeps_limits(self) -> bool:
@@ -200,7 +227,8 @@ class Verification:
         Returns
         -------
         dict
-            Route, vehicle, model, the worst segment and counts over the limit, the
+            Route, vehicle, model, the worst segment and counts over the limit, the bounds
+            checked on paper and not (``checked``, ``not_checked``), the
             roughness windows (``windows``: :meth:`WindowCheck.summary`, the count over the
             limit and the worst window), the simulation's step, the notes (and the timings).
         """
@@ -226,6 +254,8 @@ class Verification:
             "steps": self.run.steps,
             "notes": list(self.notes),
             "keeps_limits": self.keeps_limits,
+            "checked": list(self.checked),
+            "not_checked": list(self.unchecked),
             "breaches": [b.to_dict() for b in self.breaches],
         } | ({"timings_s": dict(self.timings_s)} if timings else {})
 
@@ -295,6 +325,64 @@ class Verification:
         return json.dumps(self.summary(timings), indent=2)
 
 
+def estimated_peak_bytes(route: "Route", profile: "Profile", vehicle: "Vehicle") -> tuple[float, int]:
+    """The memory :func:`verify` will need at its peak (bytes), and the simulation's time steps.
+
+    Parameters
+    ----------
+    route : Route
+        The route (its number of samples counts).
+    profile : Profile
+        The speeds (the travel time they give, not the file's ``time_s``, counts).
+    vehicle : Vehicle
+        Its natural frequency sets the simulation's time step.
+
+    Returns
+    -------
+    (float, int)
+        :data:`VERIFY_BASE_BYTES` + :data:`VERIFY_BYTES_PER_SAMPLE` per sample +
+        :data:`VERIFY_BYTES_PER_STEP` per time step, and the steps (0 when the speeds give
+        no finite travel time: the simulation refuses them itself).
+    """
+    from ..physics.simulate import boundary_times_s, choose_time_step_s
+
+    with np.errstate(all="ignore"):
+        total_s = float(boundary_times_s(np.asarray(profile.s_m, dtype=float),
+                                         np.asarray(profile.speed_mps, dtype=float))[-1])
+    steps = int(math.ceil(total_s / choose_time_step_s(vehicle.natural_frequency_radps))) if math.isfinite(
+        total_s) and total_s < 1e12 else 0
+    return VERIFY_BASE_BYTES + VERIFY_BYTES_PER_SAMPLE * route.s_m.size + VERIFY_BYTES_PER_STEP * steps, steps
+
+
+def check_memory(route: "Route", profile: "Profile", vehicle: "Vehicle", max_peak_bytes: float | None,
+                 fix: str = "pass max_peak_bytes") -> None:
+    """Refuse, before any work, a verification whose estimated peak exceeds ``max_peak_bytes``.
+
+    Parameters
+    ----------
+    route, profile, vehicle
+        As for :func:`verify`.
+    max_peak_bytes : float or None
+        The largest peak allowed (bytes); None: no bound.
+    fix : str, optional
+        How to allow more, for the message.
+
+    Raises
+    ------
+    InputError
+        One line: the estimate, the samples and steps it comes from, the bound and the fix.
+    """
+    if max_peak_bytes is None:
+        return
+    peak, steps = estimated_peak_bytes(route, profile, vehicle)
+    if peak > max_peak_bytes:
+        raise InputError(
+            f"{route.source}: verifying it needs about {peak / 1e9:.2g} GB of memory ({route.s_m.size:,} route "
+            f"samples at {VERIFY_BYTES_PER_SAMPLE / 1e3:g} kB, {steps:,} simulation steps at "
+            f"{VERIFY_BYTES_PER_STEP / 1e3:g} kB), more than the {max_peak_bytes / 1e9:g} GB allowed; on a machine "
+            f"with more memory {fix}")
+
+
 def verify(
     route: "Route",
     profile: "Profile",
@@ -304,6 +392,10 @@ def verify(
     detrend: bool = True,
     check: LimitCheck | None = None,
     roughness_seed: int = 0,
+    max_jerk_mps3: float | None = None,
+    path_tolerance_m: float | None = DEFAULT_PATH_TOLERANCE_M,
+    roughness_window_m: float = DEFAULT_ROUGHNESS_WINDOW_M,
+    max_peak_bytes: float | None = MAX_VERIFY_PEAK_BYTES,
 ) -> Verification:
     """Simulate the vehicle driving ``profile`` over ``route`` and compare with the limits.
 
@@ -333,6 +425,13 @@ def verify(
         ISO 8608 profile added to the route's elevation for the simulation
         (:meth:`~profileopt.terrain.assumed.AssumedRoughness.realisation_m`), whose RMS
         window roughness is the assumed one. A note says so. Unused for other routes.
+    max_jerk_mps3, path_tolerance_m, roughness_window_m
+        The bounds checked (:func:`check_limits`): by default the vehicle's jerk limit, the
+        path tolerance estimated from the route and 5 m windows, whatever the profile's
+        settings record (notes say where they differ). Unused when ``check`` is given.
+    max_peak_bytes : float or None, default MAX_VERIFY_PEAK_BYTES (1.5 GB)
+        Refuse, before any work, when :func:`estimated_peak_bytes` exceeds it (None: no
+        bound). Memory grows with the route's samples and the simulation's steps.
 
     Returns
     -------
@@ -344,11 +443,13 @@ def verify(
         The profile does not cover the route exactly, its RI column does not match the
         route's segments (another route, or a vehicle with another ground clearance), a
         segment is never crossed (speed 0 at both of its ends), a speed is too large to
-        simulate, or the model is unknown.
+        simulate, the model is unknown, or it would need more memory than ``max_peak_bytes``.
     """
+    check_memory(route, profile, vehicle, max_peak_bytes)
     t_start = time.perf_counter()
     if check is None:
-        check = check_limits(route, profile, vehicle, model=model)
+        check = check_limits(route, profile, vehicle, model=model, max_jerk_mps3=max_jerk_mps3,
+                             path_tolerance_m=path_tolerance_m, roughness_window_m=roughness_window_m)
     route, _ = route_as_planned(route, profile)  # the roughness it was planned with (check_limits notes it)
     force_model = get_model(check.model)
     s = np.asarray(profile.s_m, dtype=float)
@@ -371,7 +472,7 @@ def verify(
     return Verification(
         s_m=s.copy(),
         speed_mps=np.asarray(profile.speed_mps, dtype=float).copy(),
-        ri=np.asarray(profile.ri, dtype=float)[:-1].copy(),
+        ri=check.ri.copy(),  # the route's (the profile's own when they are compared)
         predicted_n=check.predicted_n.copy(),
         limit_n=limit_n,
         transmitted_peak_n=run.transmitted_peak_n,
@@ -397,4 +498,6 @@ def verify(
         },
         notes=notes,
         breaches=check.breaches,
+        checked=check.checked,
+        unchecked=check.unchecked,
     )

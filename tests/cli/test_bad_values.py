@@ -210,12 +210,3 @@ def test_a_byte_order_mark_is_accepted_in_vehicle_files(tmp_path):
     # before: the vehicle reader decoded plain UTF-8 and refused the file with a TOML error
     (tmp_path / "bom.toml").write_bytes(b"\xef\xbb\xbf" + ATV_TOML.read_bytes())
     assert load_vehicle(tmp_path / "bom.toml") == load_vehicle("atv")
-
-
-def test_make_routes_into_a_missing_folder_is_one_line(tmp_path):
-    # before: a traceback from the first write
-    done = subprocess.run([sys.executable, str(ROUTES / "make_routes.py"), "--out", str(tmp_path / "no" / "dir")],
-                          capture_output=True, text=True, timeout=120)
-    assert done.returncode == 2 and "Traceback" not in done.stderr
-    assert done.stderr.splitlines() == [f"error: --out {tmp_path / 'no' / 'dir'} is not a folder; create it or "
-                                        "choose another"]

@@ -14,9 +14,11 @@ Each test edits a real profile (``profileopt plan`` on a bundled route) as a use
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -156,7 +158,8 @@ def test_a_stale_force_column_is_recomputed_and_noted(profileopt_command, planne
     assert done.returncode == 0, done.stdout + done.stderr
     assert "stale" in done.stdout and "recomputed" in done.stdout
     predicted = table(out)["predicted_force_n"]
-    assert np.allclose(predicted, table(planned["krc"])["force_n"][:-1], rtol=1e-9)
+    # 1e-8: the profile's force_n carries 9 significant digits (issue 30), the table 10
+    assert np.allclose(predicted, table(planned["krc"])["force_n"][:-1], rtol=1e-8)
     # speeds lowered by hand: the prediction follows them (never above the plan's)
     slower = edited(planned["krc"], tmp_path / "slower.csv", speed=lambda v: 0.9 * v)
     done = run(profileopt_command, "verify", KRC_1IN, slower, "-o", out)
@@ -243,3 +246,149 @@ def test_a_reversal_is_crawled_by_plan_and_a_top_speed_one_fails_verify(tmp_path
     out, _ = capsys.readouterr()
     assert "breaks the lateral acceleration limit in turns (0.6325 m/s) first in the segment from s = 5" in out
     assert "min_turn_radius_m (3.25 m)" in out
+
+
+# issue 30: verify must not trust or clobber what the profile names
+
+def bumpy_route(path: Path) -> Path:
+    """A 60 m s,z route with bumps 5 cm apart: planned in about a second."""
+    s = np.arange(0.0, 60.001, 0.05)
+    np.savetxt(path, np.column_stack([s, 0.01 * np.sin(2.0 * s) + 0.004 * np.sin(7.0 * s)]), delimiter=",",
+               header="s,z", comments="", fmt="%.6f")
+    return path
+
+
+@pytest.fixture
+def own_vehicle(tmp_path: Path, monkeypatch) -> dict[str, Path]:
+    """A route, a vehicle file 'my veh.toml' (the atv's bytes) in folder 'a plans', and a
+    profile planned there with --vehicle 'my veh.toml' (a relative name with a space)."""
+    from profileopt import load_vehicle
+    from profileopt.cli import main
+
+    folder = tmp_path / "a plans"
+    folder.mkdir()
+    vehicle = folder / "my veh.toml"
+    vehicle.write_bytes(Path(load_vehicle("atv").name).read_bytes())
+    route = bumpy_route(tmp_path / "route.csv")
+    monkeypatch.chdir(folder)
+    assert main(["plan", str(route), "--vehicle", "my veh.toml", "-o", "p.csv"]) == 0
+    return {"folder": folder, "vehicle": vehicle, "route": route, "profile": folder / "p.csv"}
+
+
+def one_line_error(err: str) -> str:
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    return err
+
+
+def test_an_output_naming_the_vehicle_the_profile_records_is_refused(own_vehicle, capsys) -> None:
+    # Before: 'verify ROUTE PROFILE --plot veh.toml' replaced the vehicle file with a PNG (exit 0)
+    from profileopt.cli import main
+
+    vehicle, before = own_vehicle["vehicle"], own_vehicle["vehicle"].read_bytes()
+    capsys.readouterr()
+    for option in ("--plot", "-o"):
+        for name in ("my veh.toml", str(vehicle), "../a plans/./my veh.toml"):
+            assert main(["verify", str(own_vehicle["route"]), "p.csv", option, name]) == 2
+            _, err = capsys.readouterr()
+            assert "is the input" in one_line_error(err) and "my veh.toml" in err
+    assert vehicle.read_bytes() == before
+
+
+def test_the_vehicle_is_found_from_any_folder_and_a_changed_one_is_refused(own_vehicle, monkeypatch,
+                                                                          capsys) -> None:
+    # Before: the path was recorded relative to the folder plan ran in, with '_' for ' ':
+    # 'my_veh.toml' from wherever verify ran, or nothing
+    from profileopt.cli import main
+
+    route, profile, vehicle = (str(own_vehicle[k]) for k in ("route", "profile", "vehicle"))
+    elsewhere = own_vehicle["folder"].parent / "elsewhere"
+    elsewhere.mkdir()
+    (elsewhere / "my_veh.toml").write_text("not a vehicle")
+    monkeypatch.chdir(elsewhere)
+    capsys.readouterr()
+    assert main(["verify", route, profile]) == 0
+    out, err = capsys.readouterr()
+    assert f"with vehicle {vehicle}," in out and err == ""
+    # the file changed since the plan: refused, naming the file and what to do
+    with open(vehicle, "a") as handle:
+        handle.write("# tuned\n")
+    assert main(["verify", route, profile]) == 2
+    err = one_line_error(capsys.readouterr().err)
+    assert vehicle in err and "not the one the profile was planned with" in err and "plan again" in err
+    # ... unless the user names it: then it is used, with a note
+    assert main(["verify", route, profile, "--vehicle", vehicle]) == 0
+    assert "is not the file the profile was planned with" in capsys.readouterr().out
+    # an old profile (no hash) is verified with the file it names, with a note
+    lines = Path(profile).read_text().splitlines()
+    old = elsewhere / "old.csv"
+    old.write_text("\n".join([re.sub(r" vehicle_sha256=\w+", "", lines[0]), *lines[1:]]) + "\n")
+    assert main(["verify", route, str(old)]) == 0
+    assert "records no SHA-256 of its vehicle" in capsys.readouterr().out
+    # a vehicle file that is gone: one line, what to do
+    os.remove(vehicle)
+    assert main(["verify", route, profile]) == 2
+    assert "which is not there; pass --vehicle" in one_line_error(capsys.readouterr().err)
+
+
+def test_verify_judges_the_jerk_by_the_vehicle_not_the_settings_line(tmp_path, capsys) -> None:
+    # Before: a plan made with --max-jerk inf --smoothing 0 (jerk far above the vehicle's
+    # 5 m/s^3) passed, "keeps every limit of the vehicle (... jerk ...)"
+    from profileopt.cli import main
+
+    route, free = bumpy_route(tmp_path / "route.csv"), tmp_path / "free.csv"
+    assert main(["plan", str(route), "--max-jerk", "inf", "--smoothing", "0", "-o", str(free)]) == 0
+    capsys.readouterr()
+    assert main(["verify", str(route), str(free)]) == 3
+    out = capsys.readouterr().out
+    verdict = verdict_line(out)
+    assert "breaks the vehicle's limits (jerk" in verdict and "jerk (the vehicle's 5 m/s^3)" in verdict
+    assert "breaks the vehicle's jerk limit (5 m/s^3)" in out
+    assert "note: the profile was planned with --max-jerk inf (its settings line); verified against the " \
+           "vehicle's 5 m/s^3" in out
+    # the user's own bound: not checked, and the verdict says so
+    assert main(["verify", str(route), str(free), "--max-jerk", "inf"]) == 0
+    verdict = verdict_line(capsys.readouterr().out)
+    assert "not checked: jerk (--max-jerk inf)" in verdict and "jerk (" not in verdict.split("not checked")[0]
+    # a second settings line is refused, naming the file and the line
+    lines = free.read_text().splitlines()
+    twice = tmp_path / "twice.csv"
+    twice.write_text("\n".join([lines[0], lines[0], *lines[1:]]) + "\n")
+    assert main(["verify", str(route), str(twice)]) == 2
+    assert "twice.csv: line 2: a second settings line" in one_line_error(capsys.readouterr().err)
+    # bounds that are not numbers > 0
+    for option in (["--max-jerk", "0"], ["--path-tolerance", "inf"], ["--roughness-window", "-5"]):
+        assert main(["verify", str(route), str(free), *option]) == 2
+        assert f"{option[0]} " in one_line_error(capsys.readouterr().err)
+
+
+def test_a_route_too_large_for_the_memory_allowed_is_refused_before_any_work(tmp_path, capsys) -> None:
+    # issue 30 item 12: 2.9 GB for a 40 MB route. The estimate, derived here from its
+    # documented parts: 160 MB + 1.4 kB x 1201 samples + 0.42 kB x steps
+    from profileopt import load_vehicle
+    from profileopt.cli import main
+    from profileopt.cli.verify import MAX_MEMORY_GB
+    from profileopt.io import read_profile, read_route
+    from profileopt.physics.simulate import choose_time_step_s
+    from profileopt.verification.verify import MAX_VERIFY_PEAK_BYTES, estimated_peak_bytes
+
+    from profileopt.verification.verify import VERIFY_BASE_BYTES, VERIFY_BYTES_PER_SAMPLE, VERIFY_BYTES_PER_STEP
+
+    assert MAX_MEMORY_GB * 1e9 == MAX_VERIFY_PEAK_BYTES
+    # --help (which imports no numerical package) states the same numbers
+    help_text = " ".join(subprocess.run([sys.executable, "-m", "profileopt", "verify", "--help"], capture_output=True,
+                                        text=True, env=dict(os.environ, **WIDE_TERMINAL)).stdout.split())
+    assert (f"about {VERIFY_BYTES_PER_SAMPLE / 1e3:g} kB per route sample and {VERIFY_BYTES_PER_STEP / 1e3:g} kB per "
+            f"time step of the simulation, on top of {VERIFY_BASE_BYTES / 1e9:g} GB") in help_text
+    assert f"default: {MAX_MEMORY_GB:g}," in help_text
+    route_file, profile_file = bumpy_route(tmp_path / "route.csv"), tmp_path / "p.csv"
+    assert main(["plan", str(route_file), "-o", str(profile_file)]) == 0
+    route, profile, atv = read_route(route_file), read_profile(profile_file), load_vehicle("atv")
+    steps = math.ceil(profile.travel_time_s / choose_time_step_s(atv.natural_frequency_radps))
+    peak, found = estimated_peak_bytes(route, profile, atv)
+    assert found == steps and peak == pytest.approx(160e6 + 1400 * 1201 + 420 * steps)
+    capsys.readouterr()
+    out = tmp_path / "v.csv"
+    assert main(["verify", str(route_file), str(profile_file), "--max-memory", "0.1", "-o", str(out)]) == 2
+    err = one_line_error(capsys.readouterr().err)
+    assert "needs about 0.16 GB of memory (1,201 route samples" in err and "--max-memory" in err
+    assert not out.exists()
