@@ -144,6 +144,9 @@ class PointCloud:
     kept_within_m : float or None
         Only the points within this distance (m) of a track were kept
         (:func:`~profileopt.io.terrain_maps.read_terrain`'s ``track``); None: all of them.
+    ground_density_per_m2 : float or None
+        Ground points (class 2) of the whole file, also those not kept, per m^2 of their
+        bounding box; None: none, or no area, or not counted.
     """
 
     x_m: np.ndarray
@@ -155,6 +158,7 @@ class PointCloud:
     notes: tuple[str, ...] = ()
     file_extent_m: tuple[float, float, float, float] | None = None
     kept_within_m: float | None = None
+    ground_density_per_m2: float | None = None
 
     def extent_m(self) -> tuple[float, float, float, float]:
         """(xmin, xmax, ymin, ymax) (m) of the points in the file (all of them, also where
@@ -385,6 +389,7 @@ def _decode(laspy: Any, path: Path, count: int, stored: int | None, units_m: flo
         columns: tuple[list[np.ndarray], ...] = ([], [], [], [])  # x, y, z, class of each chunk kept
         held = decoded = 0
         low, high = np.full(2, np.inf), np.full(2, -np.inf)
+        ground_low, ground_high, ground_count = np.full(2, np.inf), np.full(2, -np.inf), 0
         try:
             for points in reader.chunk_iterator(_CHUNK_POINTS):
                 x = np.asarray(points.x, dtype=float) * horizontal_m
@@ -394,9 +399,14 @@ def _decode(laspy: Any, path: Path, count: int, stored: int | None, units_m: flo
                     break
                 low = np.minimum(low, [x.min(), y.min()])
                 high = np.maximum(high, [x.max(), y.max()])
+                classes = np.asarray(points.classification, dtype=np.uint8)
+                ground = classes == LAS_GROUND
+                if ground.any():  # the whole file's ground density, whatever is kept
+                    ground_count += int(ground.sum())
+                    ground_low = np.minimum(ground_low, [x[ground].min(), y[ground].min()])
+                    ground_high = np.maximum(ground_high, [x[ground].max(), y[ground].max()])
                 mask = slice(None) if select is None else np.asarray(select(x, y), dtype=bool)
-                part = (x[mask], y[mask], np.asarray(points.z, dtype=float)[mask] * vertical_m,
-                        np.asarray(points.classification, dtype=np.uint8)[mask])
+                part = (x[mask], y[mask], np.asarray(points.z, dtype=float)[mask] * vertical_m, classes[mask])
                 held += part[0].size
                 if held > MAX_CLOUD_POINTS:
                     raise _Bad(f"holds more than {MAX_CLOUD_POINTS:,} points near the track (of {count:,}); thin "
@@ -424,8 +434,10 @@ def _decode(laspy: Any, path: Path, count: int, stored: int | None, units_m: flo
         horizontal_unit_m=horizontal_m, vertical_unit_m=vertical_m, crs=crs_name, units_source=source,
     )
     extent = (float(low[0]), float(high[0]), float(low[1]), float(high[1]))
+    ground_area_m2 = float(np.prod(ground_high - ground_low)) if ground_count else 0.0
     return PointCloud(x_m=x, y_m=y, z_m=z, classification=classes, header=header, crs=crs,
-                      notes=tuple(notes), file_extent_m=extent)
+                      notes=tuple(notes), file_extent_m=extent,
+                      ground_density_per_m2=ground_count / ground_area_m2 if ground_area_m2 > 0 else None)
 
 
 def _join(chunks: list[np.ndarray]) -> np.ndarray:

@@ -319,9 +319,10 @@ def cloud_margin_m(density_per_m2: float | None, spacing_m: float | None = None,
     within ``corridor_m`` across and half a (last, up to 1.5 times longer) step along the
     path, all within ``corridor_m + spacing_m``. A sparser one is
     triangulated over its ground points within :data:`SPARSE_NEIGHBOURHOOD_M` (or 3 point
-    spacings). The margin is the larger of the two where the density (over the cloud's
-    bounding box, which underestimates a strip's) might be sparse, plus 1 m for the track's
-    own smoothing.
+    spacings, judged from a quarter of the density: the ground's share is not known before
+    the cloud is read). The margin is the larger of the two where the density (over the
+    cloud's bounding box, which underestimates a strip's) might be sparse, plus 1 m for the
+    track's own smoothing.
 
     Parameters
     ----------
@@ -341,7 +342,10 @@ def cloud_margin_m(density_per_m2: float | None, spacing_m: float | None = None,
     spacing = MAX_ROUGHNESS_SPACING_M if spacing_m is None else float(spacing_m)
     binned = corridor_m + spacing
     dense = density_per_m2 is not None and _cloud_resolution_m(0.5 * density_per_m2, corridor_m) <= spacing
-    return (binned if dense else max(binned, _sparse_neighbourhood_m(density_per_m2))) + 1.0
+    # a sparse cloud's neighbourhood is judged from its ground's density, unknown before it is
+    # read: a quarter of the whole cloud's is assumed (a larger ground share needs less)
+    sparse = _sparse_neighbourhood_m(None if density_per_m2 is None else 0.25 * density_per_m2)
+    return (binned if dense else max(binned, sparse)) + 1.0
 
 
 def smooth_track_elevations(s_m: np.ndarray, z_m: np.ndarray, *, scale_m: float = GPS_ELEVATION_SCALE_M) -> Any:
@@ -754,7 +758,7 @@ def _sample_cloud(cloud: Any, source: str, s: np.ndarray, x: np.ndarray, y: np.n
         works = cloud_spacing_m(density, corridor_m, float(s[-1]), max_gap_m)
         found += (f"; spacing_m {works:g} measures it" if works is not None else
                   f"; no spacing up to the wheel scale ({MAX_ROUGHNESS_SPACING_M:g} m) measures it ("
-                  f"{MIN_POINTS_PER_BIN:g} per bin need {resolution_m:.2g} m)")
+                  f"{MIN_POINTS_PER_BIN:g} points per bin would need bins {resolution_m:.2g} m long)")
     resolution = "; ".join(([] if dense else [found]) + ([coarse] if coarse else [])) or found
     if not measured and not assumed:  # refused by the caller with this resolution
         return np.full(s.size, np.nan), False, density, resolution, []
@@ -774,7 +778,13 @@ def _sample_cloud(cloud: Any, source: str, s: np.ndarray, x: np.ndarray, y: np.n
 
     # the ground points within a few point spacings (at least 5 m) of the track: enough to
     # surround every sample with triangles
-    spread = _sparse_neighbourhood_m(gz.size / max(np.ptp(gx) * np.ptp(gy), 1e-9))
+    # (the density of the whole file's ground, the same whether or not only the points near
+    # the track were read)
+    whole = getattr(cloud, "ground_density_per_m2", None)
+    spread = _sparse_neighbourhood_m(whole if whole is not None else gz.size / max(np.ptp(gx) * np.ptp(gy), 1e-9))
+    kept = getattr(cloud, "kept_within_m", None)
+    if kept is not None:  # no further than the points read (of a cloud whose ground is a small share)
+        spread = min(spread, kept - 1.0)
     distance, _ = cKDTree(stations).query(np.column_stack([gx, gy]), distance_upper_bound=spread)
     wide = np.flatnonzero(np.isfinite(distance))
     if wide.size < 3:

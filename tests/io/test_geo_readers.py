@@ -629,7 +629,8 @@ def test_a_cloud_is_read_in_chunks_keeping_the_points_near_the_track(tmp_path: P
     # ... and read near the track: exactly the points within the margin of the segment (distance
     # to a straight segment by hand: across it |y - 5100025|, beyond its ends the distance to the end)
     cloud = read_terrain(path, track=track, spacing_m=0.05, corridor_m=0.15)
-    margin = cloud_margin_m(2000 / (50 * 50), 0.05, 0.15)  # the density over the header's bounds
+    low, high = np.asarray(cloud.header.min_xyz), np.asarray(cloud.header.max_xyz)
+    margin = cloud_margin_m(2000 / np.prod((high - low)[:2]), 0.05, 0.15)  # the density over the header's bounds
     assert cloud.kept_within_m == margin
     beyond = np.clip(xyz[:, 0], 400005, 400045)
     distance = np.hypot(xyz[:, 0] - beyond, xyz[:, 1] - 5100025)
