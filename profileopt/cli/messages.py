@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["API_FLAGS", "API_FLAGS_ASSIGNED", "flags_for_parameters"]
+__all__ = ["API_FLAGS", "API_FLAGS_ASSIGNED", "flags_for_parameters", "printable"]
 
 #: The library names its parameters in messages (``segment_length_m = 0 m: must be > 0``);
 #: the command line says its flags instead. Names that are also plain words (model, band)
@@ -37,3 +37,19 @@ def flags_for_parameters(message: str) -> str:
     """
     message = _FLAG_PATTERN.sub(lambda m: API_FLAGS[m.group(1)], message)
     return _ASSIGNED_PATTERN.sub(lambda m: API_FLAGS_ASSIGNED[m.group(1)], message)
+
+
+def printable(text: str) -> str:
+    """A file name as text any writer takes: bytes that are not UTF-8 (kept by Python as
+    lone surrogates, which matplotlib's fonts refuse) shown as U+FFFD.
+
+    Parameters
+    ----------
+    text : str
+        A name from the command line or the file system.
+
+    Returns
+    -------
+    str
+    """
+    return text.encode("utf-8", "surrogateescape").decode("utf-8", "replace")

@@ -85,6 +85,7 @@ def run(args: argparse.Namespace) -> int:
         OutputSet,  # imported when the command runs, not for --help (issue 14)
     )
     from ..io.profiles import write_profile
+    from .messages import printable
     from ..progress import terminal_progress
 
     # first, before any work: every output checked (none may be an input, nor both the same
@@ -109,8 +110,8 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"{args.route}: --map draws a route's x,y (or a track's); this route has only s,z: "
                          "drop --map or give an x,y,z route")
     say(route.notes)
-    route_name = Path(args.route).name
-    vehicle_name = Path(vehicle.name).stem if vehicle.name else None
+    route_name = printable(Path(args.route).name)  # for the pictures' titles
+    vehicle_name = printable(Path(vehicle.name).stem) if vehicle.name else None
     with terminal_progress("profileopt plan", enabled=not args.quiet) as progress:
         profile = plan(
             route, vehicle, segment_length_m=args.segment_length, roughness_window_m=args.roughness_window,
@@ -145,7 +146,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(summary, indent=2), file=out)
     else:
-        print(_human(summary, args), file=out)
+        print(printable(_human(summary, args)), file=out)  # a file name not in UTF-8: U+FFFD
     return 0
 
 

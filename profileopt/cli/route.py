@@ -26,6 +26,7 @@ def arguments(parser: argparse.ArgumentParser) -> None:
                         help="write the route CSV (x_m,y_m,z_m) here ('-': standard output)")
     parser.add_argument("--plot", metavar="PNG", help="draw the track over the terrain and the route's elevation")
     parser.add_argument("--path-tolerance", type=number_argument, default=None, metavar="M", help=PATH_TOLERANCE_HELP)
+    parser.add_argument("-q", "--quiet", action="store_true", help="no notes on stderr (errors are still said)")
     add_track_arguments(parser)
 
 
@@ -38,6 +39,7 @@ def run(args: argparse.Namespace) -> int:
     outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot)], inputs=[args.track, *track_inputs(args)])
     result, track = smoothed_track_route(args.track, args, "profileopt route")
     from ..io.routes import write_route
+    from .messages import printable
 
     name = Path(args.output).name if args.output != STDOUT else "route"
     made = f"profileopt {__version__} route {args.track}" + (f" --terrain {args.terrain}" if args.terrain else "")
@@ -49,10 +51,11 @@ def run(args: argparse.Namespace) -> int:
         if args.plot is not None:
             from ..viz.maps import plot_route_map
 
-            plot_route_map(result, args.plot, title=f"{Path(args.track).name}"
-                           + (f" over {Path(args.terrain).name}" if args.terrain else ""))
+            plot_route_map(result, args.plot, title=printable(f"{Path(args.track).name}"
+                                                              + (f" over {Path(args.terrain).name}" if args.terrain
+                                                                 else "")))
     out = sys.stderr if outputs.uses_stdout else sys.stdout
-    print(_human(result, args), file=out)
+    print(printable(_human(result, args)), file=out)  # a file name not in UTF-8: U+FFFD
     return 0
 
 

@@ -31,6 +31,7 @@ from pathlib import Path
 
 from ..defaults import DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M, MODEL_KEYS
 from ..errors import InputError
+from .messages import printable
 from .paths import vehicle_input
 from .route import PATH_TOLERANCE_HELP
 from .track import number_argument
@@ -225,7 +226,7 @@ def run(args: argparse.Namespace) -> int:
         lines.append("wrote the table to standard output" if args.output == STDOUT else f"wrote {args.output}")
     if args.plot is not None:
         lines.append(f"wrote {args.plot}")
-    print("\n".join(lines), file=out)
+    print(printable("\n".join(lines)), file=out)  # a file name not in UTF-8: U+FFFD
     return status
 
 
@@ -256,7 +257,7 @@ def _report_unsimulated(args: argparse.Namespace, check, header: str, reason: st
     lines += [f"  note: {note}" for note in check.notes]
     if unwritten:
         lines.append(f"not written (there is no simulation to write): {', '.join(unwritten)}")
-    print("\n".join(lines))
+    print(printable("\n".join(lines)))
     return status
 
 

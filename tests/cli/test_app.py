@@ -110,3 +110,22 @@ def test_the_profile_to_a_closed_standard_output_is_refused(short_route: Path) -
     assert done.returncode == 2, done.stderr
     assert done.stderr.splitlines() == ["profileopt plan: error: -o -: standard output is closed; give the path of "
                                         "a file to write"]
+
+
+@pytest.mark.slow
+def test_a_route_name_that_is_not_utf8_is_drawn(short_route: Path, tmp_path: Path,
+                                               capsys: pytest.CaptureFixture) -> None:
+    """A file name with bytes that are not UTF-8 (a lone surrogate to Python, which
+    matplotlib's fonts refuse) is titled with U+FFFD, not an internal error."""
+    name = tmp_path / os.fsdecode(b"r\xff\xfe.csv")
+    name.write_bytes(short_route.read_bytes())
+    picture = tmp_path / "plan.png"
+    assert cli.main(["plan", str(name), "--plot", str(picture), "-q"]) == 0, capsys.readouterr().err
+    assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_printable_replaces_only_what_is_not_utf8() -> None:
+    from profileopt.cli.messages import printable
+
+    assert printable(os.fsdecode(b"r\xff.csv")) == "r\ufffd.csv"
+    assert printable("route é.csv") == "route é.csv"
