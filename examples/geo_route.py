@@ -59,11 +59,11 @@ def main(argv: list[str] | None = None) -> int:
               f"roughness assumed ({made.route.assumed_roughness.label}): {made.resolution}")
         # 3. the plan, and the plan driven in simulation over ground of the assumed roughness
         profile = plan(made.route, vehicle, path_tolerance_m=PATH_TOLERANCE_M)
-        check = verify(made.route, profile, vehicle)
+        check = verify(made.route, profile, vehicle, path_tolerance_m=PATH_TOLERANCE_M)  # as planned
         print(f"plan: {profile.travel_time_s:.2f} s; simulated: {check.windows.over_count} of "
               f"{check.windows.count} roughness windows over the force limit")
         # 4. the map
-        plot_plan_map(profile, made, args.out)
+        plot_plan_map(profile, made, args.out, route=args.track.name, vehicle=args.vehicle)
     except InputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

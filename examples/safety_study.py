@@ -27,6 +27,7 @@ from profileopt.defaults import DEFAULT_REFINE
 from profileopt.io import atomic_write, read_route
 from profileopt.core.route import Route
 from profileopt.studies.safety import SafetyStudy, safety_study
+from profileopt.progress import NO_PROGRESS, Progress, terminal_progress
 from profileopt.terrain.synthetic import iso8608_profile, step
 
 ROUTES = Path(__file__).resolve().parent / "routes"
@@ -96,12 +97,12 @@ def route_set() -> list[Route]:
     return [shifted(route, fraction * SEGMENT_LENGTH_M) for route in base_routes() for fraction in SHIFT_FRACTIONS]
 
 
-def run_study(*, refine: bool = DEFAULT_REFINE) -> SafetyStudy:
+def run_study(*, refine: bool = DEFAULT_REFINE, progress: Progress = NO_PROGRESS) -> SafetyStudy:
     """Plan, simulate and pool (the expensive part: about 2 minutes on 2 cores); ``refine``:
     every plan with refined segments (the default, as ``profileopt plan``), or False for
-    uniform segments (``profileopt plan --no-refine``)."""
+    uniform segments (``profileopt plan --no-refine``); ``progress``: told of each run."""
     return safety_study(route_set(), [load_vehicle(name) for name in VEHICLES],
-                        segment_length_m=SEGMENT_LENGTH_M, refine=refine)
+                        segment_length_m=SEGMENT_LENGTH_M, refine=refine, progress=progress)
 
 
 def report(study: SafetyStudy) -> str:
@@ -175,7 +176,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                              "--no-refine: uniform segments")
     args = parser.parse_args(argv)
     started = time.perf_counter()
-    study = run_study(refine=args.refine)
+    with terminal_progress("safety study") as progress:  # on stderr, when it is a terminal
+        study = run_study(refine=args.refine, progress=progress)
     text = report(study)
     print(text)
     if args.out:

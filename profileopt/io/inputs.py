@@ -23,8 +23,11 @@ as many as fit in the largest route file's memory (``MAX_TABLE_BYTES`` x
 :data:`MEMORY_PER_TABLE_BYTE`, 1 GB): 909,090, 45 km at 0.05 m. Without it a 130-byte track
 spanning 500 km was cut into 10 million samples and ran out of memory after minutes.
 A vehicle file is a dozen lines: 1 MB is generous. A LAS
-point cloud is checked against its own header and read in one piece (memory about the file's
-size); an OpenCRG file is read whole up to :data:`MAX_BINARY_BYTES`.
+or LAZ point cloud is checked against its own header, then decoded in chunks keeping only the
+points near the track (at most 20 million, :data:`profileopt.io.las.MAX_CLOUD_POINTS`); a
+GeoTIFF is read in the window around the track (at most 25 million cells,
+:data:`profileopt.io.terrain_maps.MAX_GRID_CELLS`); an OpenCRG file is
+read whole up to :data:`MAX_BINARY_BYTES`.
 """
 
 from __future__ import annotations

@@ -898,7 +898,8 @@ class RouteGeometry:
     def settings(self) -> dict[str, object]:
         """What a profile's settings record of the path: ``path_tolerance_m``, and for a route
         with x, y where it came from (``path_tolerance_source``) and the noise estimated
-        (``path_noise_m``), so that ``verify`` finds the same curvature.
+        (``path_noise_m``): a record for the reader (``verify`` estimates the tolerance
+        again from the route and notes a recorded one that differs).
 
         Returns
         -------
