@@ -234,7 +234,7 @@ def test_cli_plan_end_to_end(check_profile, tmp_path):
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     profile = read_profile(out)
     route = read_route(ROUTES / "washboard.csv")
-    check_profile(profile, route, load_vehicle("atv-resonant"))
+    check_profile(profile, route, load_vehicle("atv-resonant"), written=True)
     done = run_cli("plan", str(ROUTES / "curb.csv"), "--json", "--max-jerk", "inf", "--smoothing", "0")
     assert done.returncode == 0, done.stderr
     summary = json.loads(done.stdout)

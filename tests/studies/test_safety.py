@@ -196,7 +196,7 @@ def test_exceedances_on_the_curb_and_the_kerbs_are_at_the_edges(example, study: 
 
 @pytest.mark.slow
 def test_example_prints_and_writes_the_same_markdown(example, study, tmp_path, monkeypatch, capsys) -> None:
-    monkeypatch.setattr(example, "run_study", lambda *, refine=False: study)  # the study itself ran above
+    monkeypatch.setattr(example, "run_study", lambda *, refine=False, progress=None: study)  # the study itself ran above
     out = tmp_path / "comparison.md"
     assert example.main(["--out", str(out)]) == 0
     printed = capsys.readouterr().out
