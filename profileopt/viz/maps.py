@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .plots import envelope_trace, save_figure
+from .plots import envelope_trace, plan_title, save_figure
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -230,12 +230,7 @@ def plan_map_figure(profile: "Profile", result: "TrackRoute", *, title: str | No
     # below the map: "best" cannot see the route (a LineCollection) and covered its end
     fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", ncols=3, fontsize="small")
     if title is None:
-        from ..physics.forces import get_model
-
-        vehicle = vehicle or (Path(str(profile.settings.get("vehicle", ""))).stem if profile.settings else "")
-        where = f"{route}: " if route else ""
-        who = f" for {vehicle}" if vehicle else ""
-        title = (f"{where}{get_model(profile.model).label} plan{who}, planned speed along the route: "
+        title = (f"{plan_title(profile, route=route, vehicle=vehicle)}, planned speed along the route: "
                  f"{profile.distance_m:.0f} m in {profile.travel_time_s:.0f} s")
     fig.suptitle(title)
     return fig

@@ -160,11 +160,8 @@ def profile_figure(profile: "Profile", *, title: str | None = None, route: str |
     ax_v.grid(True, alpha=0.3)
     fig.legend(*ax_v.get_legend_handles_labels(), loc="outside lower center", ncols=2, fontsize="small")
     if title is None:
-        vehicle = vehicle or (Path(str(profile.settings.get("vehicle", ""))).stem if profile.settings else "")
-        where = f"{route}: " if route else ""
-        who = f" for {vehicle}" if vehicle else ""
-        title = (f"{where}{label} plan{who}, {profile.distance_m:.0f} m in {profile.travel_time_s:.1f} s "
-                 f"(status {profile.status})")
+        title = (f"{plan_title(profile, route=route, vehicle=vehicle)}, {profile.distance_m:.0f} m in "
+                 f"{profile.travel_time_s:.1f} s (status {profile.status})")
     ax_v.set_title(title)
     ax_ri.stairs(drawn.segments(profile.ri[:-1], "max"), drawn.edges, color="tab:green", fill=True, alpha=0.5)
     ax_ri.set_ylabel("RI (-) of the\nroughest window met" + ("\n(highest per bin)" if drawn.overview else ""))
@@ -235,6 +232,26 @@ def _binding_panel(ax: object, s: np.ndarray, binding: np.ndarray) -> None:
     ax.invert_yaxis()
     ax.set_ylabel("what holds\nthe speed")
     ax.grid(True, axis="x", alpha=0.3)
+
+
+def plan_title(profile: "Profile", *, route: str | None = None, vehicle: str | None = None) -> str:
+    """The start of a plan's title: ``"trail.csv: SBEM:TF plan for atv"``.
+
+    Parameters
+    ----------
+    profile : Profile
+        The plan (its model, and its recorded vehicle when ``vehicle`` is not given).
+    route, vehicle : str, optional
+        The route's file name and the vehicle's name, as the user knows them.
+
+    Returns
+    -------
+    str
+    """
+    vehicle = vehicle or (Path(str(profile.settings.get("vehicle", ""))).stem if profile.settings else "")
+    where = f"{route}: " if route else ""
+    who = f" for {vehicle}" if vehicle else ""
+    return f"{where}{get_model(profile.model).label} plan{who}"
 
 
 def save_figure(fig: "Figure", path: str | Path, dpi: int = 110) -> None:
