@@ -37,6 +37,13 @@ on the clone's path or the terminal's width: children that print help get ``COLU
 
 from __future__ import annotations
 
+import os
+
+# CasADi's MUMPS runs on OpenBLAS, whose extra threads spin on the other core for no gain on
+# these banded systems; the command line sets one thread (profileopt.cli.app.main), and so do
+# the tests, whose two workers already use both cores (before CasADi is first loaded)
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 import math
 import re
 import sys
