@@ -459,7 +459,7 @@ _CAP_WORDS = {"the step limit": "steps (SBEM:TF)", "the route's speed_limit": "t
 def _checked_words(vehicle: "Vehicle", caps: list, families: list[str], jerk_mps3: float | None, jerk_words: str,
                    force_model, limit_n: float, geometry) -> tuple[tuple[str, ...], tuple[str, ...]]:  # noqa: ANN001
     """The bounds checked, in words with their values and sources, and those not checked."""
-    how = {"estimated": "estimated from the route", "given": "--path-tolerance"}.get(geometry.tolerance_source)
+    how = {"estimated": "estimated from the route", "given": "given (--path-tolerance)"}.get(geometry.tolerance_source)
     values = {"lateral": lateral_limit_mps2(vehicle), "crawl": CRAWL_SPEED_MPS, "radius": vehicle.min_turn_radius_m,
               "mu": vehicle.friction_coefficient,
               "path": f", path tolerance {geometry.tolerance_m:.3g} m {how}" if how else ""}
