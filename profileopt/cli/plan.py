@@ -80,6 +80,35 @@ def arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    summary, uses_stdout = execute(args)
+    out = sys.stderr if uses_stdout else sys.stdout  # standard output holds the profile
+    if args.json:
+        print(json.dumps(summary, indent=2), file=out)
+    else:
+        from .messages import printable
+
+        print(printable(_human(summary, args)), file=out)  # a file name not in UTF-8: U+FFFD
+    return 0
+
+
+def execute(args: argparse.Namespace) -> tuple[dict, bool]:
+    """Plan as ``profileopt plan`` does and write its outputs, printing only notes (none with
+    ``--quiet``): the work of :func:`run` without the summary (``profileopt batch`` runs it
+    for each route).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``profileopt plan``'s arguments.
+
+    Returns
+    -------
+    summary : dict
+        :meth:`profileopt.Profile.summary` with the route and the vehicle first (and the
+        track's smoothing, for a track).
+    uses_stdout : bool
+        Whether an output went to standard output (``-o -``).
+    """
     from ..core.vehicle import load_vehicle
     from ..io.atomic import (
         OutputSet,  # imported when the command runs, not for --help (issue 14)
@@ -142,12 +171,7 @@ def run(args: argparse.Namespace) -> int:
         summary["track"] = {"smoothed": smoothing.smoothed, "tolerance_m": smoothing.tolerance_m,
                             "source": smoothing.tolerance_source, "noise_m": smoothing.noise.noise_m,
                             "points": smoothing.noise.points, "moved_max_m": smoothing.moved_max_m}
-    out = sys.stderr if outputs.uses_stdout else sys.stdout  # standard output holds the profile
-    if args.json:
-        print(json.dumps(summary, indent=2), file=out)
-    else:
-        print(printable(_human(summary, args)), file=out)  # a file name not in UTF-8: U+FFFD
-    return 0
+    return summary, outputs.uses_stdout
 
 
 def _route_file(args: argparse.Namespace):  # noqa: ANN202  (Route)

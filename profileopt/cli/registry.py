@@ -20,6 +20,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
                 "write the paper's Figs. 1, 5 and 6 (PNG and CSV of the curves) into a folder"),
     "plan": ("profileopt.cli.plan",
              "plan the fastest speed profile along a route that keeps the terrain forces within limits"),
+    "batch": ("profileopt.cli.batch",
+              "plan many routes at once (a manifest or a list of route files), on a local or remote Dask cluster"),
     "route": ("profileopt.cli.route",
               "sample the ground under the wheels along a GPS track over a terrain map into a route CSV"),
     "export-c": ("profileopt.cli.export_c", "write C source, header and README for the force limits of a vehicle"),

@@ -1,0 +1,408 @@
+"""Many routes at once: ``profileopt batch`` and :func:`plan_many`.
+
+A batch is a list of :class:`BatchRow` (from a manifest, :func:`read_manifest`): each row is
+one ``profileopt plan`` run, its route and its options (the plan command's long options
+without the dashes). Each route is planned exactly as ``profileopt plan ROUTE -o ID.csv
+OPTIONS`` plans it (the same code, :func:`profileopt.cli.plan.execute`), so the profiles
+are the same bytes. The rows run on Dask's distributed scheduler: a local cluster of worker
+processes (one thread each) by default, or any cluster given by its scheduler's address or
+a :class:`dask.distributed.Client`; ``workers=1`` without a scheduler plans one route
+after another in this process, without Dask.
+
+What a batch writes, into its output folder:
+
+- ``ID.csv`` for each row planned (written atomically, as ``plan -o`` writes);
+- ``summary.csv``, one row per manifest row: :data:`SUMMARY_COLUMNS` (``status`` is ``ok``
+  or ``failed``, ``error`` the one-line error of a row that failed), rewritten atomically
+  after every route, so a batch stopped at any point (a crash, SIGTERM, Ctrl-C) leaves a
+  summary of what was done.
+
+A row that fails does not stop the others. Run again, a batch plans only the rows whose
+profile is missing, or failed, or whose inputs changed: ``input_sha256`` hashes the
+profileopt version, the row's options and the bytes of every file it reads (route,
+terrain, vehicle file).
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import hashlib
+import io
+import json
+import math
+import os
+import re
+from pathlib import Path
+from typing import Any, Iterable, Sequence
+
+from .errors import InputError
+from .progress import NO_PROGRESS, Progress
+
+__all__ = ["BatchRow", "read_manifest", "plan_many", "SUMMARY_COLUMNS", "SUMMARY_FILE", "MISSING_DASK"]
+
+#: The summary's file name in the output folder.
+SUMMARY_FILE = "summary.csv"
+#: The summary's columns, in order.
+SUMMARY_COLUMNS = ("id", "status", "travel_time_s", "distance_m", "mean_speed_mps", "segments", "force_ratio",
+                   "binding", "notes", "error", "route", "profile", "input_sha256")
+#: What to install for more than one worker.
+MISSING_DASK = "planning on several workers needs Dask: pip install 'profileopt[batch]' (or give --workers 1)"
+#: The manifest columns that name files, read relative to the manifest's folder.
+_FILE_COLUMNS = ("route", "terrain", "vehicle")
+#: Options a batch sets itself, or that write files it does not collect.
+_NOT_IN_A_ROW = {"output", "plot", "map", "json", "quiet", "help"}
+_ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,99}")
+
+
+@dataclasses.dataclass(frozen=True)
+class BatchRow:
+    """One route of a batch.
+
+    Attributes
+    ----------
+    id : str
+        The row's name: its profile is ``ID.csv`` (letters, digits, ``.``, ``_``, ``-``).
+    route : str
+        The route file or track (as ``profileopt plan`` takes it).
+    options : tuple of (str, str)
+        ``profileopt plan``'s long options without the dashes and their values as text
+        (``("segment_length", "2")``, ``("vehicle", "atv-resonant")``); a switch's value
+        is ``"true"`` or ``"false"`` (``refine``, ``no_refine``).
+    """
+
+    id: str
+    route: str
+    options: tuple[tuple[str, str], ...] = ()
+
+    def argv(self, output: str | os.PathLike) -> list[str]:
+        """The ``profileopt plan`` arguments of this row, writing the profile to ``output``.
+
+        Parameters
+        ----------
+        output : str or os.PathLike
+            The profile CSV to write (``-o``).
+
+        Returns
+        -------
+        list of str
+            The route, ``-o OUTPUT --quiet``, then each option as ``--name=value`` (a
+            switch as ``--name`` or ``--no-name``).
+        """
+        argv = [self.route, "-o", os.fspath(output), "--quiet"]
+        for name, value in self.options:
+            flag = "--" + name.replace("_", "-")
+            if value.lower() in ("true", "yes"):
+                argv.append(flag)
+            elif value.lower() in ("false", "no"):
+                argv.append("--no-" + name.replace("_", "-"))
+            else:
+                argv.append(f"{flag}={value}")
+        return argv
+
+
+def read_manifest(path: str | os.PathLike) -> list[BatchRow]:
+    """Read a batch manifest: CSV (a header, one row per route) or JSON (a list of objects).
+
+    Columns: ``id`` and ``route``, then optionally ``terrain``, ``vehicle``, ``model`` and
+    any long option of ``profileopt plan`` without its dashes (``segment_length``,
+    ``roughness_class``, ``v0``, ``refine`` = true/false, ...); an empty cell leaves the
+    option at its default. Relative paths (``route``, ``terrain``, a ``vehicle`` that is a
+    file) are relative to the manifest's folder.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The manifest (``.csv`` or ``.json``).
+
+    Returns
+    -------
+    list of BatchRow
+
+    Raises
+    ------
+    InputError
+        The file cannot be read; a column that is no option of ``plan`` (named, with the
+        nearest); a missing or repeated ``id``, or one that is no file name; a missing
+        ``route``.
+    """
+    from .io.table import read_text
+
+    path = Path(path)
+    text = read_text(path, "manifest", line_ends=path.suffix.lower() != ".json")
+    if path.suffix.lower() == ".json":
+        try:
+            records = json.loads(text)
+        except (ValueError, RecursionError) as exc:
+            raise InputError(f"{path}: not a JSON manifest ({str(exc)[:80]}); give a list of objects, one per "
+                             'route, e.g. [{"id": "a", "route": "a.csv"}]') from None
+        if not isinstance(records, list) or not all(isinstance(r, dict) for r in records):
+            raise InputError(f"{path}: a JSON manifest is a list of objects, one per route, e.g. "
+                             '[{"id": "a", "route": "a.csv"}]')
+        rows = [(f"item {k + 1}", {str(key): "" if value is None else _text(value) for key, value in r.items()})
+                for k, r in enumerate(records)]
+    else:
+        reader = csv.DictReader(io.StringIO(text))
+        if reader.fieldnames is None:
+            raise InputError(f"{path}: the manifest is empty; give a header (id,route,...) and one row per route")
+        rows = []
+        for k, record in enumerate(reader):
+            if None in record:
+                raise InputError(f"{path}: line {reader.line_num}: more cells than the header has columns")
+            rows.append((f"line {reader.line_num}", {key.strip(): (value or "").strip()
+                                                      for key, value in record.items()}))
+    options = _plan_options()
+    out: list[BatchRow] = []
+    seen: dict[str, str] = {}
+    for where, record in rows:
+        for key in record:
+            if key not in ("id", "route") and key not in options:
+                import difflib
+
+                near = difflib.get_close_matches(key, [*options, "id", "route"], n=1)
+                hint = f"; did you mean '{near[0]}'?" if near else ""
+                raise InputError(f"{path}: {where}: column '{key}' is no option of profileopt plan (its long "
+                                 f"options without the dashes, e.g. segment_length){hint}")
+        ident, route = record.get("id", ""), record.get("route", "")
+        if not _ID.fullmatch(ident) or ident.lower() in ("summary",):
+            raise InputError(f"{path}: {where}: id '{ident}' must be a file name of letters, digits, '.', '_' and "
+                             "'-' (not 'summary'), starting with a letter or digit")
+        if ident in seen:
+            raise InputError(f"{path}: {where}: id '{ident}' is also the id of {seen[ident]}; give each row its own")
+        seen[ident] = where
+        if not route:
+            raise InputError(f"{path}: {where}: no route; give the route file in the column 'route'")
+        pairs = []
+        for key, value in record.items():
+            if key in ("id", "route") or value == "":
+                continue
+            if key in _FILE_COLUMNS and not (key == "vehicle" and _bundled_name(value)):
+                value = str(path.parent / value) if not os.path.isabs(value) else value
+            pairs.append((key, value))
+        out.append(BatchRow(ident, route if os.path.isabs(route) else str(path.parent / route), tuple(pairs)))
+    if not out:
+        raise InputError(f"{path}: the manifest has no rows; give one row per route")
+    return out
+
+
+def plan_many(rows: Sequence[BatchRow], out_dir: str | os.PathLike, *, workers: int | None = None,
+              scheduler: str | None = None, client: Any = None, progress: Progress = NO_PROGRESS
+              ) -> list[dict[str, Any]]:
+    """Plan every row, each as ``profileopt plan`` would, into ``out_dir``.
+
+    Parameters
+    ----------
+    rows : sequence of BatchRow
+        The routes (:func:`read_manifest`).
+    out_dir : str or os.PathLike
+        The output folder (created if missing): ``ID.csv`` per row and ``summary.csv``.
+    workers : int, optional
+        Worker processes of the local cluster (default: the machine's cores). ``1`` without
+        ``scheduler`` or ``client``: one route after another in this process, without Dask.
+    scheduler : str, optional
+        The address of a running Dask scheduler (``tcp://HOST:PORT``) to plan on.
+    client : dask.distributed.Client, optional
+        A client of a running cluster to plan on (instead of ``scheduler``).
+    progress : Progress, optional
+        Told of each route done (:mod:`profileopt.progress`).
+
+    Returns
+    -------
+    list of dict
+        The summary's rows (:data:`SUMMARY_COLUMNS`), in the order of ``rows``; the same as
+        ``summary.csv``.
+
+    Raises
+    ------
+    InputError
+        The output folder cannot be made, Dask is missing for several workers
+        (:data:`MISSING_DASK`), or ``workers`` is not a whole number >= 1.
+    """
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"{out}: exists and is not a folder; give the batch's output folder")
+    out.mkdir(parents=True, exist_ok=True)
+    if workers is not None and not (isinstance(workers, int) and workers >= 1):
+        raise InputError(f"workers = {workers!r} must be a whole number >= 1")
+    earlier = _read_summary(out / SUMMARY_FILE)
+    done: dict[str, dict[str, Any]] = {}
+    todo: list[tuple[BatchRow, str]] = []
+    for row in rows:
+        digest = _input_sha256(row)
+        before = earlier.get(row.id)
+        if (before is not None and before.get("status") == "ok" and before.get("input_sha256") == digest
+                and (out / f"{row.id}.csv").is_file()):
+            done[row.id] = before  # planned before with the same inputs and options: kept
+        else:
+            todo.append((row, digest))
+    progress.expect(len(todo))
+
+    def finished(row: BatchRow, digest: str, result: dict[str, Any]) -> None:
+        done[row.id] = {"id": row.id, **result, "route": row.route,
+                        "profile": f"{row.id}.csv" if result["status"] == "ok" else "", "input_sha256": digest}
+        progress.step(f"{row.id}: {done[row.id]['status']}")
+        _write_summary(out / SUMMARY_FILE, [done[r.id] for r in rows if r.id in done])
+
+    if todo and workers == 1 and scheduler is None and client is None:
+        for row, digest in todo:
+            finished(row, digest, plan_row(row.argv(out / f"{row.id}.csv")))
+    elif todo:
+        try:
+            from dask.distributed import Client, LocalCluster, as_completed
+        except ImportError:
+            raise InputError(MISSING_DASK) from None
+        owned = []
+        try:
+            if client is None:
+                if scheduler is not None:
+                    client = Client(scheduler, timeout="10s")
+                else:
+                    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # the workers inherit it
+                    cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
+                                           processes=True, dashboard_address=None)
+                    owned.append(cluster)
+                    client = Client(cluster)
+                owned.insert(0, client)
+            futures = {client.submit(plan_row, row.argv(out / f"{row.id}.csv"), key=f"profileopt-plan-{row.id}-"
+                                     f"{digest[:12]}", pure=False): (row, digest) for row, digest in todo}
+            for future in as_completed(futures):
+                row, digest = futures[future]
+                try:
+                    result = future.result()
+                except Exception as exc:  # the worker died (out of memory, killed): this row only
+                    result = _failed(f"the worker planning it stopped ({type(exc).__name__}: {exc})")
+                finished(row, digest, result)
+        except OSError as exc:  # no scheduler at that address
+            raise InputError(f"cannot reach the Dask scheduler {scheduler} ({exc}); start one ('dask scheduler') "
+                             "or leave --scheduler out for a local cluster") from None
+        finally:
+            for thing in owned:
+                thing.close()
+    return [done[row.id] for row in rows]
+
+
+def plan_row(argv: Sequence[str]) -> dict[str, Any]:
+    """Plan one route as ``profileopt plan ARGV`` does; the summary row of its outcome.
+
+    Parameters
+    ----------
+    argv : sequence of str
+        ``profileopt plan``'s arguments (:meth:`BatchRow.argv`).
+
+    Returns
+    -------
+    dict
+        ``status`` ``"ok"`` with the travel time, distance, mean speed, segments, force
+        ratio, binding shares and notes; or ``"failed"`` with ``error``, one line.
+    """
+    from .cli import plan as command
+    from .cli.messages import flags_for_parameters
+    from .errors import PlanningError
+
+    parser = _plan_parser()
+    try:
+        args = parser.parse_args(list(argv))
+    except _ArgumentError as exc:
+        return _failed(str(exc))
+    try:
+        summary, _ = command.execute(args)
+    except InputError as exc:  # bad input, or infeasible: the one line `plan` says
+        return _failed(flags_for_parameters(str(exc)))
+    except PlanningError as exc:
+        return _failed(f"the planner stopped: {exc}")
+    force = summary["margins"]["force"]["ratio"]
+    return {"status": "ok", "travel_time_s": summary["travel_time_s"], "distance_m": summary["distance_m"],
+            "mean_speed_mps": summary["mean_speed_mps"], "segments": summary["segments"],
+            "force_ratio": force, "binding": json.dumps(summary["binding"], separators=(",", ":")),
+            "notes": " | ".join(summary["notes"]), "error": ""}
+
+
+def _failed(error: str) -> dict[str, Any]:
+    return {"status": "failed", "travel_time_s": None, "distance_m": None, "mean_speed_mps": None,
+            "segments": None, "force_ratio": None, "binding": "", "notes": "", "error": error}
+
+
+class _ArgumentError(Exception):
+    """A row's option argparse refuses (its message, instead of exiting)."""
+
+
+def _plan_parser():  # noqa: ANN202  (argparse.ArgumentParser)
+    import argparse
+
+    from .cli import plan as command
+
+    class Parser(argparse.ArgumentParser):
+        def error(self, message: str):  # noqa: ANN202
+            raise _ArgumentError(f"profileopt plan: {message}")
+
+    parser = Parser(prog="profileopt plan", add_help=False)
+    command.arguments(parser)
+    return parser
+
+
+def _plan_options() -> set[str]:
+    """``profileopt plan``'s long options without the dashes, as manifest columns (those a
+    batch sets itself left out)."""
+    names = set()
+    for action in _plan_parser()._actions:
+        for option in action.option_strings:
+            if option.startswith("--"):
+                names.add(option[2:].replace("-", "_"))
+    return names - _NOT_IN_A_ROW
+
+
+def _bundled_name(value: str) -> bool:
+    from .cli.paths import vehicle_input
+
+    return vehicle_input(value) is None
+
+
+def _text(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float) and math.isfinite(value):
+        return repr(value)
+    return str(value)
+
+
+def _input_sha256(row: BatchRow) -> str:
+    """What a row's profile depends on: the version, its options, the bytes of its files."""
+    from . import __version__
+
+    digest = hashlib.sha256(f"profileopt {__version__}\n{row.id}\n{row.route}\n".encode())
+    digest.update(json.dumps(row.options).encode())
+    for name in (row.route, *(value for key, value in row.options if key in _FILE_COLUMNS)):
+        if os.path.isfile(name):
+            with open(name, "rb") as handle:
+                for block in iter(lambda: handle.read(1 << 20), b""):
+                    digest.update(block)
+    return digest.hexdigest()
+
+
+def _read_summary(path: Path) -> dict[str, dict[str, Any]]:
+    if not path.is_file():
+        return {}
+    try:
+        with open(path, newline="", encoding="utf-8") as handle:
+            return {row["id"]: _typed(row) for row in csv.DictReader(handle) if row.get("id")}
+    except (OSError, UnicodeDecodeError, csv.Error, KeyError, ValueError):
+        return {}  # unreadable: everything is planned again
+
+
+def _typed(row: dict[str, str]) -> dict[str, Any]:
+    """A summary row read back, its numbers as numbers (as :func:`plan_row` gives them)."""
+    out: dict[str, Any] = dict(row)
+    for key in ("travel_time_s", "distance_m", "mean_speed_mps", "force_ratio"):
+        out[key] = float(row[key]) if row.get(key) else None
+    out["segments"] = int(row["segments"]) if row.get("segments") else None
+    return out
+
+
+def _write_summary(path: Path, rows: Iterable[dict[str, Any]]) -> None:
+    from .io.atomic import atomic_write
+
+    with atomic_write(path) as handle:
+        writer = csv.DictWriter(handle, fieldnames=SUMMARY_COLUMNS, lineterminator="\n")
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({key: "" if row.get(key) is None else row.get(key) for key in SUMMARY_COLUMNS})

@@ -1,0 +1,240 @@
+"""profileopt.batch and ``profileopt batch``: many routes, each planned as ``profileopt plan``
+plans it (issue 32).
+
+The reference for every profile is ``profileopt plan`` itself: a batch's ``ID.csv`` must be
+the same bytes as the plan command's ``-o`` of that route with the row's options. Broken
+rows fail alone, with the one line ``plan`` would say; a batch run again plans only what is
+missing, failed or changed; a batch stopped by SIGTERM resumes where it stopped.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from profileopt import cli
+from profileopt.batch import BatchRow, plan_many, read_manifest
+from profileopt.errors import InputError
+
+from conftest import PROFILEOPT, ROUTES
+
+
+def short_route(folder: Path, name: str, length_m: float, source: Path = ROUTES / "curb.csv") -> Path:
+    """The first ``length_m`` of a bundled route (a plan in a fraction of a second)."""
+    lines = source.read_text().splitlines()
+    keep = [line for line in lines if not line[:1].isdigit() or float(line.split(",")[0]) <= length_m]
+    path = folder / name
+    path.write_text("\n".join(keep) + "\n")
+    return path
+
+
+@pytest.fixture
+def folder(tmp_path: Path) -> Path:
+    short_route(tmp_path, "kerb.csv", 120.0)  # the curb's step at 102.5 m
+    short_route(tmp_path, "board.csv", 60.0, ROUTES / "washboard.csv")
+    (tmp_path / "coarse.csv").write_text("s,z\n0,0\n10,0.1\n20,0\n30,0.1\n")  # too coarse to measure roughness
+    return tmp_path
+
+
+def alone(folder: Path, *argv: str) -> bytes:
+    """The profile ``profileopt plan ARGV -o`` writes, in this process, run in ``folder``."""
+    import contextlib
+
+    out = folder / "alone.csv"
+    with contextlib.chdir(folder):
+        assert cli.main(["plan", *argv, "-o", str(out), "-q"]) == 0
+    data = out.read_bytes()
+    out.unlink()
+    return data
+
+
+def summary(out: Path) -> dict[str, dict[str, str]]:
+    import csv
+
+    with open(out / "summary.csv", newline="") as handle:
+        return {row["id"]: row for row in csv.DictReader(handle)}
+
+
+# --------------------------------------------------------------------------------------
+# The manifest
+
+
+def test_a_manifest_reads_paths_relative_to_itself_and_plan_options(tmp_path: Path) -> None:
+    (tmp_path / "m").mkdir()
+    (tmp_path / "m" / "runs.csv").write_text("id,route,vehicle,segment_length,refine,terrain\n"
+                                             "a,../r.csv,atv-resonant,2,false,\n"
+                                             "b,/abs/r.csv,my.toml,,true,cloud.laz\n")
+    a, b = read_manifest(tmp_path / "m" / "runs.csv")
+    assert a == BatchRow("a", str(tmp_path / "m" / "../r.csv"),
+                         (("vehicle", "atv-resonant"), ("segment_length", "2"), ("refine", "false")))
+    assert b.route == "/abs/r.csv" and ("vehicle", str(tmp_path / "m" / "my.toml")) in b.options
+    assert ("terrain", str(tmp_path / "m" / "cloud.laz")) in b.options
+    assert a.argv("o.csv") == [a.route, "-o", "o.csv", "--quiet", "--vehicle=atv-resonant", "--segment-length=2",
+                               "--no-refine"]
+    (tmp_path / "runs.json").write_text(json.dumps([{"id": "j", "route": "r.csv", "v0": 1.5, "refine": True}]))
+    (j,) = read_manifest(tmp_path / "runs.json")
+    assert j.argv("o.csv")[4:] == ["--v0=1.5", "--refine"]
+
+
+@pytest.mark.parametrize("text, words", [
+    ("id,route,segment_lenght\na,r.csv,2\n", "column 'segment_lenght' is no option of profileopt plan"),
+    ("id,route,segment_lenght\na,r.csv,2\n", "did you mean 'segment_length'?"),
+    ("id,route,plot\na,r.csv,p.png\n", "column 'plot' is no option"),
+    ("id,route\na,r.csv\na,s.csv\n", "line 3: id 'a' is also the id of line 2"),
+    ("id,route\n../x,r.csv\n", "id '../x' must be a file name"),
+    ("id,route\nsummary,r.csv\n", "(not 'summary')"),
+    ("id,route\na,\n", "line 2: no route"),
+    ("id,route\n", "the manifest has no rows"),
+])
+def test_a_bad_manifest_is_one_line(tmp_path: Path, text: str, words: str) -> None:
+    (tmp_path / "m.csv").write_text(text)
+    with pytest.raises(InputError) as raised:
+        read_manifest(tmp_path / "m.csv")
+    assert words in str(raised.value) and "\n" not in str(raised.value) and "m.csv" in str(raised.value)
+
+
+# --------------------------------------------------------------------------------------
+# Planning: the same bytes as `profileopt plan`, failures alone, resumed
+
+
+@pytest.mark.slow
+def test_one_worker_plans_each_route_as_plan_does_and_fails_alone(folder: Path) -> None:
+    (folder / "runs.csv").write_text("id,route,vehicle,model,segment_length\n"
+                                     "kerb,kerb.csv,atv,,\n"
+                                     "board,board.csv,atv-resonant,sbem_ef,2\n"
+                                     "missing,nowhere.csv,,,\n"
+                                     "badveh,kerb.csv,no-such-vehicle,,\n"
+                                     "coarse,coarse.csv,,,\n")
+    out = folder / "out"
+    rows = read_manifest(folder / "runs.csv")
+    result = plan_many(rows, out, workers=1)
+    assert [r["id"] for r in result] == ["kerb", "board", "missing", "badveh", "coarse"]
+    assert (out / "kerb.csv").read_bytes() == alone(folder, str(folder / "kerb.csv"), "--vehicle", "atv")
+    assert (out / "board.csv").read_bytes() == alone(folder, str(folder / "board.csv"), "--vehicle", "atv-resonant",
+                                                     "--model", "sbem_ef", "--segment-length", "2")
+    table = summary(out)
+    assert [table[k]["status"] for k in table] == ["ok", "ok", "failed", "failed", "failed"]
+    assert "nowhere.csv: route file not found" in table["missing"]["error"]
+    assert "no bundled vehicle" in table["badveh"]["error"]
+    assert "coarse.csv" in table["coarse"]["error"] and "\n" not in table["coarse"]["error"]
+    assert not (out / "missing.csv").exists() and table["missing"]["profile"] == ""
+    assert float(table["kerb"]["travel_time_s"]) == pytest.approx(json.loads(_plan_json(folder / "kerb.csv"))[
+        "travel_time_s"], rel=1e-12)
+    # run again: only the failed rows are tried again, the profiles planned stay as they are
+    stamp = (out / "kerb.csv").stat().st_mtime_ns
+    again = plan_many(rows, out, workers=1)
+    assert (out / "kerb.csv").stat().st_mtime_ns == stamp and again[0] == result[0]
+    # a changed route is planned again
+    short_route(folder, "kerb.csv", 110.0)
+    third = plan_many(rows, out, workers=1)
+    assert third[0]["input_sha256"] != result[0]["input_sha256"]
+    assert (out / "kerb.csv").read_bytes() == alone(folder, str(folder / "kerb.csv"), "--vehicle", "atv")
+
+
+def _plan_json(route: Path) -> str:
+    done = subprocess.run([*PROFILEOPT, "plan", str(route), "--json", "-q"], capture_output=True, text=True,
+                          check=True, timeout=120)
+    return done.stdout
+
+
+@pytest.mark.slow
+def test_the_command_on_a_local_cluster_exits_5_with_the_failures(folder: Path) -> None:
+    """Two worker processes (a Dask LocalCluster): the same profiles as one after another."""
+    pytest.importorskip("distributed")
+    out = folder / "out"
+    done = subprocess.run([*PROFILEOPT, "batch", "kerb.csv", "board.csv", "coarse.csv", "--vehicle", "atv",
+                           "-o", "out", "--workers", "2", "-q"], cwd=folder, capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 5, done.stderr
+    assert done.stdout.strip() == "planned 2 of 3 routes into out (out/summary.csv); 1 failed"
+    assert [line for line in done.stderr.splitlines() if line.startswith("profileopt batch: coarse:")]
+    assert (out / "kerb.csv").read_bytes() == alone(folder, "kerb.csv", "--vehicle", "atv")
+    assert (out / "board.csv").read_bytes() == alone(folder, "board.csv", "--vehicle", "atv")
+
+
+@pytest.mark.slow
+def test_a_batch_stopped_by_sigterm_resumes_where_it_stopped(folder: Path) -> None:
+    names = [f"r{k}" for k in range(6)]
+    for k, name in enumerate(names):
+        short_route(folder, f"{name}.csv", 40.0 + 10 * k)
+    batch = subprocess.Popen([*PROFILEOPT, "batch", *(f"{n}.csv" for n in names), "-o", "out", "--workers", "1"],
+                             cwd=folder, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and len(summary(folder / "out") if (folder / "out" / "summary.csv").exists()
+                                               else {}) < 2:
+        time.sleep(0.05)
+    batch.send_signal(signal.SIGTERM)
+    _, err = batch.communicate(timeout=60)
+    assert batch.returncode == 143, err
+    first = summary(folder / "out")
+    assert 2 <= len(first) < len(names) and all(row["status"] == "ok" for row in first.values())
+    assert not list((folder / "out").glob(".po-*"))  # no half-written file
+    stamps = {name: (folder / "out" / f"{name}.csv").stat().st_mtime_ns for name in first}
+    done = subprocess.run([*PROFILEOPT, "batch", *(f"{n}.csv" for n in names), "-o", "out", "--workers", "1"],
+                          cwd=folder, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert {name: (folder / "out" / f"{name}.csv").stat().st_mtime_ns for name in first} == stamps
+    assert len(summary(folder / "out")) == len(names)
+
+
+@pytest.mark.slow
+def test_a_batch_on_a_running_cluster_gives_the_same_profiles(folder: Path) -> None:
+    """A scheduler and two workers started as their own processes, addresses on localhost."""
+    pytest.importorskip("distributed")
+    info = folder / "scheduler.json"
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+    dask = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
+    scheduler = subprocess.Popen([*dask, "--scheduler-file", str(info), "--host", "127.0.0.1", "--port", "0",
+                                  "--dashboard-address", ":0"], cwd=folder, env=env,
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    workers = []
+    try:
+        deadline = time.monotonic() + 60
+        while not info.exists() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        address = json.loads(info.read_text())["address"]
+        for _ in range(2):
+            workers.append(subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address,
+                                             "--nthreads", "1", "--no-dashboard"], cwd=folder, env=env,
+                                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        done = subprocess.run([*PROFILEOPT, "batch", "kerb.csv", "board.csv", "--vehicle", "atv-resonant", "-o",
+                               "out", "-q"], cwd=folder, capture_output=True, text=True, timeout=300,
+                              env=dict(env, DASK_SCHEDULER_ADDRESS=address))
+        assert done.returncode == 0, done.stderr
+    finally:
+        for process in (*workers, scheduler):
+            process.terminate()
+        for process in (*workers, scheduler):
+            process.wait(30)
+    for name in ("kerb", "board"):
+        assert (folder / "out" / f"{name}.csv").read_bytes() == alone(folder, f"{name}.csv", "--vehicle",
+                                                                      "atv-resonant")
+
+
+def test_the_command_refuses_a_manifest_and_routes_together(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    (tmp_path / "m.csv").write_text("id,route\na,r.csv\n")
+    assert cli.main(["batch", "r.csv", "--manifest", str(tmp_path / "m.csv"), "-o", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err == ("profileopt batch: error: give either --manifest FILE or route files, not "
+                                       "both and not neither\n")
+
+
+def test_several_workers_without_dask_say_which_extra(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import builtins
+
+    real_import = builtins.__import__
+
+    def no_dask(name, *args, **kwargs):  # noqa: ANN001, ANN202
+        if name.startswith(("dask", "distributed")):
+            raise ImportError(name)
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_dask)
+    with pytest.raises(InputError, match=r"pip install 'profileopt\[batch\]'"):
+        plan_many([BatchRow("a", "r.csv")], tmp_path / "o", workers=2)
