@@ -11,6 +11,7 @@ import os
 import sys
 
 from ..errors import InputError
+from .track import whole_number_argument
 
 #: The exit status when some routes failed (the others were planned; the summary lists the
 #: failures with their one-line errors).
@@ -68,10 +69,5 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _workers(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a whole number; give a number of workers >= 1") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{value}: give a number of workers >= 1")
-    return value
+    """A whole number >= 1 for --workers, or argparse's one-line error."""
+    return whole_number_argument(text, minimum=1, what="a number of workers")

@@ -32,13 +32,18 @@ def number_argument(text: str) -> float:
     return value
 
 
-def _index(text: str) -> int:
-    """A whole number in ASCII digits (not ``1_0`` or an Arabic-Indic digit, which ``int()``
-    reads), or argparse's one-line error."""
+def whole_number_argument(text: str, *, minimum: int | None = None, what: str = "") -> int:
+    """An option's whole number in ASCII digits (not ``1_0`` or an Arabic-Indic digit, which
+    ``int()`` reads), at least ``minimum`` if given, or argparse's one-line error naming
+    ``what`` it counts (``"a seed"``)."""
     digits = text.strip()
     if not (digits.isascii() and digits.removeprefix("-").removeprefix("+").isdigit()):
-        raise argparse.ArgumentTypeError(f"'{_shown(text)}' is not a whole number (digits 0-9)")
-    return int(digits)
+        raise argparse.ArgumentTypeError(f"'{_shown(text)}' is not a whole number (digits 0-9)"
+                                         + (f"; give {what} >= {minimum}" if minimum is not None else ""))
+    value = int(digits)
+    if minimum is not None and value < minimum:
+        raise argparse.ArgumentTypeError(f"{value}: give {what or 'a number'} >= {minimum}")
+    return value
 
 
 def add_track_arguments(parser: argparse.ArgumentParser) -> None:
@@ -62,7 +67,7 @@ def add_track_arguments(parser: argparse.ArgumentParser) -> None:
                        help="CRS of a CSV track's x,y, e.g. EPSG:32633 (GPX and GeoJSON are WGS 84); "
                             "default: the terrain's")
     group.add_argument("--terrain-crs", metavar="CRS", help="CRS of a terrain file that states none, e.g. EPSG:32633")
-    group.add_argument("--track-index", type=_index, default=None, metavar="N",
+    group.add_argument("--track-index", type=whole_number_argument, default=None, metavar="N",
                        help="use only track N (from 0) of a GPX file with several tracks")
     rough = group.add_mutually_exclusive_group()
     rough.add_argument("--roughness-class", choices=ROAD_CLASSES, type=str.upper, metavar="A-H",

@@ -34,7 +34,7 @@ from ..errors import InputError
 from .messages import printable
 from .paths import vehicle_input
 from .route import PATH_TOLERANCE_HELP
-from .track import number_argument
+from .track import number_argument, whole_number_argument
 
 
 def _vehicle_files(args: argparse.Namespace, profile) -> list[str]:
@@ -297,14 +297,8 @@ def arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _seed(text: str) -> int:
-    """An integer >= 0 for --seed, or argparse's one-line error."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not an integer; give a seed >= 0, e.g. --seed 1") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"{value} is negative; give a seed >= 0")
-    return value
+    """A whole number >= 0 for --seed, or argparse's one-line error."""
+    return whole_number_argument(text, minimum=0, what="a seed")
 
 
 def _ratio_text(ratio: float) -> str:

@@ -129,3 +129,14 @@ def test_printable_replaces_only_what_is_not_utf8() -> None:
 
     assert printable(os.fsdecode(b"r\xff.csv")) == "r\ufffd.csv"
     assert printable("route é.csv") == "route é.csv"
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["verify", "r.csv", "p.csv", "--seed", "\u0661"], "argument --seed: '\\u0661' is not a whole number (digits 0-9)"),
+    (["verify", "r.csv", "p.csv", "--seed", "-1"], "argument --seed: -1: give a seed >= 0"),
+    (["batch", "r.csv", "-o", "out", "--workers", "0"], "argument --workers: 0: give a number of workers >= 1"),
+    (["plan", "r.csv", "--track-index", "1_0"], "argument --track-index: '1_0' is not a whole number"),
+])
+def test_whole_number_options_take_ascii_digits_only(capsys: pytest.CaptureFixture, argv: list[str],
+                                                   words: str) -> None:
+    assert words in refusal(capsys, argv)
