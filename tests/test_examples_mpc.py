@@ -146,7 +146,7 @@ def test_without_the_extra_an_example_says_which_to_install(tmp_path: Path) -> N
     "route, vehicle, options",
     [
         # the trail's rough classes D to F: the force limit binds again and again
-        ("trail.csv", "atv", ["--from-m", "950", "--until-m", "300"]),
+        ("trail.csv", "atv", ["--from-m", "950", "--until-m", "150"]),
         # the washboard for the resonant vehicle: it must slow to its upper band before it
         ("washboard.csv", "atv-resonant", ["--from-m", "100", "--until-m", "60", "--cruise", "8"]),
     ],
