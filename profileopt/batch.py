@@ -36,6 +36,7 @@ import re
 from pathlib import Path
 from typing import Any, Iterable, Sequence
 
+from .core.vehicle import names_vehicle_file
 from .errors import InputError
 from .progress import NO_PROGRESS, Progress
 
@@ -176,7 +177,7 @@ def read_manifest(path: str | os.PathLike) -> list[BatchRow]:
         for key, value in record.items():
             if key in ("id", "route") or value == "":
                 continue
-            if key in _FILE_COLUMNS and not (key == "vehicle" and _bundled_name(value)):
+            if key in _FILE_COLUMNS and (key != "vehicle" or names_vehicle_file(value)):
                 value = str(path.parent / value) if not os.path.isabs(value) else value
             pairs.append((key, value))
         out.append(BatchRow(ident, route if os.path.isabs(route) else str(path.parent / route), tuple(pairs)))
@@ -349,12 +350,6 @@ def _plan_options() -> set[str]:
             if option.startswith("--"):
                 names.add(option[2:].replace("-", "_"))
     return names - _NOT_IN_A_ROW
-
-
-def _bundled_name(value: str) -> bool:
-    from .cli.paths import vehicle_input
-
-    return vehicle_input(value) is None
 
 
 def _text(value: Any) -> str:

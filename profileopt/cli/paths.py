@@ -17,10 +17,9 @@ def vehicle_input(name_or_path: str | None) -> str | None:
     """The file a ``--vehicle`` argument reads, if it names a file (the rule of
     :func:`profileopt.load_vehicle`: a path ends in .toml or has a folder in it); None for a
     bundled name."""
-    if name_or_path is None:
-        return None
-    looks_like_path = name_or_path.endswith(".toml") or "/" in name_or_path or "\\" in name_or_path
-    return name_or_path if looks_like_path else None
+    from ..core.vehicle import names_vehicle_file  # no numerical package: fine for --help
+
+    return name_or_path if name_or_path is not None and names_vehicle_file(name_or_path) else None
 
 
 def check_folder(label: str, folder: str) -> Path:

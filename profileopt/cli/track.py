@@ -15,20 +15,14 @@ TRACK_SUFFIXES = (".gpx", ".geojson", ".json")
 ROAD_CLASSES = tuple("ABCDEFGH")
 
 
-def _shown(text: str) -> str:
-    """An option's value as a message quotes it: at most 40 characters, anything but printable
-    ASCII escaped (``\\u0661``)."""
-    return text[:40] if text.isascii() and text.isprintable() else ascii(text[:40])[1:-1]
-
-
 def number_argument(text: str) -> float:
     """An option's number in ASCII decimal notation (``inf`` and ``nan`` too, which the options
     refuse or allow themselves), or argparse's one-line error."""
-    from ..io.table import decimal_number  # when an option is parsed, not for --help
+    from ..io.table import decimal_number, quoted  # when an option is parsed, not for --help
 
     value = decimal_number(text)
     if value is None:
-        raise argparse.ArgumentTypeError(f"'{_shown(text)}' is not a number (digits 0-9, '.', an optional exponent)")
+        raise argparse.ArgumentTypeError(f"{quoted(text)} is not a number (digits 0-9, '.', an optional exponent)")
     return value
 
 
@@ -36,9 +30,11 @@ def whole_number_argument(text: str, *, minimum: int | None = None, what: str = 
     """An option's whole number in ASCII digits (not ``1_0`` or an Arabic-Indic digit, which
     ``int()`` reads), at least ``minimum`` if given, or argparse's one-line error naming
     ``what`` it counts (``"a seed"``)."""
+    from ..io.table import quoted  # when an option is parsed, not for --help
+
     digits = text.strip()
     if not (digits.isascii() and digits.removeprefix("-").removeprefix("+").isdigit()):
-        raise argparse.ArgumentTypeError(f"'{_shown(text)}' is not a whole number (digits 0-9)"
+        raise argparse.ArgumentTypeError(f"{quoted(text)} is not a whole number (digits 0-9)"
                                          + (f"; give {what} >= {minimum}" if minimum is not None else ""))
     value = int(digits)
     if minimum is not None and value < minimum:
@@ -107,7 +103,9 @@ def refuse_terrain_options(args: argparse.Namespace) -> None:
     if args.terrain is None and args.terrain_crs is not None:
         from ..errors import InputError
 
-        raise InputError(f"--terrain-crs {_shown(args.terrain_crs)} sets the CRS of a terrain file, and no --terrain "
+        from ..io.table import quoted
+
+        raise InputError(f"--terrain-crs {quoted(args.terrain_crs)[1:-1]} sets the CRS of a terrain file, and no --terrain "
                          "is given; drop it, or give the terrain (--terrain FILE); the track's CRS is --track-crs")
 
 

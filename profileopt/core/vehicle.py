@@ -17,7 +17,8 @@ from pathlib import Path
 
 from ..errors import InputError
 
-__all__ = ["Vehicle", "load_vehicle", "bundled_vehicles", "vehicle_reference", "PLAUSIBLE_RANGES", "OPTIONAL_KEYS"]
+__all__ = ["Vehicle", "load_vehicle", "bundled_vehicles", "vehicle_reference", "names_vehicle_file", "PLAUSIBLE_RANGES",
+           "OPTIONAL_KEYS"]
 
 # key -> (unit, what it is). Order is the order of the dataclass fields and of the files.
 _UNITS: dict[str, tuple[str, str]] = {
@@ -274,6 +275,23 @@ def bundled_vehicles() -> list[str]:
     return sorted(names)
 
 
+def names_vehicle_file(name_or_path: str | Path) -> bool:
+    """Whether :func:`load_vehicle` reads ``name_or_path`` as a file rather than a bundled
+    name: a :class:`~pathlib.Path`, or text ending in ``.toml`` or holding a folder separator.
+
+    Parameters
+    ----------
+    name_or_path : str or pathlib.Path
+        What :func:`load_vehicle` is given.
+
+    Returns
+    -------
+    bool
+    """
+    raw = str(name_or_path)
+    return isinstance(name_or_path, Path) or raw.endswith(".toml") or "/" in raw or "\\" in raw
+
+
 def vehicle_reference(vehicle: Vehicle) -> str:
     """How to load ``vehicle`` again: its bundled name, or the path of its file.
 
@@ -351,8 +369,7 @@ def load_vehicle(name_or_path: str | Path) -> Vehicle:
 
 def _read_vehicle_text(name_or_path: str | Path) -> tuple[str, str]:
     raw = str(name_or_path)
-    looks_like_path = isinstance(name_or_path, Path) or raw.endswith(".toml") or "/" in raw or "\\" in raw
-    if not looks_like_path:
+    if not names_vehicle_file(name_or_path):
         names = bundled_vehicles()
         if raw in names:  # a name only (never a path the system is asked about: 5,000 characters, NUL)
             entry = next(d / f"{raw}.toml" for d in _bundled_dirs() if (d / f"{raw}.toml").is_file())

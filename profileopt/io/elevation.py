@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import InputError
 from ..terrain.synthetic import ElevationProfile
 from . import inputs
-from .table import split_lines
+from .table import decimal_number, split_lines
 
 __all__ = ["read_opencrg", "read_xy_profile", "parse_opencrg", "OpenCrgData"]
 
@@ -91,10 +91,9 @@ class OpenCrgData:
             if default is not None:
                 return default
             raise InputError(f"{self.path}: header key {key!r} is missing; the reader needs it to place the samples")
-        try:
-            value = float(self.keys[key])
-        except ValueError:
-            raise InputError(f"{self.path}: header key {key!r} = {self.keys[key]!r} is not a number") from None
+        value = decimal_number(self.keys[key])  # ASCII decimal notation only
+        if value is None:
+            raise InputError(f"{self.path}: header key {key!r} = {self.keys[key]!r} is not a number")
         if not math.isfinite(value):
             raise InputError(f"{self.path}: header key {key!r} = {self.keys[key]!r} is not finite")
         return value
@@ -274,7 +273,9 @@ def read_xy_profile(path: str | os.PathLike) -> ElevationProfile:
         try:
             if len(fields) != 2:
                 raise ValueError
-            distance, elevation = float(fields[0]), float(fields[1])
+            distance, elevation = (decimal_number(field) for field in fields)
+            if distance is None or elevation is None:
+                raise ValueError
         except ValueError:
             raise InputError(
                 f"{path}, line {number}: expected two numbers 'distance elevation' (m), got {stripped[:60]!r}"

@@ -32,6 +32,7 @@ import numpy as np
 
 from ..core.binding import BINDING_NAMES
 from ..core.profile import BASE_COLUMNS, PROFILE_COLUMNS, Profile
+from ..core.vehicle import names_vehicle_file
 from ..errors import InputError
 from ..physics.forces import DEFAULT_MODEL, MODELS
 from .atomic import atomic_write
@@ -81,15 +82,10 @@ def vehicle_file_sha256(reference: str) -> tuple[str, str]:
     from ..core.vehicle import load_vehicle
     from . import inputs
 
-    path = Path(load_vehicle(reference).name) if not _names_file(reference) else Path(reference)
+    path = Path(load_vehicle(reference).name) if not names_vehicle_file(reference) else Path(reference)
     # as load_vehicle reads it: a regular file of at most MAX_VEHICLE_BYTES (never a FIFO, /dev/zero)
     data = inputs.read_input(path, "vehicle file", inputs.MAX_VEHICLE_BYTES)
     return str(path), hashlib.sha256(data).hexdigest()
-
-
-def _names_file(reference: str) -> bool:
-    """Whether a vehicle reference is a path (the rule of :func:`profileopt.load_vehicle`)."""
-    return reference.endswith(".toml") or "/" in reference or "\\" in reference
 
 
 def recorded_vehicle(settings: dict) -> dict[str, object]:
@@ -111,7 +107,7 @@ def recorded_vehicle(settings: dict) -> dict[str, object]:
     reference = str(settings.get("vehicle", ""))
     if reference in ("", "unnamed"):
         return {}
-    absolute = os.path.abspath(reference) if _names_file(reference) else reference
+    absolute = os.path.abspath(reference) if names_vehicle_file(reference) else reference
     if "vehicle_sha256" in settings:
         return {"vehicle": absolute, "vehicle_sha256": str(settings["vehicle_sha256"])}
     try:

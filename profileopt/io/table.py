@@ -41,7 +41,8 @@ import numpy as np
 from ..errors import InputError
 from . import inputs
 
-__all__ = ["Table", "read_table", "split_lines", "read_text", "normalise_line_ends", "is_decimal", "decimal_number"]
+__all__ = ["Table", "read_table", "split_lines", "read_text", "normalise_line_ends", "is_decimal", "decimal_number",
+           "quoted"]
 
 #: One number in ASCII decimal notation (module notes), white space around it allowed.
 _DECIMAL = re.compile(r"[ \t]*[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|inf|infinity|nan)[ \t]*",
@@ -349,15 +350,29 @@ class Table:
             except ValueError:
                 i = next(i for i, cell in enumerate(column) if not is_decimal(cell))
                 raise InputError(f"{self.source}: line {self.line_numbers[i]}: {self.header[col]} = "
-                                 f"{_shown(column[i])} is not a number; every cell of that column must be a number "
+                                 f"{quoted(column[i])} is not a number; every cell of that column must be a number "
                                  "in SI units, written with the ASCII digits 0-9, '.' and an optional exponent "
                                  "(e.g. 12.5 or -1.2e-3)") from None
         return table
 
 
-def _shown(cell: str, limit: int = 40) -> str:
-    """A cell as a message quotes it: stripped, at most ``limit`` characters, anything but
-    printable ASCII escaped (``'\\u0661'``), so that the message stays one readable line."""
+def quoted(cell: str, limit: int = 40) -> str:
+    """A cell or an option's value as a message quotes it: stripped, at most ``limit``
+    characters, anything but printable ASCII escaped (``'\\u0661'``), so that the message
+    stays one readable line.
+
+    Parameters
+    ----------
+    cell : str
+        The text as read.
+    limit : int, default 40
+        The most characters shown (then ``...``).
+
+    Returns
+    -------
+    str
+        The text in single quotes.
+    """
     text = cell.strip()
     text = text if len(text) <= limit else text[:limit] + "..."
     if not (text.isascii() and text.isprintable()):

@@ -366,11 +366,10 @@ _V_AT = re.compile(r"^long section at v\s*=\s*([^,]*)", re.IGNORECASE)
 
 def _lateral_m(path: Path, text: str) -> float:
     """The v (m) of a ``D:long section at v = ...`` line, or one line naming it."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not math.isfinite(value):
+    from .table import decimal_number
+
+    value = decimal_number(text)  # ASCII decimal notation, as every number the project reads
+    if value is None or not math.isfinite(value):
         raise InputError(f"{path}: 'D:long section at v = {text.strip()}' does not state a lateral position in m; "
                          "write a finite number there (e.g. 'D:long section at v = -1.500,m')")
     return value
