@@ -164,6 +164,9 @@ def test_a_batch_stopped_by_sigterm_resumes_where_it_stopped(folder: Path) -> No
     names = [f"r{k}" for k in range(6)]
     for k, name in enumerate(names):
         short_route(folder, f"{name}.csv", 40.0 + 10 * k)
+    # the third route is the bundled 2 km trail (seconds to plan, where the others take a tenth
+    # of one), so the signal sent when two are done lands while the batch is still at work
+    (folder / "r2.csv").write_bytes((ROUTES / "trail.csv").read_bytes())
     batch = subprocess.Popen([*PROFILEOPT, "batch", *(f"{n}.csv" for n in names), "-o", "out", "--workers", "1"],
                              cwd=folder, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120
