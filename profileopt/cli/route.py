@@ -8,7 +8,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from .. import __version__
-from .track import add_track_arguments, assumed_roughness, number_argument, refuse_terrain_options, track_inputs
+from .track import (
+    add_track_arguments,
+    assumed_roughness,
+    number_argument,
+    refuse_terrain_options,
+    terrain_words,
+    track_inputs,
+)
 
 if TYPE_CHECKING:
     from ..io.tracks import Track
@@ -42,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
     from .messages import printable
 
     name = Path(args.output).name if args.output != STDOUT else "route"
-    made = f"profileopt {__version__} route {args.track}" + (f" --terrain {args.terrain}" if args.terrain else "")
+    made = f"profileopt {__version__} route {args.track}" + (f" --terrain {terrain_words(args)}" if args.terrain else "")
     comments = [f"{name}: the ground under the wheels along a track, made by `{made}`", *result.comments,
                 *([f"x, y: {track.smoothing.note(Path(args.track).name)}"] if track.smoothing is not None else []),
                 f"options: spacing {result.spacing_m:g} m, corridor {args.corridor:g} m, max gap {args.max_gap:g} m"]
@@ -52,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
             from ..viz.maps import plot_route_map
 
             plot_route_map(result, args.plot, title=printable(f"{Path(args.track).name}"
-                                                              + (f" over {Path(args.terrain).name}" if args.terrain
+                                                              + (f" over {_terrain_name(args)}" if args.terrain
                                                                  else "")))
     out = sys.stderr if outputs.uses_stdout else sys.stdout
     print(printable(_human(result, args)), file=out)  # a file name not in UTF-8: U+FFFD
@@ -83,7 +90,7 @@ def smoothed_track_route(track_path: str, args: argparse.Namespace, prog: str) -
     tuple of (TrackRoute, Track)
     """
     from ..defaults import DEFAULT_TRACK_SPACING_M
-    from ..io.terrain_maps import read_terrain
+    from ..io.tiles import read_tiles
     from ..io.tracks import check_not_degrees, check_track_samples, read_track
     from ..terrain.ground_track import route_from_track
     from .messages import flags_for_parameters
@@ -95,14 +102,20 @@ def smoothed_track_route(track_path: str, args: argparse.Namespace, prog: str) -
         check_not_degrees(track)
     # the finest spacing a terrain supports is at least the default: the count is an upper bound
     check_track_samples(track, DEFAULT_TRACK_SPACING_M if args.spacing is None else args.spacing)
-    terrain = (read_terrain(args.terrain, terrain_crs=args.terrain_crs, track=track, spacing_m=args.spacing,
-                            corridor_m=args.corridor) if args.terrain is not None else None)
+    terrain = (read_tiles(args.terrain, terrain_crs=args.terrain_crs, track=track, spacing_m=args.spacing,
+                          corridor_m=args.corridor) if args.terrain is not None else None)
     result = route_from_track(track, terrain, spacing_m=args.spacing, corridor_m=args.corridor,
                               max_gap_m=args.max_gap, assumed_roughness=assumed_roughness(args))
     if not getattr(args, "quiet", False):
         for note in (*track.notes, *getattr(terrain, "notes", ()), *result.notes):
             print(f"{prog}: note: {flags_for_parameters(note)}", file=sys.stderr)
     return result, track
+
+
+def _terrain_name(args: argparse.Namespace) -> str:
+    """The terrain in a title: its file's name, or the first tile's and how many more."""
+    names = [Path(path).name or str(path) for path in args.terrain]
+    return names[0] if len(names) == 1 else f"{names[0]} and {len(names) - 1} more"
 
 
 def _human(result: object, args: argparse.Namespace) -> str:
@@ -113,7 +126,7 @@ def _human(result: object, args: argparse.Namespace) -> str:
     roughness = (f"assumed, {route.assumed_roughness.label} ({result.resolution})" if route.assumed_roughness
                  else f"measured ({result.resolution})" if result.terrain_kind != "track" else "")
     frame = result.crs_name or "the track's own frame (no CRS)"
-    terrain = args.terrain or "none (the track's own elevations)"
+    terrain = terrain_words(args) or "none (the track's own elevations)"
     lines = [
         f"route {args.track}: {route.length_m:.1f} m, {route.s_m.size} samples every {result.spacing_m:g} m, "
         f"x, y in {frame}",

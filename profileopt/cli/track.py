@@ -45,9 +45,10 @@ def whole_number_argument(text: str, *, minimum: int | None = None, what: str = 
 def add_track_arguments(parser: argparse.ArgumentParser) -> None:
     """The options that turn a track and a terrain map into a route."""
     group = parser.add_argument_group("tracks and terrain maps (profileopt[geo])")
-    group.add_argument("--terrain", metavar="FILE",
+    group.add_argument("--terrain", metavar="FILE", nargs="+", action="extend",
                        help="the ground under the track: a point cloud (.las, .laz), a DEM (.tif) or an OpenCRG "
-                            "surface (.crg); without it, a track's own elevations (GPX <ele>)")
+                            "surface (.crg); or tiles: several LAS/LAZ or GeoTIFF files, or a folder of them (only "
+                            "those near the track are read); without it, a track's own elevations (GPX <ele>)")
     group.add_argument("--spacing", type=number_argument, default=None, metavar="M",
                        help="distance between route samples along the track in m (default: the finest the terrain "
                             f"resolves, from {DEFAULT_TRACK_SPACING_M:g}, half the bundled vehicles' wheel radius, up "
@@ -79,8 +80,18 @@ def is_track(path: str, args: argparse.Namespace) -> bool:
 
 
 def track_inputs(args: argparse.Namespace) -> list[str]:
-    """The files a track-reading command reads besides the track (for the output checks)."""
-    return [args.terrain] if args.terrain is not None else []
+    """The files a track-reading command reads besides the track (for the output checks): the
+    terrain files, a folder of tiles as its files."""
+    if args.terrain is None:
+        return []
+    from ..io.tiles import terrain_files
+
+    return [str(path) for path in terrain_files(args.terrain)]
+
+
+def terrain_words(args: argparse.Namespace) -> str:
+    """The ``--terrain`` files as typed, for a title or a summary (empty without one)."""
+    return " ".join(args.terrain) if args.terrain else ""
 
 
 def assumed_roughness(args: argparse.Namespace):  # noqa: ANN201  (AssumedRoughness | None)

@@ -13,6 +13,8 @@
   :func:`~profileopt.io.tracks.check_not_degrees`);
 - :mod:`~profileopt.io.terrain_maps`: raster DEMs and OpenCRG surfaces
   (:func:`read_geotiff`, :func:`read_crg_surface`, :func:`read_terrain`);
+- :mod:`~profileopt.io.tiles`: terrain in tiles, several files or a folder read as one
+  around a track (:func:`read_tiles`, :class:`GridTiles`);
 - :mod:`~profileopt.io.geo`: the optional ``geo`` packages and CRS helpers (:func:`parse_crs`);
 - :mod:`~profileopt.io.elevation`: measured elevation profiles (:func:`read_opencrg`,
   :func:`read_xy_profile`).
@@ -32,6 +34,7 @@ _LAZY = {
     "Track": "tracks", "read_track": "tracks", "project_track": "tracks", "local_projected_crs": "tracks",
     "ElevationGrid": "terrain_maps", "CrgSurface": "terrain_maps", "read_geotiff": "terrain_maps",
     "read_crg_surface": "terrain_maps", "read_terrain": "terrain_maps",
+    "GridTiles": "tiles", "read_tiles": "tiles",
     "PROFILE_COLUMNS": "profiles", "read_profile": "profiles", "write_profile": "profiles",
     "read_route": "routes",
     "Table": "table", "read_table": "table", "split_lines": "table",
@@ -56,7 +59,7 @@ __all__ = [
     "LAS_GROUND", "LasHeader", "PointCloud", "read_las",
     "parse_crs",
     "Track", "read_track", "project_track", "local_projected_crs",
-    "ElevationGrid", "CrgSurface", "read_geotiff", "read_crg_surface", "read_terrain",
+    "ElevationGrid", "CrgSurface", "read_geotiff", "read_crg_surface", "read_terrain", "GridTiles", "read_tiles",
     "PROFILE_COLUMNS", "read_profile", "write_profile",
     "read_route",
     "Table", "read_table", "split_lines",

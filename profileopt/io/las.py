@@ -26,7 +26,7 @@ from ..errors import InputError
 from . import inputs
 from .geo import UNIT_RANGE_M, length_units_m, require_geo
 
-__all__ = ["LasHeader", "PointCloud", "read_las", "LAS_GROUND", "LINEAR_UNITS_M", "UNCLASSIFIED_CODES",
+__all__ = ["LasHeader", "PointCloud", "read_las", "read_las_header", "LAS_GROUND", "LINEAR_UNITS_M", "UNCLASSIFIED_CODES",
            "MAX_CLOUD_POINTS", "SCALE_RANGE"]
 
 #: ASPRS standard class code of ground points (LAS 1.4 R15, Table 17).
@@ -147,6 +147,8 @@ class PointCloud:
     ground_density_per_m2 : float or None
         Ground points (class 2) of the whole file, also those not kept, per m^2 of their
         bounding box; None: none, or no area, or not counted.
+    ground_count : int or None
+        Ground points (class 2) of the whole file, also those not kept; None: not counted.
     """
 
     x_m: np.ndarray
@@ -159,6 +161,7 @@ class PointCloud:
     file_extent_m: tuple[float, float, float, float] | None = None
     kept_within_m: float | None = None
     ground_density_per_m2: float | None = None
+    ground_count: int | None = None
 
     def extent_m(self) -> tuple[float, float, float, float]:
         """(xmin, xmax, ymin, ymax) (m) of the points in the file (all of them, also where
@@ -315,8 +318,9 @@ def _check_layout(head: bytes, size: int) -> tuple[int, int | None]:
     return count, stored
 
 
-def _read_las(path: Path, units_m: float | tuple[float, float] | None, crs_given: Any,
-              keep: Callable[[Any, float | None], Any] | None) -> PointCloud:
+def _preflight(path: Path) -> tuple[Any, int, int | None]:
+    """laspy, and the point count and stored records of a LAS file whose header was checked
+    against the file (:func:`_check_layout`) before laspy reads anything it counts."""
     laspy = require_geo("laspy", "reading LAS/LAZ")
     try:
         # a regular file only (not /dev/zero, not a FIFO): laspy would read it until memory runs out
@@ -332,17 +336,111 @@ def _read_las(path: Path, units_m: float | tuple[float, float] | None, crs_given
     if len(head) >= 26 and (head[24] != 1 or head[25] > 4):
         raise _Bad(f"LAS version {head[24]}.{head[25]} is not supported; this reader handles 1.0-1.4")
     count, stored = _check_layout(head, size)
+    return laspy, count, stored
+
+
+def _read_las(path: Path, units_m: float | tuple[float, float] | None, crs_given: Any,
+              keep: Callable[[Any, float | None], Any] | None) -> PointCloud:
+    laspy, count, stored = _preflight(path)
     if keep is None and count > MAX_CLOUD_POINTS:
         raise _Bad(f"holds {count:,} points, more than the {MAX_CLOUD_POINTS:,} read at once; read only the points "
                    "near a track (read_terrain's track, as profileopt route and plan do) or thin the cloud first "
                    "(e.g. 'pdal translate in.laz out.laz sample --filters.sample.radius=0.02')")
-    quiet = logging.getLogger("laspy")
-    level = quiet.level
-    quiet.setLevel(logging.CRITICAL)  # laspy logs the errors it raises; the raised one becomes one line here
-    try:
+    with _quiet_laspy():
         return _decode(laspy, path, count, stored, units_m, crs_given, keep)
-    finally:
-        quiet.setLevel(level)
+
+
+class _quiet_laspy:
+    """laspy logs the errors it raises; the raised one becomes one line here."""
+
+    def __enter__(self) -> None:
+        self.logger = logging.getLogger("laspy")
+        self.level = self.logger.level
+        self.logger.setLevel(logging.CRITICAL)
+
+    def __exit__(self, *exc: object) -> None:
+        self.logger.setLevel(self.level)
+
+
+def read_las_header(path: str | os.PathLike, units_m: float | tuple[float, float] | None = None, *,
+                    crs: Any = None) -> tuple[LasHeader, Any]:
+    """The header of a LAS or LAZ file and its CRS, without decoding a point: what a tile's
+    bounds, count and units are (:func:`profileopt.io.tiles.read_tiles` chooses tiles by them).
+
+    The header is checked as :func:`read_las` checks it; ``units_m`` and ``crs`` as there.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.las`` or ``.laz`` file.
+    units_m : float or (float, float), optional
+        Metres per file unit (all axes, or horizontal and vertical); None: from the file's CRS.
+    crs : pyproj.CRS, optional
+        The cloud's CRS instead of the one the file states.
+
+    Returns
+    -------
+    (LasHeader, pyproj.CRS or None)
+        The header (bounds in file units, :attr:`LasHeader.bounds_m` in metres) and the CRS.
+
+    Raises
+    ------
+    InputError
+        What :func:`read_las` refuses about a header (one line naming the file).
+    """
+    path = Path(path)
+    try:
+        laspy, count, stored = _preflight(path)
+        with _quiet_laspy():
+            try:
+                reader = laspy.open(path)
+            except Exception as exc:  # laspy, lazrs, struct and numpy errors alike
+                raise _Bad(_laspy_failure(exc)) from None
+            with reader:
+                return _stated(reader, path, count, stored, units_m, crs)
+    except _Bad as exc:
+        raise InputError(f"{path}: {exc}") from None
+
+
+def _stated(reader: Any, path: Path, count: int, stored: int | None, units_m: float | tuple[float, float] | None,
+            crs_given: Any) -> tuple[LasHeader, Any]:
+    """What an open LAS file's header states, checked: its :class:`LasHeader` and its CRS."""
+    head = reader.header
+    if int(head.point_count) != count:  # a LAS 1.4 file whose two counts differ: laspy's decides
+        count = int(head.point_count)
+        if stored is not None and stored < count:
+            raise _Bad(f"is cut short: its header counts {count} point records, the file holds {stored}")
+    scale, offset = tuple(map(float, head.scales)), tuple(map(float, head.offsets))
+    for axis, value in zip("xyz", scale):
+        if not (math.isfinite(value) and SCALE_RANGE[0] <= abs(value) <= SCALE_RANGE[1]):
+            raise _Bad(f"its {axis} scale factor {value:g} is outside {SCALE_RANGE[0]:g} to {SCALE_RANGE[1]:g} "
+                       "(file units per stored integer), so its coordinates cannot be recovered: the header "
+                       "('x, y, z scale factor', bytes 131-154) is damaged or was written wrongly")
+    if not all(math.isfinite(v) for v in offset):
+        raise _Bad(f"its offsets {offset} must be finite: the header ('x, y, z offset', bytes 155-178) is damaged")
+    vlrs = {(v.user_id, v.record_id): v.record_data_bytes()
+            for v in list(head.vlrs) + list(getattr(reader, "evlrs", None) or [])}
+    minor = int(head.version.minor)
+    if units_m is None:
+        wkt_first = minor >= 4 and bool(head.global_encoding.wkt)
+        horizontal_m, vertical_m, crs_name, source = _las_units(vlrs, wkt_first)
+    else:
+        pair = (units_m, units_m) if isinstance(units_m, (int, float)) else tuple(units_m)
+        if len(pair) != 2 or not all(math.isfinite(float(u)) and float(u) > 0 for u in pair):
+            raise _Bad(f"units_m = {units_m!r} must be a number > 0 or a pair (horizontal, vertical) of them")
+        horizontal_m, vertical_m = (float(u) for u in pair)
+        crs_name, source = "", f"units_m argument ({horizontal_m:g} m, {vertical_m:g} m per file unit)"
+    try:
+        parsed = head.parse_crs()
+    except Exception:  # pyproj missing, or keys it cannot turn into a CRS: the units above still hold
+        parsed = None
+    header = LasHeader(
+        path=str(path), version=(int(head.version.major), minor), point_format=int(head.point_format.id),
+        record_length_bytes=int(head.point_format.size), point_count=count, scale=scale, offset=offset,
+        min_xyz=tuple(map(float, head.mins)), max_xyz=tuple(map(float, head.maxs)),
+        horizontal_unit_m=horizontal_m, vertical_unit_m=vertical_m, crs=crs_name, units_source=source,
+    )
+    return header, crs_given if crs_given is not None else parsed
 
 
 def _decode(laspy: Any, path: Path, count: int, stored: int | None, units_m: float | tuple[float, float] | None,
@@ -353,37 +451,9 @@ def _decode(laspy: Any, path: Path, count: int, stored: int | None, units_m: flo
     except Exception as exc:  # laspy, lazrs, struct and numpy errors alike
         raise _Bad(_laspy_failure(exc)) from None
     with reader:
-        head = reader.header
-        if int(head.point_count) != count:  # a LAS 1.4 file whose two counts differ: laspy's decides
-            count = int(head.point_count)
-            if stored is not None and stored < count:
-                raise _Bad(f"is cut short: its header counts {count} point records, the file holds {stored}")
-        scale, offset = tuple(map(float, head.scales)), tuple(map(float, head.offsets))
-        for axis, value in zip("xyz", scale):
-            if not (math.isfinite(value) and SCALE_RANGE[0] <= abs(value) <= SCALE_RANGE[1]):
-                raise _Bad(f"its {axis} scale factor {value:g} is outside {SCALE_RANGE[0]:g} to {SCALE_RANGE[1]:g} "
-                           "(file units per stored integer), so its coordinates cannot be recovered: the header "
-                           "('x, y, z scale factor', bytes 131-154) is damaged or was written wrongly")
-        if not all(math.isfinite(v) for v in offset):
-            raise _Bad(f"its offsets {offset} must be finite: the header ('x, y, z offset', bytes 155-178) is damaged")
-        vlrs = {(v.user_id, v.record_id): v.record_data_bytes()
-                for v in list(head.vlrs) + list(getattr(reader, "evlrs", None) or [])}
-        minor = int(head.version.minor)
-        if units_m is None:
-            wkt_first = minor >= 4 and bool(head.global_encoding.wkt)
-            horizontal_m, vertical_m, crs_name, source = _las_units(vlrs, wkt_first)
-        else:
-            pair = (units_m, units_m) if isinstance(units_m, (int, float)) else tuple(units_m)
-            if len(pair) != 2 or not all(math.isfinite(float(u)) and float(u) > 0 for u in pair):
-                raise _Bad(f"units_m = {units_m!r} must be a number > 0 or a pair (horizontal, vertical) of them")
-            horizontal_m, vertical_m = (float(u) for u in pair)
-            crs_name, source = "", f"units_m argument ({horizontal_m:g} m, {vertical_m:g} m per file unit)"
-        try:
-            parsed = head.parse_crs()
-        except Exception:  # pyproj missing, or keys it cannot turn into a CRS: the units above still hold
-            parsed = None
-        crs = crs_given if crs_given is not None else parsed
-        area_m2 = float(np.prod((np.asarray(head.maxs) - np.asarray(head.mins))[:2])) * horizontal_m**2
+        header, crs = _stated(reader, path, count, stored, units_m, crs_given)
+        count, horizontal_m, vertical_m = header.point_count, header.horizontal_unit_m, header.vertical_unit_m
+        area_m2 = float(np.prod((np.asarray(header.max_xyz) - np.asarray(header.min_xyz))[:2])) * horizontal_m**2
         density = count / area_m2 if math.isfinite(area_m2) and area_m2 > 0 else None
         select = keep(crs, density) if keep is not None else None
         columns: tuple[list[np.ndarray], ...] = ([], [], [], [])  # x, y, z, class of each chunk kept
@@ -427,16 +497,10 @@ def _decode(laspy: Any, path: Path, count: int, stored: int | None, units_m: flo
                      f"{count:,} were read, the other {stored - count:,} ignored (the header's count is wrong or records "
                      "were appended); set the count in its header to read them all")
     x, y, z, classes = (_join(column) for column in columns)
-    header = LasHeader(
-        path=str(path), version=(int(head.version.major), minor), point_format=int(head.point_format.id),
-        record_length_bytes=int(head.point_format.size), point_count=count, scale=scale, offset=offset,
-        min_xyz=tuple(map(float, head.mins)), max_xyz=tuple(map(float, head.maxs)),
-        horizontal_unit_m=horizontal_m, vertical_unit_m=vertical_m, crs=crs_name, units_source=source,
-    )
     extent = (float(low[0]), float(high[0]), float(low[1]), float(high[1]))
     ground_area_m2 = float(np.prod(ground_high - ground_low)) if ground_count else 0.0
     return PointCloud(x_m=x, y_m=y, z_m=z, classification=classes, header=header, crs=crs,
-                      notes=tuple(notes), file_extent_m=extent,
+                      notes=tuple(notes), file_extent_m=extent, ground_count=ground_count,
                       ground_density_per_m2=ground_count / ground_area_m2 if ground_area_m2 > 0 else None)
 
 

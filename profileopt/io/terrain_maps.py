@@ -266,7 +266,7 @@ def read_geotiff(path: str | os.PathLike, *, terrain_crs: str | None = None,
         with rasterio.open(path) as dataset:
             transform, stated, unit = dataset.transform, dataset.crs, (dataset.units[0] or "")
             scale, offset = float(dataset.scales[0]), float(dataset.offsets[0])
-            crs = _geotiff_crs(path, stated, terrain_crs, notes)
+            crs = geotiff_crs(path, stated, terrain_crs, notes)
             if transform.b != 0 or transform.d != 0:
                 raise InputError(f"{path}: the raster is rotated or sheared (geotransform {tuple(transform)[:6]}); "
                                  "warp it north-up first, e.g. 'gdalwarp in.tif out.tif'")
@@ -319,7 +319,7 @@ def read_geotiff(path: str | os.PathLike, *, terrain_crs: str | None = None,
                          cell_size_m=(abs(dx), abs(dy)), notes=tuple(notes), file_extent_m=full)
 
 
-def _geotiff_crs(path: Path, stated: Any, terrain_crs: str | None, notes: list[str]) -> Any:
+def geotiff_crs(path: Path, stated: Any, terrain_crs: str | None, notes: list[str]) -> Any:
     """The raster's CRS: ``terrain_crs`` (with a note where it overrides the file's), else the file's."""
     crs = parse_crs(stated.to_wkt(), str(path), "the file's CRS") if stated is not None else None
     if terrain_crs is not None:
@@ -497,18 +497,20 @@ def read_terrain(path: str | os.PathLike, *, terrain_crs: str | None = None, tra
 
     corridor = DEFAULT_CORRIDOR_M if corridor_m is None else float(corridor_m)
     if kind == "GeoTIFF":
-        near = None if track is None else (lambda crs: _track_box_m(track, crs, str(path), None, spacing_m, corridor))
+        near = None if track is None else (lambda crs: track_box_m(track, crs, str(path), None, spacing_m, corridor))
         return read_geotiff(path, terrain_crs=terrain_crs, near=near)
     if kind == "OpenCRG":
         return read_crg_surface(path, terrain_crs=terrain_crs)
-    keep = None if track is None else _Near(track, str(path), spacing_m, corridor)
+    keep = None if track is None else NearTrack(track, str(path), spacing_m, corridor)
+    return read_cloud(path, terrain_crs=terrain_crs, keep=keep)
+
+
+def read_cloud(path: Path, *, terrain_crs: str | None, keep: "NearTrack | None") -> PointCloud:
+    """A LAS/LAZ cloud as :func:`read_terrain` reads it: ``terrain_crs`` gives its CRS and
+    units (else the file's); only the points ``keep`` selects are held (None: all)."""
     if terrain_crs is None:
-        try:
+        with _crs_is_the_fix():
             return _kept(read_las(path, keep=keep), keep)
-        except InputError as exc:  # read_las's fix names its API argument; here the CRS is the fix
-            message = re.sub(r"pass units_m \(metres per file unit[^)]*\)",
-                             "give its CRS with terrain_crs (e.g. EPSG:32633)", str(exc))
-            raise InputError(message) from None
     crs = parse_crs(terrain_crs, str(path), "--terrain-crs")
     units = length_units_m(crs, str(path))
     cloud = _kept(read_las(path, units_m=units, crs=crs, keep=keep), keep)
@@ -517,7 +519,32 @@ def read_terrain(path: str | os.PathLike, *, terrain_crs: str | None = None, tra
     return dataclasses.replace(cloud, header=header, crs=crs)
 
 
-def _track_box_m(track: Any, crs: Any, source: str, density: float | None, spacing_m: float | None,
+def cloud_header(path: Path, *, terrain_crs: str | None) -> tuple[Any, Any]:
+    """The (:class:`~profileopt.io.las.LasHeader`, CRS) of a LAS/LAZ file as :func:`read_cloud`
+    would read it, without decoding a point."""
+    from .las import read_las_header
+
+    if terrain_crs is None:
+        with _crs_is_the_fix():
+            return read_las_header(path)
+    crs = parse_crs(terrain_crs, str(path), "--terrain-crs")
+    return read_las_header(path, units_m=length_units_m(crs, str(path)), crs=crs)
+
+
+class _crs_is_the_fix:
+    """read_las's fix for a file without units names its API argument; here the CRS is the fix."""
+
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, kind: Any, exc: Any, trace: Any) -> None:
+        if isinstance(exc, InputError):
+            message = re.sub(r"pass units_m \(metres per file unit[^)]*\)",
+                             "give its CRS with terrain_crs (e.g. EPSG:32633)", str(exc))
+            raise InputError(message) from None
+
+
+def track_box_m(track: Any, crs: Any, source: str, density: float | None, spacing_m: float | None,
                  corridor_m: float) -> tuple[float, float, float, float]:
     """The box (m) around the track that sampling it needs: its own box widened by the margin."""
     from ..terrain.ground_track import cloud_margin_m, track_on_terrain_m
@@ -527,12 +554,15 @@ def _track_box_m(track: Any, crs: Any, source: str, density: float | None, spaci
     return float(x.min()) - margin, float(x.max()) + margin, float(y.min()) - margin, float(y.max()) + margin
 
 
-class _Near:
+class NearTrack:
     """The points of a cloud within ``margin_m`` of a track: the ``keep`` of read_las."""
 
-    def __init__(self, track: Any, source: str, spacing_m: float | None, corridor_m: float) -> None:
+    def __init__(self, track: Any, source: str, spacing_m: float | None, corridor_m: float, *,
+                 density_per_m2: float | None = None) -> None:
         self.track, self.source, self.spacing_m, self.corridor_m = track, source, spacing_m, corridor_m
         self.margin_m: float | None = None
+        # the density that sets the margin, when it is not the file's own (tiles: all of theirs)
+        self.density_per_m2 = density_per_m2
 
     def __call__(self, crs: Any, density: float | None) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
         from scipy.spatial import cKDTree
@@ -540,6 +570,8 @@ class _Near:
         from ..core.route import path_distance_m
         from ..terrain.ground_track import cloud_margin_m, track_on_terrain_m
 
+        if self.density_per_m2 is not None:
+            density = self.density_per_m2
         x, y = track_on_terrain_m(self.track, crs, self.source)
         self.margin_m = margin = cloud_margin_m(density, self.spacing_m, self.corridor_m)
         # nodes every half margin along the track: a point within the margin of the track is
@@ -562,7 +594,7 @@ class _Near:
         return select
 
 
-def _kept(cloud: PointCloud, keep: _Near | None) -> PointCloud:
+def _kept(cloud: PointCloud, keep: NearTrack | None) -> PointCloud:
     """The cloud, with the distance from the track within which its points were kept."""
     if keep is None or keep.margin_m is None:
         return cloud
