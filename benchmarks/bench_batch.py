@@ -1,31 +1,37 @@
-"""Benchmark of ``profileopt batch`` (issue 32): a batch of 40 routes on a local Dask cluster
-against the same 40 planned one after another in one process.
+"""Benchmark of ``profileopt batch`` (issue 32): 40 routes on a local Dask cluster against the
+same 40 planned one after another in one process, each timed as a user runs it.
 
 Run by hand, never by the test suite (minutes; the numbers depend on the machine)::
 
     pip install -e '.[batch]'
     python benchmarks/bench_batch.py                 # 40 routes, 2 workers, 3 repeats
-    python benchmarks/bench_batch.py --workers 2 --repeats 1
+    python benchmarks/bench_batch.py --workers 2 --repeats 1 --separate
 
 The routes: the bundled ones (``examples/routes/*.csv``) and seeded ISO 8608 profiles of
 classes A-E (300 m at 0.05 m) to make 40. Each is planned with the vehicle ``atv`` and the
-default options. Timed side by side, repeat by repeat, in one run:
+default options. Each way is a fresh process started from the shell, so each pays its own
+imports, and they alternate, repeat by repeat, in one run:
 
 ``serial``
-    :func:`profileopt.batch.plan_many` with ``workers=1``: one route after another in this
-    process (the imports paid once, before the clock starts);
+    ``profileopt batch ROUTES --workers 1``: one route after another in the command's own
+    process, without Dask;
 ``dask``
-    the same rows on a ``LocalCluster`` of ``--workers`` processes, one thread each, from
-    the cluster's start to the last result (workers start and import within the time).
+    ``profileopt batch ROUTES --workers N``: a ``LocalCluster`` of N single-thread worker
+    processes, started, imported and closed within the time;
+``separate`` (with ``--separate``, once)
+    40 runs of ``profileopt plan ROUTE -o ID.csv``, one after another (a shell loop).
 
-Every profile of the Dask batch must be the same bytes as the serial batch's. Prints a
-Markdown table: median seconds and the ratio serial / dask.
+Every profile of the Dask batch (and of the separate runs) must be the same bytes as the
+serial batch's. Prints a Markdown table: median seconds and the ratios.
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
+import os
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -51,40 +57,66 @@ def make_routes(folder: Path, count: int) -> list[Path]:
     return routes
 
 
+def _run(argv: list[str], cwd: Path) -> float:
+    started = time.perf_counter()
+    done = subprocess.run(argv, cwd=cwd, capture_output=True, text=True)
+    elapsed = time.perf_counter() - started
+    if done.returncode not in (0, 5):  # 5: some routes refused by plan (the same in every way)
+        raise SystemExit(f"{' '.join(argv[:4])} ...: exit {done.returncode}: {done.stderr[-400:]}")
+    return elapsed
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--routes", type=int, default=40)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--separate", action="store_true", help="also time one 'profileopt plan' per route")
     args = parser.parse_args(argv)
-    from profileopt.batch import BatchRow, plan_many
-
+    command = [sys.executable, "-m", "profileopt"]
+    env_note = "OPENBLAS_NUM_THREADS=1" if os.environ.get("OPENBLAS_NUM_THREADS") == "1" else ""
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        rows = [BatchRow(f"r{k:02d}_{path.stem}", str(path), (("vehicle", "atv"),))
-                for k, path in enumerate(make_routes(folder, args.routes))]
-        plan_many(rows[:1], folder / "warm", workers=1)  # imports, once
-        times: dict[str, list[float]] = {"serial": [], "dask": []}
+        routes = make_routes(folder, args.routes)
+        ids = [f"r{k:02d}_{path.stem}" for k, path in enumerate(routes)]
+        for route, ident in zip(routes, ids):  # batch names each profile after its route file: copies
+            (folder / f"{ident}.csv").write_bytes(route.read_bytes())
+        names = [f"{ident}.csv" for ident in ids]
+        times: dict[str, list[float]] = {"serial": [], "dask": [], "separate": []}
         for repeat in range(args.repeats):
             for name, workers in (("serial", 1), ("dask", args.workers)):
-                out = folder / f"{name}{repeat}"
-                started = time.perf_counter()
-                result = plan_many(rows, out, workers=workers)
-                times[name].append(time.perf_counter() - started)
-                failed = {r["id"]: r["error"] for r in result if r["status"] != "ok"}
-            for row in rows:
-                if row.id in failed:  # refused by plan (a track without terrain, ...): the same in both
-                    continue
-                if (folder / f"serial{repeat}" / f"{row.id}.csv").read_bytes() != \
-                        (folder / f"dask{repeat}" / f"{row.id}.csv").read_bytes():
-                    print(f"{row.id}: the Dask batch's profile differs from the serial one", file=sys.stderr)
+                times[name].append(_run([*command, "batch", *names, "--vehicle", "atv", "-o", f"{name}{repeat}",
+                                         "--workers", str(workers), "-q"], folder))
+        if args.separate:
+            (folder / "separate").mkdir()
+            started = time.perf_counter()
+            for name in names:
+                subprocess.run([*command, "plan", name, "--vehicle", "atv", "-o", f"separate/{name}", "-q"],
+                               cwd=folder, capture_output=True)
+            times["separate"].append(time.perf_counter() - started)
+        summary = {row["id"]: row for row in csv.DictReader(open(folder / "serial0" / "summary.csv"))}
+        failed = sorted(ident for ident, row in summary.items() if row["status"] != "ok")
+        for ident in ids:
+            if ident in failed:
+                continue
+            reference = (folder / "serial0" / f"{ident}.csv").read_bytes()
+            others = [folder / f"dask{r}" / f"{ident}.csv" for r in range(args.repeats)]
+            if args.separate:
+                others.append(folder / "separate" / f"{ident}.csv")
+            for other in others:
+                if other.read_bytes() != reference:
+                    print(f"{other}: differs from the serial batch's profile", file=sys.stderr)
                     return 1
     serial, dask = statistics.median(times["serial"]), statistics.median(times["dask"])
-    print("| routes | workers | serial, one process (s) | Dask LocalCluster (s) | serial / Dask |")
-    print("|---|---|---|---|---|")
-    print(f"| {args.routes} | {args.workers} | {serial:.1f} | {dask:.1f} | {serial / dask:.2f} |")
-    print(f"\nmedians of {args.repeats} repeats; every profile the same bytes in both; {len(failed)} of the routes "
-          f"refused by plan in both ({', '.join(sorted(failed))})")
+    print("| routes | workers | serial batch, one process (s) | Dask LocalCluster (s) | serial / Dask |"
+          + (" 40 separate plans (s) | separate / Dask |" if args.separate else ""))
+    print("|---|---|---|---|---|" + ("---|---|" if args.separate else ""))
+    line = f"| {args.routes} | {args.workers} | {serial:.1f} | {dask:.1f} | {serial / dask:.2f} |"
+    if args.separate:
+        line += f" {times['separate'][0]:.1f} | {times['separate'][0] / dask:.2f} |"
+    print(line)
+    print(f"\nmedians of {args.repeats} repeats, each a fresh process {env_note}; every profile the same bytes in "
+          f"every way; {len(failed)} of the routes refused by plan in every way ({', '.join(failed)})")
     return 0
 
 

@@ -40,10 +40,13 @@ from .core.vehicle import names_vehicle_file
 from .errors import InputError
 from .progress import NO_PROGRESS, Progress
 
-__all__ = ["BatchRow", "read_manifest", "plan_many", "SUMMARY_COLUMNS", "SUMMARY_FILE", "MISSING_DASK"]
+__all__ = ["BatchRow", "read_manifest", "plan_many", "SUMMARY_COLUMNS", "SUMMARY_FILE", "SUMMARY_PARQUET",
+           "MISSING_DASK"]
 
 #: The summary's file name in the output folder.
 SUMMARY_FILE = "summary.csv"
+#: The summary as Parquet, beside the CSV when pyarrow (the ``parquet`` extra) is installed.
+SUMMARY_PARQUET = "summary.parquet"
 #: The summary's columns, in order.
 SUMMARY_COLUMNS = ("id", "status", "travel_time_s", "distance_m", "mean_speed_mps", "segments", "force_ratio",
                    "binding", "notes", "error", "route", "profile", "input_sha256")
@@ -93,7 +96,9 @@ class BatchRow:
         argv = [self.route, "-o", os.fspath(output), "--quiet"]
         for name, value in self.options:
             flag = "--" + name.replace("_", "-")
-            if value.lower() in ("true", "yes"):
+            if name == "terrain":
+                argv.extend(f"{flag}={part}" for part in value.split(";"))
+            elif value.lower() in ("true", "yes"):
                 argv.append(flag)
             elif value.lower() in ("false", "no"):
                 argv.append("--no-" + name.replace("_", "-"))
@@ -108,8 +113,9 @@ def read_manifest(path: str | os.PathLike) -> list[BatchRow]:
     Columns: ``id`` and ``route``, then optionally ``terrain``, ``vehicle``, ``model`` and
     any long option of ``profileopt plan`` without its dashes (``segment_length``,
     ``roughness_class``, ``v0``, ``refine`` = true/false, ...); an empty cell leaves the
-    option at its default. Relative paths (``route``, ``terrain``, a ``vehicle`` that is a
-    file) are relative to the manifest's folder.
+    option at its default. ``terrain`` is a terrain file, a folder of tiles, or several
+    of them separated by ``;`` (in JSON, also a list). Relative paths (``route``,
+    ``terrain``, a ``vehicle`` that is a file) are relative to the manifest's folder.
 
     Parameters
     ----------
@@ -177,8 +183,10 @@ def read_manifest(path: str | os.PathLike) -> list[BatchRow]:
         for key, value in record.items():
             if key in ("id", "route") or value == "":
                 continue
-            if key in _FILE_COLUMNS and (key != "vehicle" or names_vehicle_file(value)):
-                value = str(path.parent / value) if not os.path.isabs(value) else value
+            if key == "terrain":  # a file, a folder of tiles, or several of them separated by ';'
+                value = ";".join(_beside(path, part.strip()) for part in value.split(";") if part.strip())
+            elif key in _FILE_COLUMNS and (key != "vehicle" or names_vehicle_file(value)):
+                value = _beside(path, value)
             pairs.append((key, value))
         out.append(BatchRow(ident, route if os.path.isabs(route) else str(path.parent / route), tuple(pairs)))
     if not out:
@@ -352,7 +360,14 @@ def _plan_options() -> set[str]:
     return names - _NOT_IN_A_ROW
 
 
+def _beside(manifest: Path, value: str) -> str:
+    """A path of a manifest's cell: relative ones relative to the manifest's folder."""
+    return value if os.path.isabs(value) else str(manifest.parent / value)
+
+
 def _text(value: Any) -> str:
+    if isinstance(value, list):  # a JSON list of terrain tiles
+        return ";".join(_text(item) for item in value)
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, float) and math.isfinite(value):
@@ -361,16 +376,31 @@ def _text(value: Any) -> str:
 
 
 def _input_sha256(row: BatchRow) -> str:
-    """What a row's profile depends on: the version, its options, the bytes of its files."""
+    """What a row's profile depends on: the version, its options, the bytes of its route and
+    vehicle files, and its terrain files' names, sizes and modification times (tiles can be
+    gigabytes, read again for every route if hashed)."""
     from . import __version__
+    from .io.tiles import terrain_files
 
     digest = hashlib.sha256(f"profileopt {__version__}\n{row.id}\n{row.route}\n".encode())
     digest.update(json.dumps(row.options).encode())
-    for name in (row.route, *(value for key, value in row.options if key in _FILE_COLUMNS)):
+    for name in (row.route, *(value for key, value in row.options if key == "vehicle")):
         if os.path.isfile(name):
             with open(name, "rb") as handle:
                 for block in iter(lambda: handle.read(1 << 20), b""):
                     digest.update(block)
+    terrain = [value for key, value in row.options if key == "terrain"]
+    if terrain:
+        try:
+            files = terrain_files(terrain[0].split(";"))
+        except InputError:
+            files = []  # the plan will say what is wrong
+        for file in files:
+            try:
+                stat = os.stat(file)
+            except OSError:
+                continue
+            digest.update(f"{os.path.realpath(file)}\n{stat.st_size}\n{stat.st_mtime_ns}\n".encode())
     return digest.hexdigest()
 
 
@@ -396,8 +426,31 @@ def _typed(row: dict[str, str]) -> dict[str, Any]:
 def _write_summary(path: Path, rows: Iterable[dict[str, Any]]) -> None:
     from .io.atomic import atomic_write
 
+    rows = list(rows)
     with atomic_write(path) as handle:
         writer = csv.DictWriter(handle, fieldnames=SUMMARY_COLUMNS, lineterminator="\n")
         writer.writeheader()
         for row in rows:
             writer.writerow({key: "" if row.get(key) is None else row.get(key) for key in SUMMARY_COLUMNS})
+    _write_parquet(path.with_name(SUMMARY_PARQUET), rows)
+
+
+#: The summary's numeric columns and their Parquet types (the others are strings).
+_NUMBERS = {"travel_time_s": "float64", "distance_m": "float64", "mean_speed_mps": "float64", "segments": "int64",
+            "force_ratio": "float64"}
+
+
+def _write_parquet(path: Path, rows: list[dict[str, Any]]) -> None:
+    """The summary as Parquet (typed columns; empty cells null), atomically; nothing without pyarrow."""
+    try:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+    except ImportError:
+        return
+    from .io.atomic import atomic_path
+
+    columns = {key: pa.array([row.get(key) if row.get(key) not in ("", None) else None for row in rows],
+                             type=getattr(pa, _NUMBERS.get(key, "string"))())
+               for key in SUMMARY_COLUMNS}
+    with atomic_path(path) as tmp:
+        pq.write_table(pa.table(columns), tmp)

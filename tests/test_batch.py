@@ -127,6 +127,7 @@ def test_one_worker_plans_each_route_as_plan_does_and_fails_alone(folder: Path) 
     assert not (out / "missing.csv").exists() and table["missing"]["profile"] == ""
     assert float(table["kerb"]["travel_time_s"]) == pytest.approx(json.loads(_plan_json(folder / "kerb.csv"))[
         "travel_time_s"], rel=1e-12)
+    _same_as_parquet(out, table)
     # run again: only the failed rows are tried again, the profiles planned stay as they are
     stamp = (out / "kerb.csv").stat().st_mtime_ns
     again = plan_many(rows, out, workers=1)
@@ -136,6 +137,25 @@ def test_one_worker_plans_each_route_as_plan_does_and_fails_alone(folder: Path) 
     third = plan_many(rows, out, workers=1)
     assert third[0]["input_sha256"] != result[0]["input_sha256"]
     assert (out / "kerb.csv").read_bytes() == alone(folder, str(folder / "kerb.csv"), "--vehicle", "atv")
+
+
+def _same_as_parquet(out: Path, table: dict[str, dict[str, str]]) -> None:
+    """summary.parquet (with pyarrow) holds the CSV's rows, numbers typed, empty cells null;
+    without pyarrow there is none."""
+    import importlib.util
+
+    if importlib.util.find_spec("pyarrow") is None:
+        assert not (out / "summary.parquet").exists()
+        return
+    import pyarrow.parquet as pq
+
+    rows = pq.read_table(out / "summary.parquet").to_pylist()
+    assert [row["id"] for row in rows] == list(table)
+    for row in rows:
+        csv_row = table[row["id"]]
+        assert row["status"] == csv_row["status"] and row["error"] == (csv_row["error"] or None)
+        assert row["travel_time_s"] == (float(csv_row["travel_time_s"]) if csv_row["travel_time_s"] else None)
+        assert row["segments"] == (int(csv_row["segments"]) if csv_row["segments"] else None)
 
 
 def _plan_json(route: Path) -> str:
@@ -241,3 +261,41 @@ def test_several_workers_without_dask_say_which_extra(tmp_path: Path, monkeypatc
     monkeypatch.setattr(builtins, "__import__", no_dask)
     with pytest.raises(InputError, match=r"pip install 'profileopt\[batch\]'"):
         plan_many([BatchRow("a", "r.csv")], tmp_path / "o", workers=2)
+
+
+def test_a_terrain_column_takes_tiles_separated_by_semicolons_or_a_json_list(tmp_path: Path) -> None:
+    (tmp_path / "runs.json").write_text('[{"id": "a", "route": "t.gpx", "terrain": ["tiles/sw.laz", "/abs/ne.laz"]},'
+                                        ' {"id": "b", "route": "t.gpx", "terrain": "tiles"}]')
+    a, b = read_manifest(tmp_path / "runs.json")
+    assert a.options == (("terrain", f"{tmp_path / 'tiles/sw.laz'};/abs/ne.laz"),)
+    assert a.argv("o.csv")[-2:] == [f"--terrain={tmp_path / 'tiles/sw.laz'}", "--terrain=/abs/ne.laz"]
+    assert b.argv("o.csv")[-1] == f"--terrain={tmp_path / 'tiles'}"
+
+
+@pytest.mark.slow
+def test_tracks_over_a_folder_of_tiles_plan_as_plan_does(tmp_path: Path) -> None:
+    """Two GPX tracks over a folder of four LAZ tiles (and one far away), each route reading the
+    tiles near it: the profiles are plan's bytes."""
+    pytest.importorskip("laspy")
+    import numpy as np
+
+    import geo_data as g
+
+    x, y, z, c = g.cloud_points(density_per_m2=400.0)
+    (tmp_path / "tiles").mkdir()
+    mid_x, mid_y = float(np.median(x)), float(np.median(y))
+    for name, keep in (("sw", (x < mid_x) & (y < mid_y)), ("se", (x >= mid_x) & (y < mid_y)),
+                       ("nw", (x < mid_x) & (y >= mid_y)), ("ne", (x >= mid_x) & (y >= mid_y))):
+        g.write_laz(tmp_path / "tiles" / f"{name}.laz", x[keep], y[keep], z[keep], c[keep])
+    g.write_laz(tmp_path / "tiles" / "far.laz", x[:500] + 900.0, y[:500], z[:500], c[:500])
+    tx, ty = g.track_utm_m(2.0)
+    g.write_gpx(tmp_path / "arc.gpx", tx, ty)
+    g.write_gpx(tmp_path / "back.gpx", tx[::-1], ty[::-1])
+    import contextlib
+
+    with contextlib.chdir(tmp_path):
+        assert cli.main(["batch", "arc.gpx", "back.gpx", "--terrain", "tiles", "-o", "out", "--workers", "1", "-q",
+                         "--vehicle", "atv"]) == 0
+    for name in ("arc", "back"):
+        assert (tmp_path / "out" / f"{name}.csv").read_bytes() == alone(
+            tmp_path, f"{name}.gpx", "--terrain", "tiles", "--vehicle", "atv")

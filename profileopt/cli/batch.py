@@ -33,6 +33,9 @@ def arguments(parser: argparse.ArgumentParser) -> None:
                              "summary.csv (created if missing)")
     parser.add_argument("--vehicle", metavar="NAME_OR_TOML", help="with ROUTE files: the vehicle of every route")
     parser.add_argument("--model", metavar="MODEL", help="with ROUTE files: the force model of every route")
+    parser.add_argument("--terrain", metavar="FILE", nargs="+", action="extend",
+                        help="with ROUTE files (tracks): the ground under every track, a terrain file, tiles or a "
+                             "folder of them (each route reads only the tiles near it, on its worker)")
     parser.add_argument("--workers", type=_workers, default=None, metavar="N",
                         help="worker processes of the local Dask cluster (default: the machine's cores); 1: one "
                              "route after another in this process, without Dask")
@@ -49,11 +52,14 @@ def run(args: argparse.Namespace) -> int:
     if (args.manifest is None) == (not args.routes):
         raise InputError("give either --manifest FILE or route files, not both and not neither")
     if args.manifest is not None:
-        if args.vehicle or args.model:
-            raise InputError("--vehicle and --model apply to route files; in a manifest they are its columns")
+        if args.vehicle or args.model or args.terrain:
+            raise InputError("--vehicle, --model and --terrain apply to route files; in a manifest they are its "
+                             "columns")
         rows = read_manifest(args.manifest)
     else:
-        common = tuple((name, value) for name, value in (("vehicle", args.vehicle), ("model", args.model)) if value)
+        terrain = ";".join(args.terrain) if args.terrain else None
+        common = tuple((name, value) for name, value in (("vehicle", args.vehicle), ("model", args.model),
+                                                          ("terrain", terrain)) if value)
         stems = [os.path.splitext(os.path.basename(route))[0] for route in args.routes]
         if len(set(stems)) != len(stems):
             raise InputError("two route files have the same name; give a manifest with an id for each")
