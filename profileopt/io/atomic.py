@@ -363,8 +363,12 @@ def _make_temp(target: _Target) -> Path:
     except OSError as exc:
         raise InputError(f"{target.describe()}: cannot write in {directory or tempfile.gettempdir()} "
                          f"({exc.strerror}); choose another path") from None
-    os.close(fd)
-    os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; outputs get the usual permissions
+    try:
+        os.close(fd)
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; outputs get the usual permissions
+    except BaseException:  # SIGTERM or Ctrl-C between the calls: no temporary file is left
+        _remove(Path(tmp))
+        raise
     return Path(tmp)
 
 
