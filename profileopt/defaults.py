@@ -6,13 +6,17 @@ them from here, so ``profileopt --help`` needs none of the numerical packages.
 
 from __future__ import annotations
 
-__all__ = ["MODEL_KEYS", "DEFAULT_MODEL", "DEFAULT_SMOOTHING", "DEFAULT_SEGMENT_LENGTH_M", "DEFAULT_REFINE", "DEFAULT_SIMULATION_GATE", "DEFAULT_ROUGHNESS_WINDOW_M",
+__all__ = ["MODEL_KEYS", "PLAN_MODEL_KEYS", "DEFAULT_MODEL", "DEFAULT_SMOOTHING", "DEFAULT_SEGMENT_LENGTH_M", "DEFAULT_REFINE", "DEFAULT_SIMULATION_GATE", "DEFAULT_ROUGHNESS_WINDOW_M",
            "DEFAULT_PATH_TOLERANCE_M", "MIN_PATH_TOLERANCE_M", "CRAWL_SPEED_MPS", "PLAN_BANDS", "PLAN_METHODS", "MAX_C_BYTES", "DEFAULT_TRACK_SPACING_M",
            "DEFAULT_CORRIDOR_M", "DEFAULT_MAX_GAP_M", "MIN_POINTS_PER_BIN", "MAX_ROUGHNESS_SPACING_M",
            "MAX_ROUGHNESS_CORRIDOR_M", "LIMIT_RTOL"]
 
 #: The four force models, in the paper's order (keys of :data:`profileopt.physics.forces.MODELS`).
 MODEL_KEYS = ("prev_bem", "iecm", "sbem_ef", "sbem_tf")
+#: What ``plan --model`` takes: the paper's four models, and ``"dynamic"``, the quarter car's
+#: own response simulated on the route's samples (for offline plans over measured terrain;
+#: :mod:`profileopt.planning.dynamic`).
+PLAN_MODEL_KEYS = (*MODEL_KEYS, "dynamic")
 #: The model used when none is named: SBEM:TF, the paper's transmitted-force model.
 DEFAULT_MODEL = "sbem_tf"
 #: Weight of the jerk term: objective = time + w * integral (jerk / (1 m/s^3))^2 dt, both in s.

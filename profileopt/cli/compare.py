@@ -13,7 +13,7 @@ import json
 
 from .messages import flags_for_parameters
 
-from ..defaults import DEFAULT_REFINE
+from ..defaults import DEFAULT_REFINE, MODEL_KEYS
 
 
 def run(args: argparse.Namespace) -> int:
@@ -27,7 +27,8 @@ def run(args: argparse.Namespace) -> int:
     route = read_route(args.route)
     with terminal_progress("profileopt compare", enabled=not args.quiet) as progress:
         runs = compare_models(route, vehicle, segment_length_m=args.segment_length,
-                              roughness_window_m=args.roughness_window, refine=args.refine, progress=progress)
+                              roughness_window_m=args.roughness_window, refine=args.refine, progress=progress,
+                              models=[*MODEL_KEYS, "dynamic"] if args.dynamic else None)
     rows = [run.to_dict() for run in runs]
     if args.json:
         print(json.dumps({"route": args.route, "vehicle": args.vehicle, "segment_length_m": args.segment_length,
@@ -85,5 +86,8 @@ def arguments(parser: argparse.ArgumentParser) -> None:
                              "speed cap and the roughness changes (default); --no-refine: uniform segments")
     parser.add_argument("--roughness-window", type=float, default=5.0, metavar="M",
                         help="roughness window length in m, for the plans and the checks (default: 5)")
+    parser.add_argument("--dynamic", action="store_true",
+                        help="add a row for the dynamic model (the quarter car's response simulated on the route's "
+                             "own samples, for measured terrain): its plan beside the paper's models'")
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
     parser.add_argument("-q", "--quiet", action="store_true", help="no progress display on stderr")

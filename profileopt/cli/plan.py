@@ -14,7 +14,7 @@ from ..defaults import (
     DEFAULT_ROUGHNESS_WINDOW_M,
     DEFAULT_SEGMENT_LENGTH_M,
     DEFAULT_SMOOTHING,
-    MODEL_KEYS,
+    PLAN_MODEL_KEYS,
     PLAN_BANDS,
     PLAN_METHODS,
 )
@@ -51,8 +51,13 @@ def arguments(parser: argparse.ArgumentParser) -> None:
                              f"speeds admissible for its own RI (default: {DEFAULT_ROUGHNESS_WINDOW_M:g})")
     parser.add_argument("--path-tolerance", type=number_argument, default=DEFAULT_PATH_TOLERANCE_M, metavar="M",
                         help=PATH_TOLERANCE_HELP)
-    parser.add_argument("--model", default=DEFAULT_MODEL, choices=list(MODEL_KEYS),
-                        help="force model (default: sbem_tf)")
+    parser.add_argument("--model", default=DEFAULT_MODEL, choices=list(PLAN_MODEL_KEYS),
+                        help="force model: the paper's sbem_tf (default), sbem_ef, iecm, prev_bem, from the roughness "
+                             "index; or dynamic, the quarter car's response simulated on the route's own samples "
+                             "(measured terrain, offline)")
+    parser.add_argument("--force-margin", type=_share, default=0.0, metavar="SHARE",
+                        help="with --model dynamic: share of the force limit kept in reserve for error in the "
+                             "measured profile, e.g. 0.1 (default: 0)")
     parser.add_argument("--smoothing", type=number_argument, default=DEFAULT_SMOOTHING, metavar="W",
                         help="weight of the comfort term: objective = time + W * integral (jerk/(1 m/s^3))^2 dt "
                              f"(default: {DEFAULT_SMOOTHING}; 0 = pure minimum time)")
@@ -144,7 +149,8 @@ def execute(args: argparse.Namespace) -> tuple[dict, bool]:
     with terminal_progress("profileopt plan", enabled=not args.quiet) as progress:
         profile = plan(
             route, vehicle, segment_length_m=args.segment_length, roughness_window_m=args.roughness_window,
-            path_tolerance_m=tolerance, model=args.model, smoothing=args.smoothing,
+            path_tolerance_m=tolerance, model=args.model, force_margin=args.force_margin,
+            smoothing=args.smoothing,
             max_jerk_mps3=args.max_jerk, v0_mps=args.v0, vend_mps=args.vend, method=args.method,
             band=args.band, refine=args.refine, progress=progress,
         )
@@ -289,3 +295,11 @@ def _label(model: str) -> str:
     from ..physics.forces import get_model
 
     return get_model(model).label
+
+
+def _share(text: str) -> float:
+    """A number in [0, 1) for --force-margin, or argparse's one-line error."""
+    value = number_argument(text)
+    if not 0.0 <= value < 1.0:
+        raise argparse.ArgumentTypeError(f"{value:g}: give a share of the force limit, from 0 to below 1")
+    return value

@@ -29,7 +29,7 @@ import math
 import sys
 from pathlib import Path
 
-from ..defaults import DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M, MODEL_KEYS
+from ..defaults import DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M, PLAN_MODEL_KEYS
 from ..errors import InputError
 from .messages import printable
 from .paths import vehicle_input
@@ -269,7 +269,7 @@ def arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--vehicle", default=None, metavar="NAME_OR_TOML",
                         help="bundled vehicle name or .toml file (default: the vehicle the profile "
                              "records; a different one is refused)")
-    parser.add_argument("--model", default=None, choices=list(MODEL_KEYS),
+    parser.add_argument("--model", default=None, choices=list(PLAN_MODEL_KEYS),
                         help="force model to check against (default: the model the profile records)")
     # the bounds are verify's own, never read from the profile's settings line (a note says
     # where that differs): the vehicle's and the project's defaults unless given here

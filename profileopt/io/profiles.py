@@ -34,7 +34,7 @@ from ..core.binding import BINDING_NAMES
 from ..core.profile import BASE_COLUMNS, PROFILE_COLUMNS, Profile
 from ..core.vehicle import names_vehicle_file
 from ..errors import InputError
-from ..physics.forces import DEFAULT_MODEL, MODELS
+from ..defaults import DEFAULT_MODEL, PLAN_MODEL_KEYS
 from .atomic import atomic_write
 from .table import read_table
 
@@ -245,9 +245,9 @@ def read_profile(path: str | os.PathLike) -> Profile:
         raise InputError(f"{name}: line {numbers[i]}: speed_mps = {values[i, 1]:g} m/s is negative; "
                          "speeds must be >= 0")
     model = str(settings.get("model", DEFAULT_MODEL))
-    if model not in MODELS:
+    if model not in PLAN_MODEL_KEYS:
         raise InputError(f"{name}: line {settings_line}: model={model} is unknown; it must be one of "
-                         f"{', '.join(MODELS)}")
+                         f"{', '.join(PLAN_MODEL_KEYS)}")
     extra: dict[str, object] = {}
     if full:
         labels = np.array([row.split(",")[binding_at].strip() for row in table.rows], dtype=object)

@@ -51,6 +51,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "DEFAULT_MODEL",
+    "DYNAMIC",
     "ForceModel",
     "MODELS",
     "FORCE_OF_E_MAX",
@@ -452,6 +453,20 @@ if tuple(MODELS) != MODEL_KEYS:  # pragma: no cover - the command line lists MOD
     raise RuntimeError("profileopt.defaults.MODEL_KEYS must name the models of MODELS, in order")
 
 
+def _no_formula(*args: Any) -> Any:
+    raise InputError("the dynamic model has no force formula of the RI or e_max: its force is the quarter car's "
+                     "response simulated on the route's own samples (profileopt.physics.simulate); choose one "
+                     "of the paper's models (sbem_tf, sbem_ef, iecm, prev_bem) here")
+
+
+#: The ``dynamic`` model: the transmitted force of the quarter car driven over the route's own
+#: samples, as :func:`~profileopt.physics.simulate.simulate_quarter_car` computes it, held to
+#: ``max_transmitted_force_n``. It has no formula of the RI (its ``of_ri`` and
+#: ``envelope_of_ri`` refuse, naming the paper's models); the planner imposes it by
+#: simulating (:mod:`profileopt.planning.dynamic`). Not one of :data:`MODELS` (the paper's).
+DYNAMIC = ForceModel("dynamic", "dynamic", "max_transmitted_force_n", "transmitted", _no_formula, _no_formula, False)
+
+
 #: The models defined on the worst-case elevation e_max (m) of Eq. (8), each with its own
 #: expression ``force(speed_mps, e_max_m, vehicle)`` (N). Prev:BEM is defined on the RI only.
 FORCE_OF_E_MAX: dict[str, Callable[..., Any]] = {
@@ -467,17 +482,20 @@ def get_model(model: str) -> ForceModel:
     Parameters
     ----------
     model : str
-        ``"prev_bem"``, ``"iecm"``, ``"sbem_ef"`` or ``"sbem_tf"``.
+        ``"prev_bem"``, ``"iecm"``, ``"sbem_ef"``, ``"sbem_tf"`` or ``"dynamic"``
+        (:data:`DYNAMIC`).
 
     Raises
     ------
     InputError
         Another ``model``; the message names the choices.
     """
+    if model == DYNAMIC.key:
+        return DYNAMIC
     try:
         return MODELS[model]
     except (KeyError, TypeError):
-        raise InputError(f"model {model!r} is unknown; choose one of {', '.join(MODELS)}") from None
+        raise InputError(f"model {model!r} is unknown; choose one of {', '.join(MODELS)} or dynamic") from None
 
 
 def check_e_max_model(model: str) -> None:

@@ -40,22 +40,28 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..core.route import with_assumed_roughness
 from ..physics.forces import get_model
 from ..physics.simulate import QuarterCarRun, simulate_quarter_car
 from ..physics.steps import StepCaps
-from ..core.route import with_assumed_roughness
+from ..progress import NO_PROGRESS, Progress
+from .limits.simulated import SimulatedLimit
 
 if TYPE_CHECKING:
+    from typing import Callable
+
     from ..core.profile import Profile
     from ..core.route import Route
     from ..core.vehicle import Vehicle
+    from .limits.base import Limit
 
-__all__ = ["GATE_MARGIN", "GATE_SHRINK", "MAX_GATE_ROUNDS", "GateCheck", "gate_applies", "check_plan", "gate_caps",
-           "merged_caps", "covered_m"]
+__all__ = ["GATE_MARGIN", "GATE_SHRINK", "MAX_GATE_ROUNDS", "GateCheck", "GateRun", "gate_applies", "check_plan",
+           "gate_caps", "merged_caps", "covered_m", "segment_peaks_n", "run_gate", "gate_note"]
 
 #: A simulated force above (1 - GATE_MARGIN) of the limit sends the plan back; a new cap aims
 #: at that much below the limit, so the profile as written to a file (rounded speeds) and
@@ -111,7 +117,8 @@ def gate_applies(model: str) -> bool:
     return get_model(model).quantity == "transmitted"
 
 
-def check_plan(route: "Route", profile: "Profile", vehicle: "Vehicle", *, window_m: float) -> GateCheck:
+def check_plan(route: "Route", profile: "Profile", vehicle: "Vehicle", *, window_m: float,
+               force_margin: float = 0.0) -> GateCheck:
     """Drive ``profile`` over ``route`` in the exact simulation (the one ``verify`` uses).
 
     Parameters
@@ -125,6 +132,9 @@ def check_plan(route: "Route", profile: "Profile", vehicle: "Vehicle", *, window
         The quarter car and ``max_transmitted_force_n``.
     window_m : float
         The roughness window the plan used (m): the band of an assumed roughness's profile.
+    force_margin : float, default 0
+        Share of the force limit kept in reserve (dimensionless, in [0, 1)): the limit
+        judged is ``(1 - force_margin)`` times the vehicle's.
 
     Returns
     -------
@@ -133,13 +143,13 @@ def check_plan(route: "Route", profile: "Profile", vehicle: "Vehicle", *, window
     if route.assumed_roughness is not None:
         route, _ = with_assumed_roughness(route, vehicle, window_m=window_m, seed=0)
     run = simulate_quarter_car(route.s_m, route.z_m, profile.s_m, profile.speed_mps, vehicle)
-    limit = float(vehicle.max_transmitted_force_n)
+    limit = float(vehicle.max_transmitted_force_n) * (1.0 - force_margin)
     force = np.abs(run.transmitted_n)
     worst = int(np.argmax(force))
     return GateCheck(run=run, limit_n=limit, worst_ratio=float(force[worst]) / limit, worst_s_m=float(run.s_m[worst]))
 
 
-def gate_caps(check: GateCheck, vehicle: "Vehicle", round_number: int) -> StepCaps:
+def gate_caps(check: GateCheck, vehicle: "Vehicle", round_number: int, *, shrink: float = GATE_SHRINK) -> StepCaps:
     """The caps that take the plan of ``check`` back within the limit: one per stretch of
     route charged with a point over it (see the module's docstring).
 
@@ -152,6 +162,9 @@ def gate_caps(check: GateCheck, vehicle: "Vehicle", round_number: int) -> StepCa
     round_number : int
         1 for the first round of the gate, 2 for the second, ...: the lookback is that many
         natural periods.
+    shrink : float, default :data:`GATE_SHRINK`
+        A new cap is at most this share of the fastest speed driven before the worst point
+        (dimensionless, in (0, 1)).
 
     Returns
     -------
@@ -176,8 +189,32 @@ def gate_caps(check: GateCheck, vehicle: "Vehicle", round_number: int) -> StepCa
                       for a, b in zip(heads.tolist(), np.append(heads[1:], over.size).tolist())])
     first = np.searchsorted(run.time_s, run.time_s[worst] - period_s, side="left")
     fastest = np.array([float(np.max(run.speed_mps[a:b + 1])) for a, b in zip(first.tolist(), worst.tolist())])
-    shrink = np.minimum(GATE_SHRINK, (1.0 - GATE_MARGIN) / ratio[worst])
-    return StepCaps(start_m=lo, end_m=hi, cap_mps=fastest * shrink)
+    cut = np.minimum(shrink, (1.0 - GATE_MARGIN) / ratio[worst])
+    return StepCaps(start_m=lo, end_m=hi, cap_mps=fastest * cut)
+
+
+def segment_peaks_n(check: GateCheck, s_m: np.ndarray) -> np.ndarray:
+    """The largest simulated |F_T| (N) inside each segment of boundaries ``s_m``, per row
+    (the last row repeats the last segment's), as a profile's ``force_n`` column holds it.
+
+    Parameters
+    ----------
+    check : GateCheck
+        The simulation of the plan.
+    s_m : numpy.ndarray, shape (N+1,)
+        The plan's segment boundaries (m).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N+1,)
+    """
+    from ..core.stations import segment_index
+
+    s = np.asarray(s_m, dtype=float)
+    seg = segment_index(check.run.s_m, s)
+    peaks = np.zeros(s.size - 1)
+    np.maximum.at(peaks, seg, np.abs(check.run.transmitted_n))
+    return np.append(peaks, peaks[-1])
 
 
 def merged_caps(old: StepCaps | None, new: StepCaps) -> StepCaps:
@@ -222,3 +259,95 @@ def covered_m(caps: StepCaps) -> float:
     heads = np.flatnonzero(new)
     tails = np.append(heads[1:], start.size) - 1
     return float(np.sum(end[tails] - start[heads]))
+
+
+@dataclasses.dataclass(frozen=True)
+class GateRun:
+    """A plan driven through the simulation gate: the last profile, its simulation, the caps
+    the gate set (None: none), and the first round's worst ratio and where (None: it passed at once)."""
+
+    profile: Profile
+    check: GateCheck
+    caps: StepCaps | None
+    first_ratio: float | None
+    first_s_m: float | None
+    rounds: int
+
+
+def run_gate(profile: Profile, once: "Callable[[tuple[Limit, ...]], Profile]", limits: tuple[Limit, ...],
+             route: "Route", vehicle: "Vehicle", window_m: float, timings: dict[str, float],
+             progress: Progress = NO_PROGRESS, once_steps: int = 0, *, rounds: int = MAX_GATE_ROUNDS,
+             shrink: float = GATE_SHRINK, force_margin: float = 0.0) -> GateRun:
+    """Simulate ``profile`` and, while it goes over the force limit, plan again with the
+    gate's caps, for at most ``rounds`` rounds; the last plan and its simulation, passing or not.
+
+    Parameters
+    ----------
+    profile : Profile
+        The first plan.
+    once : callable
+        ``once(limits)``: a plan with these limits (the same segments and path).
+    limits : tuple of Limit
+        The plan's limits; each round adds a :class:`~profileopt.planning.limits.SimulatedLimit`
+        holding every cap so far.
+    route : Route
+        The route (its samples are simulated).
+    vehicle : Vehicle
+        The quarter car and its limit.
+    window_m : float
+        The roughness window (m) (:func:`check_plan`).
+    timings : dict
+        Adds the simulation time (s) under ``"simulate"``.
+    progress : Progress, optional
+        Told each simulation.
+    once_steps : int, default 0
+        The progress steps of one plan.
+    rounds : int, default :data:`MAX_GATE_ROUNDS`
+        Most rounds of capping.
+    shrink : float, default :data:`GATE_SHRINK`
+        As :func:`gate_caps`'s.
+    force_margin : float, default 0
+        As :func:`check_plan`'s.
+
+    Returns
+    -------
+    GateRun
+        ``check.passes`` says whether the last plan keeps the limit.
+    """
+    caps = None
+    first_ratio = first_s = None
+    for round_number in range(1, rounds + 1):
+        t = time.perf_counter()
+        progress.step("simulating the plan" if round_number == 1 else
+                      f"simulating the plan again (round {round_number} of the simulation gate)")
+        check = check_plan(route, profile, vehicle, window_m=window_m, force_margin=force_margin)
+        timings["simulate"] = timings.get("simulate", 0.0) + time.perf_counter() - t
+        if check.passes:
+            return GateRun(profile, check, caps, first_ratio, first_s, round_number)
+        if first_ratio is None:
+            first_ratio, first_s = check.worst_ratio, check.worst_s_m
+        caps = merged_caps(caps, gate_caps(check, vehicle, round_number, shrink=shrink))
+        progress.expect(once_steps + 1)  # plan again, simulate again
+        profile = once((*limits, SimulatedLimit(caps=caps)))
+    check = check_plan(route, profile, vehicle, window_m=window_m, force_margin=force_margin)
+    return GateRun(profile, check, caps, first_ratio, first_s, rounds)
+
+
+def gate_note(run: GateRun) -> str | None:
+    """What the gate did to a plan, one line.
+
+    Parameters
+    ----------
+    run : GateRun
+        A plan through the gate.
+
+    Returns
+    -------
+    str or None
+        None when it passed at once.
+    """
+    if run.caps is None:
+        return None
+    return (f"simulation gate: the plan went {run.first_ratio:.4g}x over the force limit in the exact simulation "
+            f"(at s = {run.first_s_m:.6g} m); the speed was capped over {covered_m(run.caps):.3g} m of route "
+            f"({run.caps.cap_mps.size} stretch(es)), until it held ({run.check.worst_ratio:.4g} of the limit)")

@@ -52,8 +52,8 @@ from ..physics.speeds import SpeedBands, max_force_over_segments
 from ..progress import NO_PROGRESS, Progress
 from .bands import BandChoice, DrivePower, choose_bands, snap_to_band
 from .fallback import fallback_choice
-from .gate import MAX_GATE_ROUNDS, check_plan, covered_m, gate_applies, gate_caps, merged_caps
-from .limits import Limit, PlanContext, SimulatedLimit, default_limits
+from .gate import MAX_GATE_ROUNDS, gate_applies, gate_note, run_gate
+from .limits import Limit, PlanContext, default_limits
 from .nlp.pieces import choose_cuts, cut_scores, solve_pieces
 from .nlp.problem import Scaling, family_rows, objective_s, row_bounds
 from .nlp.solve import solve_nlp
@@ -114,6 +114,7 @@ def plan(
     solver_options: SolverOptions | None = None,
     refine: bool = DEFAULT_REFINE,
     simulation_gate: bool = DEFAULT_SIMULATION_GATE,
+    force_margin: float = 0.0,
     progress: Progress = NO_PROGRESS,
 ) -> Profile:
     """The fastest smooth speed profile along ``route`` that keeps every limit.
@@ -143,7 +144,10 @@ def plan(
         vehicle's ``min_turn_radius_m`` (a reversal always is) is planned at a crawl, with a
         note naming where.
     model : str, default :data:`~profileopt.physics.forces.DEFAULT_MODEL` (``"sbem_tf"``)
-        Force model: ``"sbem_tf"``, ``"sbem_ef"``, ``"iecm"`` or ``"prev_bem"``.
+        Force model: ``"sbem_tf"``, ``"sbem_ef"``, ``"iecm"`` or ``"prev_bem"`` (the paper's,
+        from the roughness index), or ``"dynamic"``: the transmitted force of the quarter car
+        simulated on the route's own samples held within the limit, for offline plans over
+        measured terrain (:mod:`profileopt.planning.dynamic`).
     smoothing : float, default :data:`DEFAULT_SMOOTHING` (0.01)
         Weight w of the comfort term: the objective is travel time + w * integral of
         (jerk / 1 m/s^3)^2 dt, both in seconds. 0 is pure minimum time.
@@ -184,7 +188,12 @@ def plan(
         Drive the plan in the exact simulation ``verify`` uses and, where the force goes over
         the limit, plan again with lower caps there (:mod:`profileopt.planning.gate`; model
         ``sbem_tf``). False returns the model's plan as it is: for studies of the force
-        models themselves (:func:`profileopt.studies.safety.safety_study`).
+        models themselves (:func:`profileopt.studies.safety.safety_study`). The ``dynamic``
+        model is the simulation: it refuses False.
+    force_margin : float, default 0
+        Share of the force limit kept in reserve by the ``dynamic`` model (dimensionless, in
+        [0, 1)): its simulated force is held within (1 - force_margin) of the limit, for
+        error in the measured profile. Other models refuse a margin other than 0.
     progress : Progress, default :data:`profileopt.progress.NO_PROGRESS`
         Told the steps of the plan as they start (cutting the route, the path, the speed
         bands, refining, solving, each round of the simulation gate): for a display of
@@ -216,6 +225,17 @@ def plan(
     _validate_options(vehicle, smoothing, jerk, v0_mps, vend_mps, method, band, refine)
     options = SolverOptions() if solver_options is None else solver_options
     timings: dict[str, float] = {}
+    dynamic = model == "dynamic"
+    if not (isinstance(force_margin, (int, float)) and 0.0 <= force_margin < 1.0):
+        raise InputError(f"force_margin = {force_margin!r}: must be a number from 0 to below 1 (a share of the force "
+                         "limit)")
+    if force_margin and not dynamic:
+        raise InputError(f"force_margin = {force_margin:g} applies to the dynamic model (model='dynamic'); the "
+                         f"{get_model(model).label} model has its own margins in its force formula")
+    if dynamic:
+        from .dynamic import check_dynamic_route
+
+        check_dynamic_route(route, simulation_gate)
     gate = simulation_gate and gate_applies(model)
     once_steps = 4 if refine else 2  # the speed bands (again after refining), refining, solving
     progress.expect(2 + once_steps + (1 if gate else 0))
@@ -239,7 +259,20 @@ def plan(
                           timings=timings, progress=progress)
 
     profile = once(limits)
-    if gate:  # drive it in the exact simulation; cap where it goes over
+    if dynamic:  # the force is the simulated response: gate the kinematic optimum (and a second start)
+        from .dynamic import plan_dynamic
+
+        def sbem_tf() -> Profile:
+            return plan(route, vehicle, segment_length_m=segment_length_m, roughness_window_m=roughness_window_m,
+                        path_tolerance_m=path_tolerance_m, model="sbem_tf", smoothing=smoothing,
+                        max_jerk_mps3=max_jerk_mps3, v0_mps=v0_mps, vend_mps=vend_mps, method=method, band=band,
+                        extra_limits=extra_limits, solver_options=solver_options, refine=refine,
+                        simulation_gate=True, progress=progress)
+
+        profile = plan_dynamic(profile, once, limits, route, vehicle, window_m=seg.roughness_window_m,
+                               timings=timings, fallback=sbem_tf, force_margin=float(force_margin),
+                               progress=progress, once_steps=once_steps)
+    elif gate:  # drive it in the exact simulation; cap where it goes over
         profile = _gate(profile, once, limits, route, vehicle, seg.roughness_window_m, timings, progress,
                         once_steps)
     timings["total"] = time.perf_counter() - t_start
@@ -252,35 +285,14 @@ def _gate(profile: Profile, once: "Callable[[tuple[Limit, ...]], Profile]", limi
     """Simulate ``profile`` and, while it goes over the force limit, plan again with the
     gate's caps (:mod:`.gate`); the last profile, with a note when the gate capped anything.
     ``progress`` is told each simulation; ``once_steps``: the steps of one plan."""
-    caps = None
-    first_ratio = first_s = None
-    for round_number in range(1, MAX_GATE_ROUNDS + 1):
-        t = time.perf_counter()
-        progress.step("simulating the plan" if round_number == 1 else
-                      f"simulating the plan again (round {round_number} of the simulation gate)")
-        check = check_plan(route, profile, vehicle, window_m=window_m)
-        timings["simulate"] = timings.get("simulate", 0.0) + time.perf_counter() - t
-        if check.passes:
-            break
-        if first_ratio is None:
-            first_ratio, first_s = check.worst_ratio, check.worst_s_m
-        caps = merged_caps(caps, gate_caps(check, vehicle, round_number))
-        progress.expect(once_steps + 1)  # plan again, simulate again
-        profile = once((*limits, SimulatedLimit(caps=caps)))
-    else:
-        check = check_plan(route, profile, vehicle, window_m=window_m)
-        if not check.passes:
-            raise PlanningError(
-                f"{route.source}: after {MAX_GATE_ROUNDS} rounds of lowering the speed, the exact simulation is "
-                f"still over the force limit ({check.worst_ratio:.4g} of it at s = {check.worst_s_m:.6g} m); "
-                "please report this with the route and vehicle")
-    if caps is None:
-        return profile
-    note = (f"simulation gate: the plan went {first_ratio:.4g}x over the force limit in the exact simulation "
-            f"(at s = {first_s:.6g} m); the speed was capped over {covered_m(caps):.3g} m of route "
-            f"({caps.cap_mps.size} stretch(es)), until it held "
-            f"({check.worst_ratio:.4g} of the limit)")
-    return dataclasses.replace(profile, notes=(*profile.notes, note))
+    run = run_gate(profile, once, limits, route, vehicle, window_m, timings, progress, once_steps)
+    if not run.check.passes:
+        raise PlanningError(
+            f"{route.source}: after {MAX_GATE_ROUNDS} rounds of lowering the speed, the exact simulation is "
+            f"still over the force limit ({run.check.worst_ratio:.4g} of it at s = {run.check.worst_s_m:.6g} m); "
+            "please report this with the route and vehicle")
+    note = gate_note(run)
+    return run.profile if note is None else dataclasses.replace(run.profile, notes=(*run.profile.notes, note))
 
 
 def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *, seg: Segments,
@@ -659,7 +671,9 @@ def _assemble(seg: Segments, b: np.ndarray, vehicle: "Vehicle", model: str, band
     accel = segment_accel_mps2(b[:-1], b[1:], seg.length_m)
     dt = segment_time_s(speed[:-1], speed[1:], seg.length_m)
     time_s = np.concatenate([[0.0], np.cumsum(dt)])
-    force = max_force_over_segments(model, vehicle, seg.ri, speed, bands.peaks_mps, ri_min=seg.ri_min)
+    # the dynamic model's force is simulated once the plan is made (planning.dynamic)
+    force = (np.zeros(seg.count) if model == "dynamic" else
+             max_force_over_segments(model, vehicle, seg.ri, speed, bands.peaks_mps, ri_min=seg.ri_min))
     rows = np.arange(seg.count)
 
     def per_row(x: np.ndarray) -> np.ndarray:

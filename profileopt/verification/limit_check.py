@@ -394,7 +394,8 @@ def check_limits(
     path = segment_path(route, segments, geometry)
     caps = _speed_caps(route, vehicle, segments, path, force_model.key)
     decel_bound, accel_bound = _accel_bounds(vehicle, path)
-    bands = speed_bands(ri_here, vehicle, model=force_model.key, ri_min=segments.ri_min)
+    dynamic = force_model.key == "dynamic"  # its force is judged by the simulation alone (verify)
+    bands = None if dynamic else speed_bands(ri_here, vehicle, model=force_model.key, ri_min=segments.ri_min)
     row_data = _row_data(vehicle, path, decel_bound, accel_bound)
     n = s.size - 1
     index = np.arange(n)
@@ -429,12 +430,16 @@ def check_limits(
             jerk = boundary_jerk_mps3(v[1:-1], accel[:-1], accel[1:], length[:-1], length[1:])
             breaches.append(_first_breach("jerk", jerk_name, np.abs(jerk), np.array(jerk_bound), s[1:-1],
                                           index[1:], "m/s^3"))
-        predicted = max_force_over_segments(force_model.key, vehicle, ri_here, v, bands.peaks_mps,
-                                            ri_min=segments.ri_min)
-        breaches.append(_first_breach("force", f"the {force_model.label} force limit", predicted, np.array(limit),
-                                      s[:-1], index, "N"))
-        recorded = np.asarray(profile.force_n, dtype=float)[:-1]
-        stale = np.flatnonzero(~(np.abs(recorded - predicted) <= STALE_FORCE_RTOL * limit))
+        if dynamic:  # no formula to predict with: the exact simulation is the model
+            predicted = np.zeros(n)
+            stale = np.empty(0, dtype=int)
+        else:
+            predicted = max_force_over_segments(force_model.key, vehicle, ri_here, v, bands.peaks_mps,
+                                                ri_min=segments.ri_min)
+            breaches.append(_first_breach("force", f"the {force_model.label} force limit", predicted,
+                                          np.array(limit), s[:-1], index, "N"))
+            recorded = np.asarray(profile.force_n, dtype=float)[:-1]
+            stale = np.flatnonzero(~(np.abs(recorded - predicted) <= STALE_FORCE_RTOL * limit))
     if stale.size and same_windows:  # other windows: other forces, by design
         i = stale[0]
         notes.append(
@@ -480,7 +485,11 @@ def _checked_words(vehicle: "Vehicle", caps: list, families: list[str], jerk_mps
         checked.append(f"jerk ({jerk_words})")
     else:
         unchecked.append(f"jerk ({jerk_words.replace(' m/s^3', '')})")
-    checked.append(f"predicted force ({force_model.label}, the vehicle's {force_model.limit_key} {limit_n:g} N)")
+    if force_model.key == "dynamic":
+        checked.append(f"force (the dynamic model: the exact simulation's, the vehicle's {force_model.limit_key} "
+                       f"{limit_n:g} N)")
+    else:
+        checked.append(f"predicted force ({force_model.label}, the vehicle's {force_model.limit_key} {limit_n:g} N)")
     return tuple(checked), tuple(unchecked)
 
 

@@ -473,7 +473,7 @@ def verify(
         s_m=s.copy(),
         speed_mps=np.asarray(profile.speed_mps, dtype=float).copy(),
         ri=check.ri.copy(),  # the route's (the profile's own when they are compared)
-        predicted_n=check.predicted_n.copy(),
+        predicted_n=simulated.copy() if force_model.key == "dynamic" else check.predicted_n.copy(),
         limit_n=limit_n,
         transmitted_peak_n=run.transmitted_peak_n,
         transmitted_up_n=up,

@@ -439,7 +439,8 @@ def check_windows(route: "Route", run: "QuarterCarRun", speed_mps: np.ndarray, v
     window_m = windows.window_m
     start, stop = windows.start_m, windows.stop_m
     low, high = window_speed_range_mps(run.boundaries_m, speed_mps, start, stop)
-    predicted = window_predicted_force_n(spec.key, vehicle, windows.ri, low, high)
+    # the dynamic model predicts by simulating: its prediction is the simulated peak (below)
+    predicted = None if spec.key == "dynamic" else window_predicted_force_n(spec.key, vehicle, windows.ri, low, high)
     tol = 1e-9 * max(window_m, 1.0)
     lo, hi = _window_rows(run.s_m, start, stop, tol)
     zeros = np.zeros(windows.count)
@@ -460,7 +461,7 @@ def check_windows(route: "Route", run: "QuarterCarRun", speed_mps: np.ndarray, v
         peak, row = _affine_peaks(a_part, b_part, lo, hi, slope, offset)
         datum = "window line" if detrend else "window mean"
     return WindowCheck(window_m=window_m, start_m=start, stop_m=stop, ri=windows.ri, speed_low_mps=low,
-                       speed_high_mps=high, predicted_n=predicted, simulated_n=peak, peak_s_m=run.s_m[row],
+                       speed_high_mps=high, predicted_n=peak if predicted is None else predicted, simulated_n=peak, peak_s_m=run.s_m[row],
                        limit_n=spec.limit_n(vehicle), model=spec.key, datum=datum)
 
 

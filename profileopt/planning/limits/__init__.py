@@ -1,6 +1,8 @@
 """The kinds of limit a plan keeps, one module each, and the set every plan starts from.
 
 - :class:`ForceLimit` (``force.py``): the terrain force model's admissible speed bands;
+- :class:`DynamicForceLimit` (``dynamic.py``): the ``dynamic`` model's force, the simulated
+  response (no bands; imposed by :mod:`profileopt.planning.dynamic`);
 - :class:`StepLimit` (``step.py``): SBEM:TF's caps where the wheel meets a step or lands
   after a drop (with the ``sbem_tf`` model only);
 - :class:`SpeedLimit` (``speed.py``): the vehicle's top speed and the route's speed limits;
@@ -31,6 +33,7 @@ from typing import TYPE_CHECKING
 from ...physics.motion import lateral_limit_mps2, plans_on_grades
 from .accel import AccelLimit
 from .base import Limit, PlanContext, worst_ratio
+from .dynamic import DynamicForceLimit
 from .force import ForceLimit
 from .friction import FrictionLimit
 from .jerk import JerkLimit
@@ -43,7 +46,7 @@ from .step import StepLimit
 if TYPE_CHECKING:
     from ...core.vehicle import Vehicle
 
-__all__ = ["Limit", "PlanContext", "worst_ratio", "ForceLimit", "SpeedLimit", "AccelLimit", "JerkLimit",
+__all__ = ["Limit", "PlanContext", "worst_ratio", "ForceLimit", "DynamicForceLimit", "SpeedLimit", "AccelLimit", "JerkLimit",
            "LateralLimit", "FrictionLimit", "PowerLimit", "StepLimit", "SimulatedLimit",
            "default_limits"]
 
@@ -52,7 +55,9 @@ def default_limits(vehicle: "Vehicle", *, model: str, max_jerk_mps3: float) -> t
     """The limits of a plan: force, speed caps, lateral, friction, acceleration, power, jerk
     (in this order, which is also the order of the summary's margins); lateral, friction and
     power only when the vehicle gives their keys; the step limit after the force with the
-    ``sbem_tf`` model (it bounds the same transmitted force where Eq. 13 falls short).
+    ``sbem_tf`` model (it bounds the same transmitted force where Eq. 13 falls short). The
+    ``dynamic`` model's force limit is the simulated response (:class:`DynamicForceLimit`,
+    imposed by :mod:`profileopt.planning.dynamic`).
 
     Parameters
     ----------
@@ -67,7 +72,7 @@ def default_limits(vehicle: "Vehicle", *, model: str, max_jerk_mps3: float) -> t
     -------
     tuple of Limit
     """
-    limits: list[Limit] = [ForceLimit(model=model)]
+    limits: list[Limit] = [DynamicForceLimit() if model == "dynamic" else ForceLimit(model=model)]
     if model == "sbem_tf":
         limits.append(StepLimit())
     limits.append(SpeedLimit(max_speed_mps=vehicle.max_speed_mps))
