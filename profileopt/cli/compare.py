@@ -65,7 +65,7 @@ def _table(args: argparse.Namespace, length_m: float, rows: list[dict]) -> str:
         if row["status"] not in ("optimal", "exact"):
             notes.append(f"{row['label']}: planner status {row['status']}")
     out.append("")
-    out.append(f"Simulated force: the one the model limits (F_T for SBEM:TF, k y + c y' for the others), its peak "
+    out.append(f"Simulated force: the one the model limits (F_T for SBEM:TF and dynamic, k y + c y' for the others), its peak "
                f"while the vehicle is inside each {args.roughness_window:g} m roughness window (y measured from the "
                "window's least-squares line, as its RI) and in each segment, against the limit; 'simulated > "
                "predicted': windows where it exceeds the model's own prediction for the window by more than 1 % "

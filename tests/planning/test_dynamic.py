@@ -145,6 +145,19 @@ def test_the_command_line_plans_and_verify_judges_by_the_simulation(tmp_path) ->
     write_profile(relabelled, tmp_path / "over.csv")
     assert cli.main(["verify", str(tmp_path / "block.csv"), str(tmp_path / "over.csv"),
                      "--vehicle", "atv-resonant"]) == 4
+    # compare --dynamic: the dynamic row beside the paper's four, within the limit in simulation
+    import contextlib
+    import io
+    import json
+
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        assert cli.main(["compare", str(tmp_path / "block.csv"), "--vehicle", "atv-resonant", "--dynamic", "--json",
+                         "-q"]) == 0
+    rows = {row["model"]: row for row in json.loads(printed.getvalue())["models"]}
+    assert list(rows) == ["prev_bem", "iecm", "sbem_ef", "sbem_tf", "dynamic"]
+    assert rows["dynamic"]["worst_transmitted_ratio"] <= 1.0
+    assert rows["dynamic"]["travel_time_s"] <= rows["sbem_tf"]["travel_time_s"]
     with pytest.raises(SystemExit) as stopped:  # argparse's one line, exit 2
         cli.main(["plan", str(tmp_path / "block.csv"), "--force-margin", "1"])
     assert stopped.value.code == 2
