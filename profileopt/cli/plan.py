@@ -55,6 +55,9 @@ def arguments(parser: argparse.ArgumentParser) -> None:
                         help="force model: the paper's sbem_tf (default), sbem_ef, iecm, prev_bem, from the roughness "
                              "index; or dynamic, the quarter car's response simulated on the route's own samples "
                              "(measured terrain, offline)")
+    parser.add_argument("--keep-contact", action="store_true",
+                        help="with --model dynamic: also keep the simulated wheel on the ground (transmitted force "
+                             ">= -m g); slower where the force limit exceeds the wheel load (the atv)")
     parser.add_argument("--force-margin", type=_share, default=0.0, metavar="SHARE",
                         help="with --model dynamic: share of the force limit kept in reserve for error in the "
                              "measured profile, e.g. 0.1 (default: 0)")
@@ -150,7 +153,7 @@ def execute(args: argparse.Namespace) -> tuple[dict, bool]:
         profile = plan(
             route, vehicle, segment_length_m=args.segment_length, roughness_window_m=args.roughness_window,
             path_tolerance_m=tolerance, model=args.model, force_margin=args.force_margin,
-            smoothing=args.smoothing,
+            keep_contact=args.keep_contact, smoothing=args.smoothing,
             max_jerk_mps3=args.max_jerk, v0_mps=args.v0, vend_mps=args.vend, method=args.method,
             band=args.band, refine=args.refine, progress=progress,
         )

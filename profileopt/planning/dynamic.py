@@ -33,6 +33,10 @@ What it guarantees: the returned profile, driven at its own speeds over the rout
 (the rigid-wheel quarter car with the profile's speeds interpolated exactly as ``verify``
 drives them), keeps |F_T| within (1 - :data:`~profileopt.planning.gate.GATE_MARGIN`) x
 (1 - ``force_margin``) of the limit everywhere; every other limit is kept as in any plan.
+With ``keep_contact`` the simulated wheel also stays on the ground (F_T >= -m g, m the
+quarter mass), where the linear model holds; without it (the default, as for SBEM:TF) the
+plan may lift the wheel where F_T < -m g, which ``verify`` reports ("wheel lift-off"):
+for the atv, whose force limit is five times its wheel load, often.
 The guarantee is only as good as the route's samples: ground the samples miss is not
 simulated (hence ``force_margin``, a share of the limit kept in reserve for measurement error,
 and the refusal of routes whose roughness is assumed rather than measured). As speed falls
@@ -95,7 +99,7 @@ def check_dynamic_route(route: "Route", simulation_gate: bool) -> None:
 
 def plan_dynamic(first: "Profile", once: "Callable[[tuple[Limit, ...]], Profile]", limits: "tuple[Limit, ...]",
                  route: "Route", vehicle: "Vehicle", *, window_m: float, timings: dict[str, float],
-                 fallback: "Callable[[], Profile]", force_margin: float = 0.0,
+                 fallback: "Callable[[], Profile]", force_margin: float = 0.0, keep_contact: bool = False,
                  progress: Progress = NO_PROGRESS, once_steps: int = 0) -> "Profile":
     """The dynamic model's plan (see the module's docstring for the method and its guarantee).
 
@@ -120,6 +124,8 @@ def plan_dynamic(first: "Profile", once: "Callable[[tuple[Limit, ...]], Profile]
         ``fallback()``: the SBEM:TF plan, returned when neither start passes.
     force_margin : float, default 0
         Share of the force limit kept in reserve (dimensionless, in [0, 1)).
+    keep_contact : bool, default False
+        Also keep the wheel on the ground in the simulation (F_T >= -m g).
     progress : Progress, optional
         Told each simulation.
     once_steps : int, default 0
@@ -131,7 +137,8 @@ def plan_dynamic(first: "Profile", once: "Callable[[tuple[Limit, ...]], Profile]
         ``force_n`` holds each segment's largest simulated |F_T| (N); a note says which start
         won and how far the gate lowered the speed.
     """
-    settings = {"rounds": MAX_DYNAMIC_ROUNDS, "shrink": DYNAMIC_GATE_SHRINK, "force_margin": force_margin}
+    settings = {"rounds": MAX_DYNAMIC_ROUNDS, "shrink": DYNAMIC_GATE_SHRINK, "force_margin": force_margin,
+                "keep_contact": keep_contact}
     kinematic = run_gate(first, once, limits, route, vehicle, window_m, timings, progress, once_steps, **settings)
     runs: list[tuple[str, GateRun]] = [("from the kinematic optimum", kinematic)]
     if kinematic.caps is not None or not kinematic.check.passes:  # else nothing is faster: done
@@ -153,9 +160,11 @@ def plan_dynamic(first: "Profile", once: "Callable[[tuple[Limit, ...]], Profile]
     note = (f"dynamic model: the exact simulation of the quarter car on the route's samples held within "
             f"{run.check.worst_ratio * (1 - force_margin):.4g} of the force limit"
             + (f" ({force_margin:g} of it kept in reserve)" if force_margin else "")
+            + (", the wheel on the ground (F_T >= -m g)" if keep_contact else "")
             + f"; planned {how}" + (f" (the other start: {'; '.join(other)})" if other else ""))
     gated = gate_note(run)
     notes = (*profile.notes, *([gated] if gated else []), note)
-    settings = {**profile.settings, **({"force_margin": float(force_margin)} if force_margin else {})}
+    settings = {**profile.settings, **({"force_margin": float(force_margin)} if force_margin else {}),
+                **({"keep_contact": True} if keep_contact else {})}
     return dataclasses.replace(profile, force_n=segment_peaks_n(run.check, profile.s_m), notes=notes,
                                settings=settings)

@@ -47,6 +47,7 @@ import numpy as np
 
 from ..core.route import with_assumed_roughness
 from ..physics.forces import get_model
+from ..physics.motion import STANDARD_GRAVITY_MPS2
 from ..physics.simulate import QuarterCarRun, simulate_quarter_car
 from ..physics.steps import StepCaps
 from ..progress import NO_PROGRESS, Progress
@@ -84,15 +85,19 @@ class GateCheck:
     limit_n : float
         The force limit (N): the vehicle's ``max_transmitted_force_n``.
     worst_ratio : float
-        Largest |F_T| / limit anywhere (dimensionless).
+        Largest |F_T| / limit anywhere (dimensionless); with ``keep_contact``, or -F_T / m g
+        where that is larger (over 1: the wheel leaves the ground).
     worst_s_m : float
         Where it occurs (m).
+    ratio : numpy.ndarray, shape (K,)
+        That ratio at each point of the run.
     """
 
     run: QuarterCarRun
     limit_n: float
     worst_ratio: float
     worst_s_m: float
+    ratio: np.ndarray
 
     @property
     def passes(self) -> bool:
@@ -118,7 +123,7 @@ def gate_applies(model: str) -> bool:
 
 
 def check_plan(route: "Route", profile: "Profile", vehicle: "Vehicle", *, window_m: float,
-               force_margin: float = 0.0) -> GateCheck:
+               force_margin: float = 0.0, keep_contact: bool = False) -> GateCheck:
     """Drive ``profile`` over ``route`` in the exact simulation (the one ``verify`` uses).
 
     Parameters
@@ -135,6 +140,9 @@ def check_plan(route: "Route", profile: "Profile", vehicle: "Vehicle", *, window
     force_margin : float, default 0
         Share of the force limit kept in reserve (dimensionless, in [0, 1)): the limit
         judged is ``(1 - force_margin)`` times the vehicle's.
+    keep_contact : bool, default False
+        Also judge the wheel's contact: F_T >= -m g (m the quarter mass), where the linear
+        simulation holds; below it the real wheel leaves the ground.
 
     Returns
     -------
@@ -144,9 +152,12 @@ def check_plan(route: "Route", profile: "Profile", vehicle: "Vehicle", *, window
         route, _ = with_assumed_roughness(route, vehicle, window_m=window_m, seed=0)
     run = simulate_quarter_car(route.s_m, route.z_m, profile.s_m, profile.speed_mps, vehicle)
     limit = float(vehicle.max_transmitted_force_n) * (1.0 - force_margin)
-    force = np.abs(run.transmitted_n)
-    worst = int(np.argmax(force))
-    return GateCheck(run=run, limit_n=limit, worst_ratio=float(force[worst]) / limit, worst_s_m=float(run.s_m[worst]))
+    ratio = np.abs(run.transmitted_n) / limit
+    if keep_contact:
+        ratio = np.maximum(ratio, -run.transmitted_n / (vehicle.quarter_mass_kg * STANDARD_GRAVITY_MPS2))
+    worst = int(np.argmax(ratio))
+    return GateCheck(run=run, limit_n=limit, worst_ratio=float(ratio[worst]), worst_s_m=float(run.s_m[worst]),
+                     ratio=ratio)
 
 
 def gate_caps(check: GateCheck, vehicle: "Vehicle", round_number: int, *, shrink: float = GATE_SHRINK) -> StepCaps:
@@ -172,7 +183,7 @@ def gate_caps(check: GateCheck, vehicle: "Vehicle", round_number: int, *, shrink
         Stretches (m) and caps (m/s), sorted by start; empty when nothing is over.
     """
     run = check.run
-    ratio = np.abs(run.transmitted_n) / check.limit_n
+    ratio = check.ratio
     over = np.flatnonzero(ratio > 1.0 - GATE_MARGIN)
     if over.size == 0:
         return StepCaps(start_m=np.empty(0), end_m=np.empty(0), cap_mps=np.empty(0))
@@ -277,7 +288,7 @@ class GateRun:
 def run_gate(profile: Profile, once: "Callable[[tuple[Limit, ...]], Profile]", limits: tuple[Limit, ...],
              route: "Route", vehicle: "Vehicle", window_m: float, timings: dict[str, float],
              progress: Progress = NO_PROGRESS, once_steps: int = 0, *, rounds: int = MAX_GATE_ROUNDS,
-             shrink: float = GATE_SHRINK, force_margin: float = 0.0) -> GateRun:
+             shrink: float = GATE_SHRINK, force_margin: float = 0.0, keep_contact: bool = False) -> GateRun:
     """Simulate ``profile`` and, while it goes over the force limit, plan again with the
     gate's caps, for at most ``rounds`` rounds; the last plan and its simulation, passing or not.
 
@@ -306,7 +317,7 @@ def run_gate(profile: Profile, once: "Callable[[tuple[Limit, ...]], Profile]", l
         Most rounds of capping.
     shrink : float, default :data:`GATE_SHRINK`
         As :func:`gate_caps`'s.
-    force_margin : float, default 0
+    force_margin, keep_contact : float, bool
         As :func:`check_plan`'s.
 
     Returns
@@ -320,7 +331,8 @@ def run_gate(profile: Profile, once: "Callable[[tuple[Limit, ...]], Profile]", l
         t = time.perf_counter()
         progress.step("simulating the plan" if round_number == 1 else
                       f"simulating the plan again (round {round_number} of the simulation gate)")
-        check = check_plan(route, profile, vehicle, window_m=window_m, force_margin=force_margin)
+        check = check_plan(route, profile, vehicle, window_m=window_m, force_margin=force_margin,
+                           keep_contact=keep_contact)
         timings["simulate"] = timings.get("simulate", 0.0) + time.perf_counter() - t
         if check.passes:
             return GateRun(profile, check, caps, first_ratio, first_s, round_number)
@@ -329,7 +341,8 @@ def run_gate(profile: Profile, once: "Callable[[tuple[Limit, ...]], Profile]", l
         caps = merged_caps(caps, gate_caps(check, vehicle, round_number, shrink=shrink))
         progress.expect(once_steps + 1)  # plan again, simulate again
         profile = once((*limits, SimulatedLimit(caps=caps)))
-    check = check_plan(route, profile, vehicle, window_m=window_m, force_margin=force_margin)
+    check = check_plan(route, profile, vehicle, window_m=window_m, force_margin=force_margin,
+                       keep_contact=keep_contact)
     return GateRun(profile, check, caps, first_ratio, first_s, rounds)
 
 

@@ -115,6 +115,7 @@ def plan(
     refine: bool = DEFAULT_REFINE,
     simulation_gate: bool = DEFAULT_SIMULATION_GATE,
     force_margin: float = 0.0,
+    keep_contact: bool = False,
     progress: Progress = NO_PROGRESS,
 ) -> Profile:
     """The fastest smooth speed profile along ``route`` that keeps every limit.
@@ -194,6 +195,9 @@ def plan(
         Share of the force limit kept in reserve by the ``dynamic`` model (dimensionless, in
         [0, 1)): its simulated force is held within (1 - force_margin) of the limit, for
         error in the measured profile. Other models refuse a margin other than 0.
+    keep_contact : bool, default False
+        With the ``dynamic`` model, also keep the simulated wheel on the ground
+        (F_T >= -m g, where the linear quarter car holds); other models refuse True.
     progress : Progress, default :data:`profileopt.progress.NO_PROGRESS`
         Told the steps of the plan as they start (cutting the route, the path, the speed
         bands, refining, solving, each round of the simulation gate): for a display of
@@ -232,6 +236,8 @@ def plan(
     if force_margin and not dynamic:
         raise InputError(f"force_margin = {force_margin:g} applies to the dynamic model (model='dynamic'); the "
                          f"{get_model(model).label} model has its own margins in its force formula")
+    if keep_contact and not dynamic:
+        raise InputError(f"keep_contact applies to the dynamic model (model='dynamic'), not {get_model(model).label}")
     if dynamic:
         from .dynamic import check_dynamic_route
 
@@ -271,7 +277,7 @@ def plan(
 
         profile = plan_dynamic(profile, once, limits, route, vehicle, window_m=seg.roughness_window_m,
                                timings=timings, fallback=sbem_tf, force_margin=float(force_margin),
-                               progress=progress, once_steps=once_steps)
+                               keep_contact=bool(keep_contact), progress=progress, once_steps=once_steps)
     elif gate:  # drive it in the exact simulation; cap where it goes over
         profile = _gate(profile, once, limits, route, vehicle, seg.roughness_window_m, timings, progress,
                         once_steps)

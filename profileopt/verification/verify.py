@@ -36,6 +36,7 @@ from ..io.atomic import atomic_write
 from ..physics.forces import get_model
 from ..core.route import with_assumed_roughness
 from .limit_check import LimitBreach, LimitCheck, check_limits, route_as_planned
+from ..physics.motion import STANDARD_GRAVITY_MPS2  # the static wheel load m g
 from ..physics.simulate import QuarterCarRun, simulate_quarter_car
 from .window_check import UNDERPREDICTION_TOLERANCE, WindowCheck, check_windows
 
@@ -64,8 +65,6 @@ VERIFY_BYTES_PER_STEP = 420
 #: About 820,000 samples (a 14 MB ``s,z`` file, 41 km at 5 cm) driven at 10 m/s.
 MAX_VERIFY_PEAK_BYTES = 1.5e9
 
-#: Standard gravity (m/s^2), for the static wheel load m g.
-STANDARD_GRAVITY_MPS2 = 9.80665
 #: Columns of the verification CSV, in order.
 VERIFICATION_COLUMNS = (
     "s_start_m", "s_end_m", "speed_start_mps", "speed_end_mps", "ri",

@@ -19,6 +19,7 @@ import pytest
 import profileopt
 from profileopt.core.route import Route
 from profileopt.errors import InputError
+from profileopt.physics.simulate import simulate_quarter_car
 from profileopt.planning import dynamic
 from profileopt.studies.known_terrain import constant_speed_drive, fastest_constant_speed, simulated_ratio
 from profileopt.terrain.assumed import AssumedRoughness
@@ -161,3 +162,20 @@ def test_the_command_line_plans_and_verify_judges_by_the_simulation(tmp_path) ->
     with pytest.raises(SystemExit) as stopped:  # argparse's one line, exit 2
         cli.main(["plan", str(tmp_path / "block.csv"), "--force-margin", "1"])
     assert stopped.value.code == 2
+
+
+def test_keep_contact_keeps_the_simulated_wheel_on_the_ground() -> None:
+    """The atv's force limit (5000 N) is five times its wheel load (m g = 981 N): its dynamic
+    plan over the kerb lifts the simulated wheel (F_T < -m g, verify's 'wheel lift-off');
+    with keep_contact it never does, and keeps the force limit."""
+    route = profileopt.read_route(ROUTES / "curb.csv")
+    vehicle = profileopt.load_vehicle("atv")
+    weight_n = vehicle.quarter_mass_kg * 9.80665
+    free = profileopt.plan(route, vehicle, model="dynamic")
+    assert profileopt.verify(route, free, vehicle).lift_off.any()
+    kept = profileopt.plan(route, vehicle, model="dynamic", keep_contact=True)
+    run = simulate_quarter_car(route.s_m, route.z_m, kept.s_m, kept.speed_mps, vehicle)
+    assert run.transmitted_n.min() >= -weight_n and np.abs(run.transmitted_n).max() <= vehicle.max_transmitted_force_n
+    assert kept.settings["keep_contact"] is True and kept.travel_time_s >= free.travel_time_s
+    with pytest.raises(InputError, match="keep_contact applies to the dynamic model"):
+        profileopt.plan(route, vehicle, keep_contact=True)
