@@ -31,6 +31,10 @@ from .registry import COMMANDS, load_command
 
 __all__ = ["main", "build_parser"]
 
+#: The arguments being parsed (:func:`_parse`), for :meth:`_Parser.error`'s hints.
+_ARGV: list[str] = []
+
+
 class _Parser(argparse.ArgumentParser):
     """An argument parser whose errors are one line (no usage block), exit status 2."""
 
@@ -40,6 +44,11 @@ class _Parser(argparse.ArgumentParser):
         if switch:
             names = [name for name in switch.groups()[:2] if name]
             message = f"{'/'.join(names)} takes no value ('{switch.group(3)}' given): write {' or '.join(names)}"
+        missing = message.split(": ", 1)[1].split(", ") if message.startswith("the following arguments are") else []
+        if any(not name.startswith("-") for name in missing) and any(
+                word == "--terrain" or word.startswith("--terrain=") for word in _ARGV):
+            # --terrain takes several files: a route after it is taken for one more
+            message += "; --terrain takes one or more files, so give the route before it"
         choice = re.fullmatch(r"argument (.+): invalid choice: '(.*)' \(choose from (.*)\)", message)
         if choice:  # a misspelt sub-command or choice: the nearest, first
             offered = re.findall(r"'([^']*)'", choice.group(3))
@@ -82,6 +91,7 @@ def _parse(parser: argparse.ArgumentParser, argv: Sequence[str] | None) -> argpa
     """The arguments; what the sub-command does not know is refused by the sub-command, by
     name (``profileopt plan: error: unrecognized arguments: --segment-lenght; did you mean
     --segment-length?``), not by the top-level parser."""
+    _ARGV[:] = sys.argv[1:] if argv is None else list(argv)  # for the parser's messages
     args, extras = parser.parse_known_args(argv)
     if extras:
         sub = next(action for action in parser._actions if isinstance(action, argparse._SubParsersAction))

@@ -36,6 +36,10 @@ def refusal(capsys: pytest.CaptureFixture, argv: list[str]) -> str:
     (["plan", "r.csv", "--zzzz"], "profileopt plan: error: unrecognized arguments: --zzzz (see"),
     (["paln", "r.csv"], "did you mean plan?"),
     (["plan", "r.csv", "--model", "sbem_fT"], "did you mean sbem_tf?"),
+    # --terrain takes several files (tiles): a route after them is taken for one more
+    (["plan", "--terrain", "a.laz", "b.laz", "track.gpx"], "required: route; --terrain takes one or more files, so "
+                                                             "give the route before it"),
+    (["route", "--terrain", "tiles", "track.gpx", "-o", "r.csv"], "give the route before it"),
 ])
 def test_a_misspelt_option_names_its_command_and_the_nearest_option(capsys: pytest.CaptureFixture,
                                                                    argv: list[str], words: str) -> None:
@@ -140,3 +144,8 @@ def test_printable_replaces_only_what_is_not_utf8() -> None:
 def test_whole_number_options_take_ascii_digits_only(capsys: pytest.CaptureFixture, argv: list[str],
                                                    words: str) -> None:
     assert words in refusal(capsys, argv)
+
+
+def test_a_missing_route_without_terrain_gets_no_terrain_hint(capsys: pytest.CaptureFixture) -> None:
+    assert refusal(capsys, ["plan"]) == ("profileopt plan: error: the following arguments are required: route "
+                                         "(see 'profileopt plan --help')")
