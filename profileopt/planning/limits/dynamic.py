@@ -12,14 +12,9 @@ segment's largest simulated |F_T|, which this limit reports as the force margin.
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING
-
-import numpy as np
 
 from .base import Limit
-
-if TYPE_CHECKING:
-    from ...core.profile import Profile
+from .force import ForceLimit
 
 __all__ = ["DynamicForceLimit"]
 
@@ -31,19 +26,6 @@ class DynamicForceLimit(Limit):
     name = "force"
     binding = "force"
 
-    def margins(self, profile: "Profile") -> dict[str, dict]:
-        """The largest simulated force over its limit, and where.
-
-        Parameters
-        ----------
-        profile : Profile
-            A planned profile whose ``force_n`` holds each segment's largest simulated |F_T| (N).
-
-        Returns
-        -------
-        dict
-            ``{"force": {"ratio": float, "s_m": float}}``.
-        """
-        ratio = profile.force_n[:-1] / profile.force_limit_n[:-1]
-        k = int(np.argmax(ratio))
-        return {"force": {"ratio": float(ratio[k]), "s_m": float(profile.s_m[k])}}
+    #: The largest force in the ``force_n`` column over its limit, and where: the column holds
+    #: the simulated peaks here, the predicted ones for :class:`~.force.ForceLimit`.
+    margins = ForceLimit.margins
