@@ -212,3 +212,20 @@ def test_a_peak_between_steps_is_found_even_on_a_coarse_grid() -> None:
     at_knots = np.max(np.abs(run.transmitted_n[free & (on_grid | np.isin(run.s_m, s))]))
     assert at_knots < (1 - 2e-4) * peaks[2000][1]
     assert np.max(np.abs(run.transmitted_n[free])) == peaks[20][1]  # the turning point is a row
+
+
+@pytest.mark.parametrize("damping_ratio", [0.02, 0.3, 1.5])
+def test_the_two_pole_filter_is_lfilters(damping_ratio: float) -> None:
+    """The grid recursion's filter against scipy.signal.lfilter (the reference it replaces, 1.5 s
+    to import): the denominator of a quarter car's transition over 5 ms, two numerators, a
+    random input of 100,000 steps; the same outputs to 1e-12 of their size."""
+    import scipy.signal
+
+    from profileopt.physics.quarter_car import transition, two_pole_filter
+
+    f11, f12, f21, f22 = (float(v[0]) for v in transition(np.array([0.005]), 20.0, damping_ratio))
+    den = [1.0, -(f11 + f22), f11 * f22 - f12 * f21]
+    x = np.random.default_rng(7).normal(size=100_000)
+    for num in ([1.0, -f22], [0.0, f12]):
+        expected = scipy.signal.lfilter(num, den, x)
+        assert np.max(np.abs(two_pole_filter(num, den, x) - expected)) <= 1e-12 * np.max(np.abs(expected))
