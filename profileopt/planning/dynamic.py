@@ -155,7 +155,14 @@ def plan_dynamic(first: "Profile", once: "Callable[[tuple[Limit, ...]], Profile]
         worst = min(run.check.worst_ratio for _, run in runs)
         profile = fallback()
         note = (f"dynamic model: after {MAX_DYNAMIC_ROUNDS} rounds of lowering the speed the exact simulation was "
-                f"still over the force limit ({worst:.4g} of it at best); this is the SBEM:TF plan instead")
+                f"still over the " + ("limits" if keep_contact else "force limit")
+                + f" ({worst:.4g} of it at best); this is the SBEM:TF plan instead")
+        if keep_contact or force_margin:  # say whether it keeps what was asked beyond SBEM:TF's own gate
+            check = check_plan(route, profile, vehicle, window_m=window_m, force_margin=force_margin,
+                               keep_contact=keep_contact)
+            note += (", and it keeps them in the simulation too" if check.passes else
+                     f", which does not keep them in the simulation ({check.worst_ratio:.4g} at s = "
+                     f"{check.worst_s_m:.6g} m" + (": the wheel lifts" if keep_contact else "") + ")")
         return dataclasses.replace(profile, notes=(*profile.notes, note))
     how, run = min(passed, key=lambda item: item[1].profile.travel_time_s)
     if len(runs) > 1:  # the kinematic optimum did not pass at once: SBEM:TF's gated plan may be faster
@@ -168,7 +175,7 @@ def plan_dynamic(first: "Profile", once: "Callable[[tuple[Limit, ...]], Profile]
     note = (f"dynamic model: the exact simulation of the quarter car on the route's samples held within "
             f"{run.check.worst_ratio * (1 - force_margin):.4g} of the force limit"
             + (f" ({force_margin:g} of it kept in reserve)" if force_margin else "")
-            + (", the wheel on the ground (F_T >= -m g)" if keep_contact else "")
+            + (" and of the wheel's load (F_T >= -m g: on the ground)" if keep_contact else "")
             + f"; planned {how}" + (f" (the other start: {'; '.join(other)})" if other else ""))
     gated = gate_note(run)
     return _as_dynamic(profile, run.check, (*([gated] if gated else []), note), force_margin=force_margin,
@@ -204,5 +211,5 @@ def _paper_if_faster(fallback: "Callable[[], Profile]", travel_time_s: float, ro
         return None
     note = (f"dynamic model: the SBEM:TF plan ({paper.travel_time_s:.4g} s) was faster than the capped starts "
             f"({travel_time_s:.4g} s) and holds within {check.worst_ratio * (1 - force_margin):.4g} of the force "
-            "limit in the exact simulation" + (", the wheel on the ground" if keep_contact else "") + ": it is the plan")
+            "limit" + (" and of the wheel's load" if keep_contact else "") + " in the exact simulation: it is the plan")
     return _as_dynamic(paper, check, (note,), force_margin=force_margin, keep_contact=keep_contact)
