@@ -271,8 +271,11 @@ def read_tiles(paths: str | os.PathLike | Sequence[str | os.PathLike], *, terrai
         area = sum(_area_m2(tile.box_m) for tile in tiles)
         density = sum(tile.points or 0 for tile in tiles) / area if area > 0 else None
     chosen = tiles if track is None else _near_track(tiles, track, label, density, spacing_m, corridor)
-    note = (f"{label}: read {len(chosen)} of its {len(tiles)} tiles, those within reach of the track ("
-            + ", ".join(tile.path.name for tile in chosen[:6]) + (", ..." if len(chosen) > 6 else "") + ")")
+    if track is None:
+        note = f"{label}: read all {len(tiles)} tiles whole (no track to read only those near it)"
+    else:
+        note = (f"{label}: read {len(chosen)} of its {len(tiles)} tiles, those within reach of the track ("
+                + ", ".join(tile.path.name for tile in chosen[:6]) + (", ..." if len(chosen) > 6 else "") + ")")
     if clouds:
         return _join_clouds(chosen, label, terrain_crs, track, spacing_m, corridor, density, note)
     return _join_grids(chosen, label, terrain_crs, track, spacing_m, corridor, note)

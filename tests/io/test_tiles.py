@@ -102,6 +102,8 @@ def test_a_point_two_buffered_tiles_hold_counts_once(ground: Path) -> None:
     merged = read_terrain(ground / "merged.laz")
     assert len(whole) == len(merged)  # the same points: those in the 0.5 m buffers once
     assert any("counted once" in note for note in whole.notes)
+    first = sorted((ground / "buffered").iterdir())[0]
+    assert whole.notes[0] == f"{first} and 3 more tiles: read all 4 tiles whole (no track to read only those near it)"
     def points(cloud) -> np.ndarray:  # noqa: ANN001  (rows x, y, z in mm, as the files store them)
         return np.unique(np.round(np.column_stack([cloud.x_m, cloud.y_m, cloud.z_m]) * 1000).astype(np.int64), axis=0)
 
