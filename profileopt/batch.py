@@ -17,10 +17,13 @@ What a batch writes, into its output folder:
   after every route, so a batch stopped at any point (a crash, SIGTERM, Ctrl-C) leaves a
   summary of what was done.
 
+With pyarrow installed (the ``parquet`` extra), ``summary.parquet`` holds the same table
+with typed columns.
+
 A row that fails does not stop the others. Run again, a batch plans only the rows whose
 profile is missing, or failed, or whose inputs changed: ``input_sha256`` hashes the
-profileopt version, the row's options and the bytes of every file it reads (route,
-terrain, vehicle file).
+profileopt version, the row's options, the bytes of its route and vehicle files, and the
+names, sizes and modification times of its terrain files.
 """
 
 from __future__ import annotations
@@ -52,8 +55,6 @@ SUMMARY_COLUMNS = ("id", "status", "travel_time_s", "distance_m", "mean_speed_mp
                    "binding", "notes", "error", "route", "profile", "input_sha256")
 #: What to install for more than one worker.
 MISSING_DASK = "planning on several workers needs Dask: pip install 'profileopt[batch]' (or give --workers 1)"
-#: The manifest columns that name files, read relative to the manifest's folder.
-_FILE_COLUMNS = ("route", "terrain", "vehicle")
 #: Options a batch sets itself, or that write files it does not collect.
 _NOT_IN_A_ROW = {"output", "plot", "map", "json", "quiet", "help"}
 _ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,99}")
@@ -185,10 +186,10 @@ def read_manifest(path: str | os.PathLike) -> list[BatchRow]:
                 continue
             if key == "terrain":  # a file, a folder of tiles, or several of them separated by ';'
                 value = ";".join(_beside(path, part.strip()) for part in value.split(";") if part.strip())
-            elif key in _FILE_COLUMNS and (key != "vehicle" or names_vehicle_file(value)):
+            elif key == "vehicle" and names_vehicle_file(value):  # a file, not a bundled name
                 value = _beside(path, value)
             pairs.append((key, value))
-        out.append(BatchRow(ident, route if os.path.isabs(route) else str(path.parent / route), tuple(pairs)))
+        out.append(BatchRow(ident, _beside(path, route), tuple(pairs)))
     if not out:
         raise InputError(f"{path}: the manifest has no rows; give one row per route")
     return out

@@ -65,10 +65,10 @@ def _table(args: argparse.Namespace, length_m: float, rows: list[dict]) -> str:
         if row["status"] not in ("optimal", "exact"):
             notes.append(f"{row['label']}: planner status {row['status']}")
     out.append("")
-    out.append(f"Simulated force: the one the model limits (F_T for SBEM:TF and dynamic, k y + c y' for the others), its peak "
-               f"while the vehicle is inside each {args.roughness_window:g} m roughness window (y measured from the "
-               "window's least-squares line, as its RI) and in each segment, against the limit; 'simulated > "
-               "predicted': windows where it exceeds the model's own prediction for the window by more than 1 % "
+    out.append("Simulated force: the one the model limits (F_T for SBEM:TF and dynamic, k y + c y' for the others), "
+               f"its peak while the vehicle is inside each {args.roughness_window:g} m roughness window (y measured "
+               "from the window's least-squares line, as its RI) and in each segment, against the limit; 'simulated "
+               "> predicted': windows where it exceeds the model's own prediction for the window by more than 1 % "
                "of the limit; 'wheel lift-off': segments where F_T < -m g (the linear model keeps the wheel on "
                "the ground).")
     out += [f"note: {n}" for n in notes]

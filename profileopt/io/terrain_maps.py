@@ -290,8 +290,7 @@ def read_geotiff(path: str | os.PathLike, *, terrain_crs: str | None = None,
                 transform = type(transform)(transform.a, 0.0, transform.c + window.col_off * transform.a,
                                             0.0, transform.e, transform.f + window.row_off * transform.e)
     except rasterio.errors.RasterioError as exc:
-        reason = " ".join(str(exc).split())[:160]
-        raise InputError(f"{path}: is not a readable GeoTIFF (rasterio: {reason}); check the file") from None
+        raise unreadable_geotiff(path, exc) from None
     rows, cols = band.shape
     if rows < 2 or cols < 2:
         raise InputError(f"{path}: the raster has {rows} x {cols} cells; interpolation needs at least 2 x 2")
@@ -317,6 +316,12 @@ def read_geotiff(path: str | os.PathLike, *, terrain_crs: str | None = None,
     y0 = (transform.f + 0.5 * transform.e) * horizontal_m
     return ElevationGrid(z_m=z * vertical_m, transform=(x0, dx, y0, dy), crs=crs, source=str(path),
                          cell_size_m=(abs(dx), abs(dy)), notes=tuple(notes), file_extent_m=full)
+
+
+def unreadable_geotiff(path: Path, exc: Exception) -> InputError:
+    """The one line for a file rasterio cannot read as a GeoTIFF (its reason, whitespace folded)."""
+    reason = " ".join(str(exc).split())[:160]
+    return InputError(f"{path}: is not a readable GeoTIFF (rasterio: {reason}); check the file")
 
 
 def geotiff_crs(path: Path, stated: Any, terrain_crs: str | None, notes: list[str]) -> Any:

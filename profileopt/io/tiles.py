@@ -38,9 +38,12 @@ from .terrain_maps import (
     ElevationGrid,
     NearTrack,
     cloud_header,
+    geotiff_crs,
     read_cloud,
     read_geotiff,
     read_terrain,
+    track_box_m,
+    unreadable_geotiff,
 )
 
 __all__ = ["GridTiles", "read_tiles", "terrain_files", "MAX_TILES"]
@@ -300,7 +303,6 @@ def _header(path: Path, terrain_crs: str | None) -> _Tile:
                      header.point_count)
     rasterio = require_geo("rasterio", "reading GeoTIFF")
     from . import inputs
-    from .terrain_maps import geotiff_crs
 
     inputs.check_regular_input(path, "GeoTIFF file")
     try:
@@ -308,8 +310,7 @@ def _header(path: Path, terrain_crs: str | None) -> _Tile:
             bounds, stated, transform = dataset.bounds, dataset.crs, dataset.transform
             crs = geotiff_crs(path, stated, terrain_crs, [])
     except rasterio.errors.RasterioError as exc:
-        reason = " ".join(str(exc).split())[:160]
-        raise InputError(f"{path}: is not a readable GeoTIFF (rasterio: {reason}); check the file") from None
+        raise unreadable_geotiff(path, exc) from None
     unit = length_units_m(crs, str(path))[0]
     return _Tile(path, "GeoTIFF DEM", (bounds.left * unit, bounds.right * unit, min(bounds.bottom, bounds.top) * unit,
                                        max(bounds.bottom, bounds.top) * unit), crs,
@@ -433,7 +434,6 @@ def _once(x: np.ndarray, y: np.ndarray, z: np.ndarray, boxes: list[tuple[float, 
 def _join_grids(tiles: list[_Tile], label: str, terrain_crs: str | None, track: Any, spacing_m: float | None,
                 corridor_m: float, note: str) -> ElevationGrid | GridTiles:
     """The windows of ``tiles`` around the track on their common grid of cells."""
-    from .terrain_maps import track_box_m
 
     blocks = []
     cells = 0
