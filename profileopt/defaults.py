@@ -7,7 +7,7 @@ them from here, so ``profileopt --help`` needs none of the numerical packages.
 from __future__ import annotations
 
 __all__ = ["MODEL_KEYS", "PLAN_MODEL_KEYS", "DEFAULT_MODEL", "DEFAULT_SMOOTHING", "DEFAULT_SEGMENT_LENGTH_M", "DEFAULT_REFINE", "DEFAULT_SIMULATION_GATE", "DEFAULT_ROUGHNESS_WINDOW_M",
-           "DEFAULT_PATH_TOLERANCE_M", "MIN_PATH_TOLERANCE_M", "CRAWL_SPEED_MPS", "PLAN_BANDS", "PLAN_METHODS", "MAX_C_BYTES", "DEFAULT_TRACK_SPACING_M",
+           "DEFAULT_PATH_TOLERANCE_M", "MIN_PATH_TOLERANCE_M", "CRAWL_SPEED_MPS", "PLAN_BANDS", "PLAN_METHODS", "PLAN_SOLVERS", "MAX_C_BYTES", "DEFAULT_TRACK_SPACING_M",
            "DEFAULT_CORRIDOR_M", "DEFAULT_MAX_GAP_M", "MIN_POINTS_PER_BIN", "MAX_ROUGHNESS_SPACING_M",
            "MAX_ROUGHNESS_CORRIDOR_M", "LIMIT_RTOL"]
 
@@ -89,6 +89,10 @@ PLAN_BANDS = ("all", "first", "largest")
 #: Methods of ``plan`` (``--method``): "auto" (the exact forward-backward profile where it is
 #: optimal, else the NLP) and "nlp" (always the NLP, whichever solver solves it).
 PLAN_METHODS = ("auto", "nlp")
+#: The NLP's solver back ends (``--solver``, ``SolverOptions.nlp_solver``), the default first:
+#: IPOPT, FATROP on the NLP's stage form, the banded interior point written here
+#: (:mod:`profileopt.planning.nlp.backends`).
+PLAN_SOLVERS = ("ipopt", "fatrop", "banded")
 #: Largest C export written (bytes, estimated from
 #: :data:`profileopt.mpc.codegen.C_BYTES_PER_STAGE` before any work): 64 MB is about 2700 stages
 #: of all four models (11 s to generate), far beyond an MPC horizon; 100,000 stages would be

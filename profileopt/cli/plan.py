@@ -17,6 +17,7 @@ from ..defaults import (
     PLAN_MODEL_KEYS,
     PLAN_BANDS,
     PLAN_METHODS,
+    PLAN_SOLVERS,
 )
 from ..errors import InputError
 from .paths import vehicle_input
@@ -69,8 +70,13 @@ def arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--v0", type=number_argument, default=0.0, metavar="MPS", help="speed at the start, m/s (default: 0)")
     parser.add_argument("--vend", type=number_argument, default=0.0, metavar="MPS", help="speed at the end, m/s (default: 0)")
     parser.add_argument("--method", default="auto", choices=list(PLAN_METHODS),
-                        help="'auto': exact forward-backward profile when it is optimal, else the NLP "
-                             "(banded interior point; IPOPT where it stops); 'nlp': always the NLP")
+                        help="'auto': exact forward-backward profile when it is optimal, else the NLP; "
+                             "'nlp': always the NLP")
+    parser.add_argument("--solver", default=PLAN_SOLVERS[0], choices=list(PLAN_SOLVERS),
+                        help="the NLP's solver: 'ipopt' (IPOPT with MUMPS); 'fatrop' (FATROP on the NLP's stage "
+                             "form, a long route in pieces); 'banded' (the banded interior point written here, "
+                             "faster on long routes); IPOPT takes over where another stops "
+                             f"(default: {PLAN_SOLVERS[0]})")
     parser.add_argument("--band", default="all", choices=list(PLAN_BANDS),
                         help="'all': any admissible speed band, chosen over the whole route (may cross "
                              "washboard above resonance); 'first': only speeds reachable from rest "
@@ -130,7 +136,7 @@ def execute(args: argparse.Namespace) -> tuple[dict, bool]:
     outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot), ("--map", args.map)],
                         inputs=[args.route, vehicle_input(args.vehicle), *track_inputs(args)])
     vehicle = load_vehicle(args.vehicle)
-    from ..planning import plan  # the numerical packages: imported only when planning
+    from ..planning import SolverOptions, plan  # the numerical packages: imported only when planning
 
     made = track = None
     tolerance = args.path_tolerance
@@ -156,6 +162,7 @@ def execute(args: argparse.Namespace) -> tuple[dict, bool]:
             keep_contact=args.keep_contact, smoothing=args.smoothing,
             max_jerk_mps3=args.max_jerk, v0_mps=args.v0, vend_mps=args.vend, method=args.method,
             band=args.band, refine=args.refine, progress=progress,
+            solver_options=SolverOptions(nlp_solver=args.solver),
         )
         progress.expect(sum(name is not None for name in (args.plot, args.map)))
         with outputs:
@@ -232,6 +239,11 @@ def _ratio(m: dict) -> str:
     return "off or unused" if m["ratio"] is None else f"{100 * m['ratio']:.1f} % of limit at s = {m['s_m']:g} m"
 
 
+def _backend(backend: str | None) -> str:
+    """The back end as the summary line names it ("" when no NLP was solved)."""
+    return "" if backend is None else f"{backend}, "
+
+
 def _human(summary: dict, args: argparse.Namespace) -> str:
     from ..io.atomic import STDOUT  # already imported by the run
 
@@ -259,7 +271,7 @@ def _human(summary: dict, args: argparse.Namespace) -> str:
         + " of the distance",
         *([f"  limits off   {', '.join(summary['limits_off'])} (not in the vehicle file)"]
           if summary["limits_off"] else []),
-        f"  solver       {solver['status']} ({solver['iterations']} NLP iterations"
+        f"  solver       {solver['status']} ({_backend(solver['backend'])}{solver['iterations']} NLP iterations"
         + (f" over {solver['pieces']} pieces" if solver["pieces"] > 1 else "")
         + f"), planned in {solver['time_s']:.3f} s",
     ]

@@ -89,12 +89,16 @@ class Profile:
         Wall-clock seconds of the stages (``segment``, ``path``, ``bands``, ``choose``,
         ``refine`` when refining, ``build``, ``solve``, ``total``).
     iterations : int
-        NLP solver iterations (0 if not run), of all its solves together (the banded
-        solver's and IPOPT's where IPOPT took over).
+        NLP solver iterations (0 if not run), of all its solves together (the chosen back
+        end's and IPOPT's where IPOPT took over).
     pieces : int
         How many NLP solves make up the profile: 1 for a route solved whole, more for a
-        long route solved in pieces (exactly; by default only with IPOPT, see
-        :attr:`~.options.SolverOptions.split_above_segments`), 0 if none.
+        long route solved in pieces (exactly; by default only with FATROP, see
+        :attr:`~profileopt.planning.options.SolverOptions.split_above_segments`), 0 if none.
+    solver : str
+        The NLP back end whose answer the profile is (``"ipopt"``, ``"fatrop"``,
+        ``"banded"``, or ``"ipopt (the <name> solver stopped: <why>)"``); ``""`` when no NLP
+        was solved (the exact forward-backward profile, a profile read from a file).
     notes : tuple of str
         Remarks for the user (merged segments, fallback, ignored columns).
     allowable_first_mps, allowable_largest_mps : numpy.ndarray, shape (N,) or None
@@ -146,6 +150,7 @@ class Profile:
     timings_s: dict = dataclasses.field(default_factory=dict)
     iterations: int = 0
     pieces: int = 0
+    solver: str = ""
     notes: tuple[str, ...] = ()
     allowable_first_mps: np.ndarray | None = None
     allowable_largest_mps: np.ndarray | None = None
@@ -237,7 +242,7 @@ class Profile:
             for a profile read from a file, the label its settings record); for a route with
             x, y, ``path`` (:meth:`path_summary`: the path tolerance, where it came from, the
             noise estimated, the turns sharper than the turning circle); ``solver``
-            (status, success, iterations, pieces, time_s); ``notes`` (the plan's, then the
+            (status, success, backend: the NLP back end or null, iterations, pieces, time_s); ``notes`` (the plan's, then the
             path's: each turn sharper than the vehicle's turning circle, each reversal).
             Plain Python numbers only.
         """
@@ -289,8 +294,9 @@ class Profile:
             "roughness": self._roughness(),
             **({"path": path} if path is not None else {}),
             "solver": {
-                "status": self.status, "success": self.success, "iterations": self.iterations,
-                "pieces": self.pieces, "time_s": float(self.timings_s.get("total", math.nan)),
+                "status": self.status, "success": self.success, "backend": self.solver or None,
+                "iterations": self.iterations, "pieces": self.pieces,
+                "time_s": float(self.timings_s.get("total", math.nan)),
             },
             "notes": [*self.notes, *path_notes],
         }

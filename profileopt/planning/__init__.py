@@ -2,8 +2,8 @@
 
 Data flows route -> :mod:`profileopt.core.segments` (segments and their roughness) ->
 :mod:`.limits` (what each kind of limit allows, one module each) -> :mod:`.bands` (one band
-per segment, exact forward-backward profile) -> :mod:`.nlp` (the NLP, solved by the banded
-interior point or IPOPT, in pieces on long routes) or :mod:`.fallback` -> a
+per segment, exact forward-backward profile) -> :mod:`.nlp` (the NLP, solved by IPOPT or an
+opt-in back end, FATROP or the banded interior point) or :mod:`.fallback` -> a
 :class:`profileopt.core.profile.Profile`; :mod:`.refine` cuts segments where the first
 profile meets a cap. :mod:`.planner` holds the orchestration (:func:`plan`);
 :mod:`.options` the solver's tuning values.

@@ -7,8 +7,8 @@
    profile for it by a forward-backward pass (:mod:`.bands`); with smoothing and jerk off
    that is already the optimum (status ``exact``).
 4. Otherwise polish it by solving the NLP in the squared speed b = v^2 (:mod:`.nlp`) with
-   the banded interior-point solver, IPOPT where it stops (:mod:`.solve`; with IPOPT alone
-   a long route in exact pieces, :mod:`.pieces`); check the solution independently and, if
+   the back end the solver options name, IPOPT by default (:mod:`.nlp.backends`; with
+   FATROP a long route in exact pieces, :mod:`.nlp.pieces`); check the solution independently and, if
    no solver gave a usable one, fall back to a slower profile that keeps every limit
    (:mod:`.fallback`).
 5. Build the :class:`~.result.Profile` and check it once more against every limit.
@@ -381,12 +381,14 @@ def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *,
                      f"{_shortest_exact(power, seg):.3g} m plans it exactly")
 
     iterations = pieces = 0
+    solver = ""
     progress.step(f"solving the plan on {seg.count} segments")
     if method == "auto" and smoothing == 0 and not math.isfinite(jerk_bound) and "friction" not in rows:
         b, status, success = chosen.greatest_b, "exact", True
     else:
         result = _solve_nlp(seg, chosen, decel, accel, smoothing, jerk_bound, options, rows)
         b, status, iterations, pieces = result.b, result.status, result.iterations, result.pieces
+        solver = result.solver
         timings.update(result.timings)
         if result.solver.startswith("ipopt (") and status == "optimal":  # IPOPT took over: worth knowing
             notes.append(f"IPOPT solved the NLP{result.solver.removeprefix('ipopt')}")
@@ -440,7 +442,7 @@ def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *,
     )
     profile = dataclasses.replace(
         profile, status=status, success=success, objective=objective_s(b, seg.length_m, smoothing),
-        iterations=iterations, pieces=pieces, notes=tuple(notes), settings=settings,
+        iterations=iterations, pieces=pieces, solver=solver, notes=tuple(notes), settings=settings,
         limits=limits, cap_source=cap_source, band_source=band_source, path=path,
         curvature_1pm=path.curvature_1pm, grade_rad=path.grade_rad, binding=binding, roughness=roughness,
     )
@@ -640,7 +642,7 @@ def _accel_scale(accel: np.ndarray, decel: np.ndarray) -> float:
 def _solve_nlp(seg: Segments, chosen: BandChoice, decel: np.ndarray, accel: np.ndarray, smoothing: float,
                jerk: float, options: SolverOptions, rows: dict[str, np.ndarray]) -> _NlpResult:
     """The NLP's optimum over the chosen bands (:func:`~.solve.solve_nlp`): in pieces on a long
-    route when IPOPT alone solves it (exact, checked), else whole."""
+    route when the back end asks for them (exact, checked), else whole."""
     n = seg.count
     with_jerk = math.isfinite(jerk)
     scaling = Scaling(b_ref=max(float(chosen.upper_b.max()), 1e-6), l_ref=float(seg.length_m.mean()),
@@ -648,15 +650,15 @@ def _solve_nlp(seg: Segments, chosen: BandChoice, decel: np.ndarray, accel: np.n
                       t_whole=max(objective_s(chosen.greatest_b, seg.length_m, 0.0), 1e-6))
     timings = {"build": 0.0, "solve": 0.0}
     iterations = 0
-    if n > max(options.split_threshold(), options.piece_segments):
+    if n > max(options.split_threshold(), options.piece_size()):
         score = cut_scores(chosen.upper_b, chosen.greatest_b, seg.length_m)
-        cuts = choose_cuts(score, options.piece_segments)
+        cuts = choose_cuts(score, options.piece_size())
         if cuts.size:
             b, iterations, pieces, taken_over = solve_pieces(seg.length_m, chosen, decel, accel, scaling, with_jerk,
                                                              score, cuts, options, timings, rows)
             if b is not None:
-                solver = (f"ipopt (the banded solver stopped on {taken_over} of {pieces} pieces)" if taken_over
-                          else options.nlp_solver)
+                solver = (f"ipopt (the {options.nlp_solver} solver stopped on {taken_over} of {pieces} pieces)"
+                          if taken_over else options.nlp_solver)
                 return _NlpResult(b, "optimal", iterations, pieces, timings, solver)
 
     families = tuple(rows)

@@ -262,10 +262,10 @@ def test_a_bad_path_tolerance_is_one_line(tmp_path, atv):
 @pytest.mark.parametrize("route_name, vehicle_name", [("trail", "atv"), ("washboard", "atv-resonant")])
 def test_a_vehicle_file_without_the_keys_plans_exactly_as_before(route_name, vehicle_name):
     # tests/expected/before-turns/ holds the profiles the planner wrote before turns and hills
-    # (commit 87d3afb, IPOPT; rewritten once, with the vehicle's optional keys off, when the
-    # roughness windows became exact at any offset, issue 29): the same vehicle without the
-    # optional keys must give them bit for bit with IPOPT, and the banded solver (issue 14,
-    # later) the same optimum within its tolerance
+    # (commit 87d3afb, IPOPT; rewritten, with the vehicle's optional keys off, when the
+    # roughness windows became exact at any offset, issue 29, and when IPOPT's tol became
+    # 1e-13, issue 28): the same vehicle without the optional keys must give them bit for bit
+    # with IPOPT, and the banded back end the same optimum within its tolerance
     from profileopt.io import read_route
     from profileopt.planning import SolverOptions
 
@@ -280,8 +280,8 @@ def test_a_vehicle_file_without_the_keys_plans_exactly_as_before(route_name, veh
     # under IPOPT round differently in the last bit (seen: 6e-16 relative in speed, 2e-14 m/s^2
     # in an acceleration near 0), so to 1e-12, far below any change of the plan
     np.testing.assert_allclose(now, before, rtol=1e-12, atol=1e-12)
-    banded = plan(route, bare, refine=False)
-    assert banded.objective == pytest.approx(profile.objective, rel=1e-7)
+    banded = plan(route, bare, solver_options=SolverOptions(nlp_solver="banded"), refine=False)
+    assert banded.objective == pytest.approx(profile.objective, rel=1e-8)
     np.testing.assert_allclose(banded.speed_mps, profile.speed_mps, rtol=0, atol=1e-4)
 
 

@@ -326,7 +326,7 @@ def solve_pieces(length_m: np.ndarray, chosen: "BandChoice", decel_mps2: np.ndar
                  options: "SolverOptions", timings: dict[str, float], rows: dict[str, np.ndarray] | None = None,
                  ) -> tuple[np.ndarray | None, int, int, int]:
     """The NLP solved piece by piece between the fixed pairs at ``cuts``, each piece in the
-    one NLP of ``options.piece_segments`` segments: the piece's boundaries, then (behind it, or in front of the last piece)
+    one NLP of ``options.piece_size()`` segments: the piece's boundaries, then (behind it, or in front of the last piece)
     padding boundaries fixed at the neighbouring fixed speed, whose rows are unbounded and
     whose terms involve fixed variables only. A cut that is not a KKT point of the whole
     problem, or beside a piece IPOPT cannot solve, is replaced by another between its
@@ -364,10 +364,10 @@ def solve_pieces(length_m: np.ndarray, chosen: "BandChoice", decel_mps2: np.ndar
     -------
     (b, iterations, pieces, taken_over) : tuple
         b (m^2/s^2), shape (N+1,), or None; NLP iterations of all the solves; the pieces of b;
-        how many of them IPOPT solved where the banded solver had stopped
+        how many of them IPOPT solved where the chosen back end had stopped
         (:func:`~.solve.solve_nlp`).
     """
-    n, w = length_m.size, options.piece_segments
+    n, w = length_m.size, options.piece_size()
     rows = rows or {}
     families = tuple(rows)
     data = np.column_stack(list(rows.values())) if rows else None
@@ -390,7 +390,7 @@ def solve_pieces(length_m: np.ndarray, chosen: "BandChoice", decel_mps2: np.ndar
     n_rows += n_family * w
     solved: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]] = {}
     iterations, cuts, tried = 0, cuts.copy(), set()
-    taken_over: set[tuple[int, int]] = set()  # pieces IPOPT solved after the banded solver stopped
+    taken_over: set[tuple[int, int]] = set()  # pieces IPOPT solved after the chosen back end stopped
 
     def solve(first: int, last: int) -> bool:
         nonlocal iterations

@@ -240,7 +240,7 @@ def nlp_parts(n: int, with_jerk: bool, families: tuple[str, ...]) -> "NlpParts":
     """The symbolic pieces of the planner's NLP, placed but not yet assembled into matrices.
 
     :func:`build_nlp` assembles them into IPOPT's sparse Jacobian and Hessian;
-    :func:`profileopt.planning.nlp.banded_ipm.build_banded_oracle` returns them as dense bands.
+    :func:`profileopt.planning.nlp.backends.banded.build_banded_oracle` returns them as dense bands.
 
     Parameters
     ----------
@@ -503,7 +503,7 @@ class NlpResult:
     iterations : int
         Iterations.
     solver : str, default "ipopt"
-        ``"banded"`` (:mod:`.banded_ipm`) or ``"ipopt"``.
+        The back end whose answer it is (:mod:`profileopt.planning.nlp.backends`).
     """
 
     y: np.ndarray

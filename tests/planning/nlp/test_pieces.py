@@ -240,8 +240,10 @@ def test_summary_and_command_report_the_pieces(monkeypatch, capsys):
     profile = solve(monkeypatch, read_route(ROUTES / "trail.csv"), load_vehicle("atv"), 200)
     assert profile.pieces == 3  # 400 segments, cut at 156 and 315, then 156 and 256 (315 fails the check)
     assert profile.summary()["solver"]["pieces"] == 3
-    # the command plans with the default SolverOptions: make those cut at 200 segments
-    monkeypatch.setattr(planner, "SolverOptions",
+    # the command plans with SolverOptions(nlp_solver=--solver): make those cut at 200 segments
+    import profileopt.planning
+
+    monkeypatch.setattr(profileopt.planning, "SolverOptions",
                         functools.partial(SolverOptions, piece_segments=200, split_above_segments=200))
     assert cli.main(["plan", str(ROUTES / "trail.csv"), "--vehicle", "atv", "--no-refine"]) == 0
     assert "NLP iterations over 3 pieces" in capsys.readouterr().out

@@ -1,4 +1,4 @@
-"""The banded interior-point solver (profileopt.planning.nlp.banded_ipm) and its use by plan().
+"""The banded interior-point back end (profileopt.planning.nlp.backends.banded) and its use by plan().
 
 References, each independent of the solver:
 
@@ -12,7 +12,6 @@ References, each independent of the solver:
 from __future__ import annotations
 
 import functools
-import re
 
 import casadi as ca
 import numpy as np
@@ -22,24 +21,25 @@ import profileopt
 from profileopt import Route, load_vehicle, read_route
 from profileopt.errors import InputError
 from profileopt.planning import SolverOptions
-from profileopt.planning.nlp import banded_ipm
+from profileopt.planning.nlp.backends import banded as banded_backend
 from profileopt.planning.nlp.problem import NlpResult
-from profileopt.planning.options import DEFAULT_IPOPT_OPTIONS
+from profileopt.planning.options import DEFAULT_IPOPT_OPTIONS, FATROP_PIECE_SEGMENTS
 from profileopt.terrain.synthetic import iso8608_sections
 
 from conftest import ROUTES
-from test_problem import dense, random_point, random_problem, reference_functions, reference_nlp
+from planning.nlp.test_problem import dense, random_point, random_problem, reference_functions, reference_nlp
 
 # These tests compare the solvers on the uniform segments their sizes name; refining (the
 # default, which cuts segments where the plan meets the force's cap) is tested in
 # tests/planning/test_refine.py.
-plan = functools.partial(profileopt.plan, refine=False)
-
+# The banded method is an opt-in back end: these tests ask for it, and for IPOPT to compare.
+BANDED = SolverOptions(nlp_solver="banded")
 IPOPT = SolverOptions(nlp_solver="ipopt")
+plan = functools.partial(profileopt.plan, refine=False, solver_options=BANDED)
 ALL_ROUTES = ("curb", "iri_road", "krc_rms_1in", "krc_rms_2in", "krc_rms_4in", "trail", "washboard")
 
 
-def banded_matrices(oracle: banded_ipm.BandedOracle, x, p, lam_f, lam_g) -> tuple:
+def banded_matrices(oracle: banded_backend.BandedOracle, x, p, lam_f, lam_g) -> tuple:
     """f, g, grad f, J (dense) and the full Hessian (dense) assembled from the oracle's bands."""
     out = [np.asarray(ca.DM(o).full()).ravel(order="F") for o in oracle.derivatives(x, p, lam_f, lam_g)]
     n1 = x.size
@@ -57,7 +57,7 @@ def banded_matrices(oracle: banded_ipm.BandedOracle, x, p, lam_f, lam_g) -> tupl
 
 @pytest.mark.parametrize("n, with_jerk", [(1, True), (2, True), (2, False), (5, True), (37, True), (37, False)])
 def test_oracle_bands_equal_the_reference_derivatives(n: int, with_jerk: bool) -> None:
-    oracle = banded_ipm.build_banded_oracle(n, with_jerk)
+    oracle = banded_backend.build_banded_oracle(n, with_jerk)
     ref = reference_functions(n, with_jerk)
     ng = ref.size1_out(1)
     rng = np.random.default_rng(100 + n)
@@ -78,8 +78,8 @@ def test_optimum_equals_ipopts_on_the_reference_nlp(n: int, with_jerk: bool) -> 
     reference = ca.nlpsol("reference", "ipopt", reference_nlp(n, with_jerk), dict(DEFAULT_IPOPT_OPTIONS))
     x_ref = dense(reference(**args)["x"]).ravel()
     assert reference.stats()["success"]
-    oracle = banded_ipm.build_banded_oracle(n, with_jerk)
-    result = banded_ipm.solve_banded(oracle, args["x0"], args["lbx"], args["ubx"], args["lbg"], args["ubg"], args["p"])
+    oracle = banded_backend.build_banded_oracle(n, with_jerk)
+    result = banded_backend.solve_banded(oracle, args["x0"], args["lbx"], args["ubx"], args["lbg"], args["ubg"], args["p"])
     assert result.success and result.solver == "banded", result.status
     # the same local optimum: f equal within the tolerances and never worse; y within 1e-5,
     # since the smoothing term leaves directions so flat that IPOPT's stopping point differs
@@ -96,9 +96,9 @@ def test_one_segment_from_rest_reaches_the_closed_form() -> None:
     # one segment of ds = 5 m from rest (b0 = 0 fixed), cap b1 <= b_ref = 100 m^2/s^2, a <= 1.5:
     # travel time 2 ds / (v0 + v1) falls as b1 grows, so b1 = min(cap, 2 a ds) = 15 m^2/s^2
     b_ref, ds, accel = 100.0, 5.0, 1.5
-    oracle = banded_ipm.build_banded_oracle(1, False)
+    oracle = banded_backend.build_banded_oracle(1, False)
     p = np.array([1.0, b_ref, ds, accel, 30.0, 0.0, 0.0])
-    result = banded_ipm.solve_banded(oracle, np.array([0.0, 0.5]), np.zeros(2), np.array([0.0, 1.0]),
+    result = banded_backend.solve_banded(oracle, np.array([0.0, 0.5]), np.zeros(2), np.array([0.0, 1.0]),
                                      np.array([-2.0]), np.array([1.0]), p)
     assert result.success
     assert result.y[0] == 0.0  # fixed variables stay exactly where they are fixed
@@ -107,9 +107,9 @@ def test_one_segment_from_rest_reaches_the_closed_form() -> None:
 
 
 def test_equal_row_bounds_are_a_stop_not_a_wrong_answer() -> None:
-    oracle = banded_ipm.build_banded_oracle(1, False)
+    oracle = banded_backend.build_banded_oracle(1, False)
     p = np.array([1.0, 100.0, 5.0, 1.5, 30.0, 0.0, 0.0])
-    result = banded_ipm.solve_banded(oracle, np.array([0.0, 0.5]), np.zeros(2), np.ones(2), np.array([0.5]),
+    result = banded_backend.solve_banded(oracle, np.array([0.0, 0.5]), np.zeros(2), np.ones(2), np.array([0.5]),
                                      np.array([0.5]), p)
     assert not result.success and "equality" in result.status
 
@@ -154,7 +154,7 @@ def test_the_duality_gap_and_not_only_each_bound_decides_when_to_stop() -> None:
     route, vehicle = Route(profile.s_m, profile.z_m, source="iso"), load_vehicle("atv")
     convex = dict(smoothing=0.0, max_jerk_mps3=float("inf"))
     exact = plan(route, vehicle, method="auto", **convex)
-    loose = plan(route, vehicle, method="nlp", solver_options=SolverOptions(ipopt={"ipopt.tol": 1e-6}), **convex)
+    loose = plan(route, vehicle, method="nlp", solver_options=SolverOptions(nlp_solver="banded", ipopt={"ipopt.tol": 1e-6}), **convex)
     tight = plan(route, vehicle, method="nlp", **convex)
     assert loose.pieces == tight.pieces == 1  # solved whole: the banded solver never splits by default
     assert not any("IPOPT solved" in note for note in loose.notes + tight.notes)
@@ -172,8 +172,8 @@ def test_a_step_onto_a_bound_near_the_end_is_not_halved(monkeypatch) -> None:
     profile = iso8608_sections([("D", 300.0), ("F", 400.0), ("C", 300.0)], 0.5, 8608, n_max_cpm=0.9)
     route, vehicle = Route(profile.s_m, profile.z_m, source="iso"), load_vehicle("atv")
     steps = []
-    solve = banded_ipm.solve_banded
-    monkeypatch.setattr(banded_ipm, "solve_banded", lambda *a, **k: solve(*a, **k, trace=steps.append))
+    solve = banded_backend.solve_banded
+    monkeypatch.setattr(banded_backend, "solve_banded", lambda *a, **k: solve(*a, **k, trace=steps.append))
     banded = plan(route, vehicle, smoothing=0.0)
     assert banded.status == "optimal" and steps
     assert not [t["iteration"] for t in steps if t["alpha"] == 0.5 * t["alpha_max"]]
@@ -216,8 +216,8 @@ def test_one_sided_rows_and_positive_lower_bounds(seed: int) -> None:
     reference = ca.nlpsol("reference", "ipopt", reference_nlp(n, True), dict(DEFAULT_IPOPT_OPTIONS))
     x_ref = dense(reference(**args)["x"]).ravel()
     assert reference.stats()["success"]
-    oracle = banded_ipm.build_banded_oracle(n, True)
-    result = banded_ipm.solve_banded(oracle, args["x0"], args["lbx"], args["ubx"], args["lbg"], args["ubg"], args["p"])
+    oracle = banded_backend.build_banded_oracle(n, True)
+    result = banded_backend.solve_banded(oracle, args["x0"], args["lbx"], args["ubx"], args["lbg"], args["ubg"], args["p"])
     assert result.success, result.status
     assert np.all(result.lam_g[unbounded] == 0.0)  # no bound, no multiplier
     f_ref = dense(oracle.values(x_ref, args["p"])[0]).item()
@@ -228,10 +228,10 @@ def test_one_sided_rows_and_positive_lower_bounds(seed: int) -> None:
 
 
 def test_crossed_variable_bounds_are_a_stop_not_a_wrong_answer() -> None:
-    oracle = banded_ipm.build_banded_oracle(1, False)
+    oracle = banded_backend.build_banded_oracle(1, False)
     p = np.array([1.0, 100.0, 5.0, 1.5, 30.0, 0.0, 0.0])
     # y_1 >= 0.05 and y_1 <= 0.04: no point satisfies both (a fixed variable is lbx == ubx, not this)
-    result = banded_ipm.solve_banded(oracle, np.array([0.0, 0.05]), np.array([0.0, 0.05]), np.array([0.0, 0.04]),
+    result = banded_backend.solve_banded(oracle, np.array([0.0, 0.05]), np.array([0.0, 0.05]), np.array([0.0, 0.04]),
                                      np.array([-2.0]), np.array([1.0]), p)
     assert not result.success and "above its upper bound" in result.status
 
@@ -242,13 +242,13 @@ def test_ipopt_takes_over_where_the_banded_solver_stops(monkeypatch) -> None:
     def stops(oracle, x0, *args, **kwargs):
         return NlpResult(x0.copy(), np.zeros(0), False, "the line search failed", 7, "banded")
 
-    monkeypatch.setattr(banded_ipm, "solve_banded", stops)
+    monkeypatch.setattr(banded_backend, "solve_banded", stops)
     taken_over = plan(route, vehicle)
     ipopt = plan(route, vehicle, solver_options=IPOPT)
     assert taken_over.status == "optimal"
     assert "IPOPT solved the NLP (the banded solver stopped: the line search failed)" in taken_over.notes
     # and where IPOPT fails too, the note does not say it solved the NLP
-    failing = SolverOptions(ipopt={"ipopt.max_iter": 2})
+    failing = SolverOptions(nlp_solver="banded", ipopt={"ipopt.max_iter": 2})
     neither = plan(route, vehicle, solver_options=failing)
     assert neither.status.startswith("fallback") and not any("IPOPT solved" in note for note in neither.notes)
     assert taken_over.iterations == ipopt.iterations + 7
@@ -259,9 +259,9 @@ def test_pieces_that_ipopt_took_over_are_named_in_a_note(monkeypatch) -> None:
     """With the route split explicitly, a piece the banded solver stops on is solved by IPOPT,
     and the note says on how many pieces that happened (it used to say nothing)."""
     route, vehicle = read_route(ROUTES / "krc_rms_2in.csv"), load_vehicle("atv")
-    split = SolverOptions(piece_segments=50, split_above_segments=50)  # as in test_pieces.py
+    split = SolverOptions(nlp_solver="banded", piece_segments=50, split_above_segments=50)  # as in test_pieces.py
     calls = []
-    solve = banded_ipm.solve_banded
+    solve = banded_backend.solve_banded
 
     def every_third_stops(oracle, x0, *args, **kwargs):
         calls.append(1)
@@ -271,7 +271,7 @@ def test_pieces_that_ipopt_took_over_are_named_in_a_note(monkeypatch) -> None:
 
     clean = plan(route, vehicle, solver_options=split)
     assert clean.pieces > 1 and not any("IPOPT solved" in note for note in clean.notes)
-    monkeypatch.setattr(banded_ipm, "solve_banded", every_third_stops)
+    monkeypatch.setattr(banded_backend, "solve_banded", every_third_stops)
     taken_over = plan(route, vehicle, solver_options=split)
     assert taken_over.status == "optimal" and taken_over.pieces > 1
     stopped = (len(calls) + 2) // 3  # calls 1, 4, 7, ...: each a piece IPOPT then solved
@@ -280,56 +280,37 @@ def test_pieces_that_ipopt_took_over_are_named_in_a_note(monkeypatch) -> None:
 
 
 @pytest.mark.slow
-def test_a_short_route_or_a_crawl_keeps_the_lower_of_the_two_solvers_optima(monkeypatch) -> None:
+def test_the_banded_back_end_is_solved_once_even_where_ipopt_finds_a_lower_optimum(monkeypatch) -> None:
     """The NLP is not convex: on krc_rms_1in.csv at 0.5 m segments (1,010 segments, jerk
-    bound, smoothing 0) the banded solver alone crawls through a rough spot at 0.4 m/s, about
-    3 % more travel time than IPOPT's optimum, which keeps 5 m/s there. IPOPT solves it too,
-    and the lower optimum is kept with a note that says by how much, on a route of up to
-    CROSS_CHECK_MAX_SEGMENTS, or on a longer one whose optimum crawls (somewhere under
-    CRAWL_RATIO of its start's speed); otherwise IPOPT is not run."""
-    from profileopt.planning.nlp import solve
+    bound, smoothing 0) the banded method crawls through a rough spot at 0.4 m/s, more than
+    2 % more travel time than IPOPT's optimum, which keeps 5 m/s there (the docs' solver page
+    says so). Asked for, it is the banded method's answer, and IPOPT is not run after it: no
+    automatic second solve."""
+    from profileopt.planning.nlp.backends import ipopt as ipopt_backend
 
     route, vehicle = read_route(ROUTES / "krc_rms_1in.csv"), load_vehicle("atv")
     options = dict(segment_length_m=0.5, smoothing=0.0)
-    calls, crawl_ratio = [], solve.CRAWL_RATIO
-    solve_ipopt = solve.solve_ipopt
-    monkeypatch.setattr(solve, "solve_ipopt", lambda *a: calls.append(1) or solve_ipopt(*a))
-    monkeypatch.setattr(solve, "CROSS_CHECK_MAX_SEGMENTS", 500)  # below this route's 1,010 segments
-    monkeypatch.setattr(solve, "CRAWL_RATIO", 0.0)  # no crawl check either
+    calls = []
+    solve_ipopt = ipopt_backend.solve_ipopt
+    monkeypatch.setattr(ipopt_backend, "solve_ipopt", lambda *a: calls.append(1) or solve_ipopt(*a))
     alone = plan(route, vehicle, **options)
     assert not calls and not any("IPOPT" in note for note in alone.notes)
+    assert alone.solver == "banded"
     ipopt = plan(route, vehicle, solver_options=IPOPT, **options)
+    assert calls and ipopt.solver == "ipopt"
     assert alone.status == ipopt.status == "optimal"
-    assert alone.objective > ipopt.objective * 1.02  # the banded solver's own, worse, local optimum
-    lower_percent = 100 * (alone.objective - ipopt.objective) / alone.objective
-    for threshold, crawl in ((5000, 0.0), (500, crawl_ratio)):  # short; long but crawling
-        monkeypatch.setattr(solve, "CROSS_CHECK_MAX_SEGMENTS", threshold)
-        monkeypatch.setattr(solve, "CRAWL_RATIO", crawl)
-        calls.clear()
-        kept = plan(route, vehicle, **options)
-        assert calls and kept.status == "optimal"
-        assert kept.objective == pytest.approx(ipopt.objective, rel=1e-9)
-        found = [re.fullmatch(r"IPOPT solved the NLP \(an optimum (\S+) % lower than the banded solver's\)", note)
-                 for note in kept.notes]
-        assert [float(m.group(1)) for m in found if m] == [pytest.approx(lower_percent, rel=0.05)], kept.notes
-    # longer than the threshold and no crawl: the banded solver's optimum alone
-    monkeypatch.setattr(solve, "CROSS_CHECK_MAX_SEGMENTS", 100)
-    calls.clear()
-    trail = plan(read_route(ROUTES / "trail.csv"), vehicle)  # 400 segments
-    assert not calls and not any("IPOPT" in note for note in trail.notes)
-    # short, and both reach the same optimum: IPOPT runs, nothing changes, no note
-    monkeypatch.setattr(solve, "CROSS_CHECK_MAX_SEGMENTS", 5000)
-    washboard = plan(read_route(ROUTES / "washboard.csv"), vehicle)
-    ipopt_only = plan(read_route(ROUTES / "washboard.csv"), vehicle, solver_options=IPOPT)
-    assert calls and not any("IPOPT" in note for note in washboard.notes)
-    assert washboard.objective <= ipopt_only.objective * (1 + 1e-9)
+    assert alone.objective > ipopt.objective * 1.02  # the banded method's own, worse, local optimum
 
 
 def test_solver_options_name_the_solver_and_its_split() -> None:
-    with pytest.raises(InputError, match=r"nlp_solver = 'mumps': choose one of banded, ipopt"):
+    with pytest.raises(InputError, match=r"nlp_solver = 'mumps': choose one of ipopt, fatrop, banded"):
         SolverOptions(nlp_solver="mumps")
+    assert SolverOptions().nlp_solver == "ipopt"
     assert SolverOptions().split_threshold() == float("inf")
-    assert SolverOptions(nlp_solver="ipopt").split_threshold() == 10_000
+    assert SolverOptions(nlp_solver="banded").split_threshold() == float("inf")
+    assert SolverOptions(nlp_solver="fatrop").split_threshold() == FATROP_PIECE_SEGMENTS
+    assert SolverOptions(nlp_solver="fatrop").piece_size() == FATROP_PIECE_SEGMENTS
+    assert SolverOptions().piece_size() == 4000
     assert SolverOptions(split_above_segments=300).split_threshold() == 300
     with pytest.raises(InputError, match="split_above_segments"):
         SolverOptions(split_above_segments=0)
@@ -338,14 +319,14 @@ def test_solver_options_name_the_solver_and_its_split() -> None:
 @pytest.mark.parametrize("n", [1, 2, 64, 400])
 def test_lapack_and_casadi_factorisations_give_the_same_optimum(monkeypatch, n: int) -> None:
     """Long routes factorise with LAPACK, shorter ones with CasADi's CSparse and LDL^T
-    (banded_ipm.LAPACK_ABOVE): both are exact Cholesky factorisations of the same matrix,
+    (banded_backend.LAPACK_ABOVE): both are exact Cholesky factorisations of the same matrix,
     so the iterates agree to rounding."""
     args = random_problem(n, True, 70 + n)
-    oracle = banded_ipm.build_banded_oracle(n, True)
+    oracle = banded_backend.build_banded_oracle(n, True)
     results = {}
     for name, above in (("casadi", 10**9), ("lapack", 0)):
-        monkeypatch.setattr(banded_ipm, "LAPACK_ABOVE", above)
-        results[name] = banded_ipm.solve_banded(oracle, args["x0"], args["lbx"], args["ubx"], args["lbg"],
+        monkeypatch.setattr(banded_backend, "LAPACK_ABOVE", above)
+        results[name] = banded_backend.solve_banded(oracle, args["x0"], args["lbx"], args["ubx"], args["lbg"],
                                                 args["ubg"], args["p"])
     assert results["casadi"].success and results["lapack"].success
     assert results["casadi"].iterations == results["lapack"].iterations
@@ -355,8 +336,8 @@ def test_lapack_and_casadi_factorisations_give_the_same_optimum(monkeypatch, n: 
 def test_a_matrix_that_is_not_positive_definite_is_refused_by_both_factorisations(monkeypatch) -> None:
     # diag(1, -1, 2): the Cholesky of either backend must fail (so that delta I is added)
     for above in (10**9, 0):
-        monkeypatch.setattr(banded_ipm, "LAPACK_ABOVE", above)
-        band = banded_ipm._BandSolver(3)
+        monkeypatch.setattr(banded_backend, "LAPACK_ABOVE", above)
+        band = banded_backend._BandSolver(3)
         assert band.solve(np.array([1.0, -1.0, 2.0]), np.zeros(2), np.zeros(1), np.ones(3), definite_only=True) is None
         x = band.solve(np.array([1.0, 4.0, 2.0]), np.array([0.5, 0.0]), np.zeros(1), np.ones(3), definite_only=True)
         np.testing.assert_allclose(x, np.linalg.solve([[1.0, 0.5, 0.0], [0.5, 4.0, 0.0], [0.0, 0.0, 2.0]], np.ones(3)))

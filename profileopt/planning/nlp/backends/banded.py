@@ -1,4 +1,4 @@
-"""A primal-dual interior-point solver for the planner's chain-structured NLP (issue 14).
+"""A primal-dual interior-point solver for the planner's chain-structured NLP: an opt-in back end.
 
 The planner's NLP (:func:`profileopt.planning.nlp.problem.build_nlp`) is a chain: every term of
 the objective and every row acts on at most three neighbouring variables. Its Newton
@@ -7,10 +7,15 @@ matrix of bandwidth 2, which a sparse Cholesky factorisation solves in time prop
 N. IPOPT cannot know this and hands a sparse indefinite system five times that size to
 MUMPS at every iteration, which is where 85 % of a 10,000-segment plan went. This module
 solves the same problem, with the same exact derivatives (:func:`build_banded_oracle`:
-the stage Functions of :mod:`.nlp`, placed as bands), by the same kind of method as IPOPT;
-the planner hands the problem to IPOPT whenever it does not converge
-(:func:`profileopt.planning.nlp.solve.solve_nlp`), so it can make a plan faster but never
-decide whether one is found.
+the stage Functions of :mod:`~profileopt.planning.nlp.problem`, placed as bands), by the
+same kind of method as IPOPT; the planner hands the problem to IPOPT whenever it does not
+converge (:func:`profileopt.planning.nlp.solve.solve_nlp`), so it can make a plan faster
+but never decide whether one is found.
+
+Why it is kept, as ``SolverOptions(nlp_solver="banded")`` or ``profileopt plan --solver
+banded`` and never by default: on the benchmark's long routes it is more than twice as
+fast as IPOPT with the same optimum (the measurements are in ``benchmarks/results.md`` and
+the docs' solver page). It is a solver this project owns, so the default is IPOPT.
 
 The method (Nocedal and Wright, *Numerical Optimization*, 2nd ed., ch. 19; Wächter and
 Biegler, Math. Program. 106 (2006) 25-57, for the safeguards):
@@ -48,13 +53,17 @@ import functools
 import math
 from typing import Callable
 
+import time
+
 import casadi as ca
 import numpy as np
 
-from .problem import NlpResult, diagonal_matrix, nlp_parts
+from ...options import DEFAULT_IPOPT_OPTIONS, SolverOptions
+from ..problem import NlpResult, diagonal_matrix, nlp_parts
+from .base import NlpInstance
 
-__all__ = ["BandedOracle", "build_banded_oracle", "cached_banded_oracle", "solve_banded", "LAPACK_ABOVE",
-           "band_solve_functions"]
+__all__ = ["BACKEND", "BandedBackend", "BandedOracle", "build_banded_oracle", "cached_banded_oracle",
+           "solve_banded", "LAPACK_ABOVE", "band_solve_functions"]
 
 #: Largest multiple of I added to the condensed matrix before the solve gives up.
 _MAX_REGULARISATION = 1e20
@@ -93,7 +102,7 @@ class BandedOracle:
 
 
 def build_banded_oracle(n: int, with_jerk: bool, families: tuple[str, ...] = ()) -> "BandedOracle":
-    """The planner's NLP for N = n segments as dense banded pieces, for :mod:`.banded_ipm`.
+    """The planner's NLP for N = n segments as dense banded pieces, for :func:`solve_banded`.
 
     The same variables, parameters, objective and rows as :func:`~.nlp.build_nlp` (same stage
     Functions, same placement), but the Jacobian and the Hessian of the Lagrangian are
@@ -560,3 +569,47 @@ class _BandSolver:
         except RuntimeError:  # CSparse found a pivot that is not positive
             return None
         return x if np.all(np.isfinite(x)) else None
+
+
+class BandedBackend:
+    """The banded interior-point method (:func:`solve_banded`) as a back end.
+
+    Its tolerance is :meth:`SolverOptions.backend_tol
+    <profileopt.planning.options.SolverOptions.backend_tol>`, its iteration limit IPOPT's
+    (``"ipopt.max_iter"`` of
+    :attr:`SolverOptions.ipopt <profileopt.planning.options.SolverOptions.ipopt>`).
+    """
+
+    name = "banded"
+
+    def solve(self, problem: NlpInstance, options: SolverOptions, timings: dict[str, float]) -> NlpResult:
+        """Solve one instance with the banded method (see :class:`~.base.Backend`).
+
+        Parameters
+        ----------
+        problem : NlpInstance
+            The instance.
+        options : SolverOptions
+            :meth:`~profileopt.planning.options.SolverOptions.backend_tol` and ``"ipopt.max_iter"``.
+        timings : dict
+            ``build`` and ``solve`` seconds are added here.
+
+        Returns
+        -------
+        NlpResult
+        """
+        tol = options.backend_tol()
+        max_iter = int(options.ipopt.get("ipopt.max_iter", DEFAULT_IPOPT_OPTIONS["ipopt.max_iter"]))
+        t = time.perf_counter()
+        oracle = cached_banded_oracle(problem.n, problem.with_jerk, problem.families)
+        if problem.n + 1 <= LAPACK_ABOVE:
+            band_solve_functions(problem.n + 1)  # the factorisations' analysis belongs to the build
+        timings["build"] = timings.get("build", 0.0) + time.perf_counter() - t
+        t = time.perf_counter()
+        result = solve_banded(oracle, problem.x0, problem.lbx, problem.ubx, problem.lbg, problem.ubg,
+                              problem.parameters(), tol=tol, max_iter=max_iter)
+        timings["solve"] = timings.get("solve", 0.0) + time.perf_counter() - t
+        return result
+
+
+BACKEND = BandedBackend()
