@@ -161,6 +161,15 @@ class SolverOptions:
         """
         return max(float(self.ipopt.get("ipopt.tol", DEFAULT_IPOPT_OPTIONS["ipopt.tol"])), BACKEND_TOL)
 
+    def max_iter(self) -> int:
+        """The iteration limit of every back end: ``"ipopt.max_iter"`` of ``ipopt``.
+
+        Returns
+        -------
+        int
+        """
+        return int(self.ipopt.get("ipopt.max_iter", DEFAULT_IPOPT_OPTIONS["ipopt.max_iter"]))
+
     def ipopt_key(self) -> tuple:
         """The IPOPT options as a hashable, ordered key (for caching built solvers).
 

@@ -58,7 +58,7 @@ import time
 import casadi as ca
 import numpy as np
 
-from ...options import DEFAULT_IPOPT_OPTIONS, SolverOptions
+from ...options import SolverOptions
 from ..problem import NlpResult, diagonal_matrix, nlp_parts
 from .base import NlpInstance
 
@@ -599,7 +599,7 @@ class BandedBackend:
         NlpResult
         """
         tol = options.backend_tol()
-        max_iter = int(options.ipopt.get("ipopt.max_iter", DEFAULT_IPOPT_OPTIONS["ipopt.max_iter"]))
+        max_iter = options.max_iter()
         t = time.perf_counter()
         oracle = cached_banded_oracle(problem.n, problem.with_jerk, problem.families)
         if problem.n + 1 <= LAPACK_ABOVE:

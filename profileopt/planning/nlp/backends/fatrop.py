@@ -38,7 +38,7 @@ import numpy as np
 
 from ....core.kinematics import boundary_jerk_mps3, jerk_squared_time, segment_time_s
 from ....physics.rows import ROW_FAMILIES
-from ...options import DEFAULT_IPOPT_OPTIONS, FATROP_MAX_SEGMENTS, SolverOptions
+from ...options import FATROP_MAX_SEGMENTS, SolverOptions
 from ..problem import PARAMETERS, NlpResult, speed_mps
 from .base import NlpInstance
 
@@ -47,7 +47,7 @@ from .base import NlpInstance
 BOUND_RELAX = 1e-8
 
 __all__ = ["BACKEND", "BOUND_RELAX", "FatropBackend", "build_stage_nlp", "cached_stage_nlp",
-           "stage_instance", "StageInstance"]
+           "StageInstance"]
 
 
 
@@ -246,21 +246,6 @@ class StageInstance:
         return NlpResult(y, lam, success, status, iterations, "fatrop")
 
 
-def stage_instance(problem: NlpInstance) -> StageInstance:
-    """The instance in stage form (see :class:`StageInstance`).
-
-    Parameters
-    ----------
-    problem : NlpInstance
-        The instance.
-
-    Returns
-    -------
-    StageInstance
-    """
-    return StageInstance(problem)
-
-
 class FatropBackend:
     """FATROP on the stage form of the NLP (see the module docstring).
 
@@ -293,7 +278,7 @@ class FatropBackend:
                              f"{problem.n} segments, more than the {FATROP_MAX_SEGMENTS:,} FATROP is given at once",
                              0, "fatrop")
         tol = options.backend_tol()
-        max_iter = int(options.ipopt.get("ipopt.max_iter", DEFAULT_IPOPT_OPTIONS["ipopt.max_iter"]))
+        max_iter = options.max_iter()
         fatrop_options = {"tol": tol, "max_iter": max_iter, "print_level": 0}
         t = time.perf_counter()
         solver = cached_stage_nlp(problem.n, problem.jerk_rows, problem.families, tuple(sorted(fatrop_options.items())))

@@ -186,7 +186,7 @@ def test_a_step_onto_a_bound_near_the_end_is_not_halved(monkeypatch) -> None:
 def test_turns_and_hills_rows_are_solved_by_the_banded_solver() -> None:
     """The friction and power row families (winding 6 % hills, scarce grip and power): the
     banded solver converges on its own, to IPOPT's optimum or below."""
-    from test_pieces import winding_hilly_route
+    from planning.nlp.test_pieces import winding_hilly_route
 
     route = winding_hilly_route()
     vehicle = load_vehicle("atv").replace(friction_coefficient=0.5, max_power_w=6000.0)
