@@ -28,8 +28,8 @@ NLP_SOLVERS = PLAN_SOLVERS
 
 #: Most segments FATROP solves at once (its CasADi interface takes time growing faster than
 #: N to set a problem up and at every iteration: 0.6 s to build 1,000 segments, 5.5 s 4,000,
-#: 214 s 23,633); a longer route is solved in exact pieces of this size. Measured on the
-#: 10,000-segment jerk-limited benchmark route: see the docs' solver page.
+#: 214 s 23,633); a longer route is solved in exact pieces of this size, chosen so that one
+#: piece's set-up stays well under a second. Not tuned further (see the docs' solver page).
 FATROP_PIECE_SEGMENTS = 500
 #: Most segments FATROP is given at all: where a long route's pieces do not check out, the
 #: planner solves it whole, which would take CasADi's FATROP interface minutes to set up;
