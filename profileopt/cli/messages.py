@@ -14,11 +14,13 @@ API_FLAGS = {"segment_length_m": "--segment-length", "roughness_window_m": "--ro
              "path_tolerance_m": "--path-tolerance", "v0_mps": "--v0",
              "vend_mps": "--vend", "n_stages": "--stages", "spacing_m": "--spacing", "corridor_m": "--corridor",
              "max_gap_m": "--max-gap", "track_crs": "--track-crs", "terrain_crs": "--terrain-crs",
-             "track_index": "--track-index", "roughness_class": "--roughness-class"}
+             "track_index": "--track-index", "roughness_class": "--roughness-class",
+             "sensor_range_m": "--sensor-range", "cycle_s": "--cycle", "sensor_noise_m": "--sensor-noise",
+             "sensor_spacing_m": "--sensor-spacing"}
 #: max_jerk_mps3 is a vehicle file's key too: only ``max_jerk_mps3 = ...`` (or a message's
 #: ``ri VALUE``, the form of an option and its argument) is the option.
 API_FLAGS_ASSIGNED = {"model": "--model", "smoothing": "--smoothing", "method": "--method", "band": "--band",
-                      "max_jerk_mps3": "--max-jerk", "ri": "--ri"}
+                      "max_jerk_mps3": "--max-jerk", "ri": "--ri", "unseen": "--unseen"}
 _FLAG_PATTERN = re.compile(r"(?<![\w'])(" + "|".join(API_FLAGS) + r")(?![\w'])")
 _ASSIGNED_PATTERN = re.compile(r"(?<![\w.'-])(" + "|".join(API_FLAGS_ASSIGNED) + r")(?= = | VALUE\b)")
 

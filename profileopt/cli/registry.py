@@ -22,6 +22,9 @@ COMMANDS: dict[str, tuple[str, str]] = {
              "plan the fastest speed profile along a route that keeps the terrain forces within limits"),
     "batch": ("profileopt.cli.batch",
               "plan many routes at once (a manifest or a list of route files), on a local or remote Dask cluster"),
+    "drive": ("profileopt.cli.drive",
+              "drive a route seeing only the terrain within the sensing range: the online speed selector, "
+              "checked in simulation against the offline plan"),
     "route": ("profileopt.cli.route",
               "sample the ground under the wheels along a GPS track over a terrain map into a route CSV"),
     "export-c": ("profileopt.cli.export_c", "write C source, header and README for the force limits of a vehicle"),

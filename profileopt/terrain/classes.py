@@ -191,3 +191,24 @@ def iso8608_ri(road_class: str, *, window_m: float, clearance_m: float) -> float
         RI (dimensionless).
     """
     return iso8608_expected_rms_m(road_class, window_m=window_m) / finite_positive("clearance_m", clearance_m)
+
+
+def smoothest_class_covering(ri: float, *, window_m: float, clearance_m: float) -> str:
+    """The smoothest ISO 8608 class whose RI (:func:`iso8608_ri`) is at least ``ri``; ``"H"``
+    when none is.
+
+    Parameters
+    ----------
+    ri : float
+        RI (dimensionless), e.g. the roughest window of a route.
+    window_m : float
+        Roughness window length W (m), > 0.
+    clearance_m : float
+        Ground clearance h (m), > 0.
+
+    Returns
+    -------
+    str
+        One letter A to H.
+    """
+    return next((c for c in "ABCDEFGH" if iso8608_ri(c, window_m=window_m, clearance_m=clearance_m) >= ri), "H")

@@ -1,0 +1,154 @@
+"""``profileopt drive``: drive a route online, seeing it only within the sensing range.
+
+The online selector (:mod:`profileopt.online`) chooses the speed every cycle from the terrain
+revealed ahead; the vehicle follows; the driven speed is simulated on the real route; the
+route's offline plan (``profileopt plan`` with its defaults) is the yardstick.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from ..defaults import DEFAULT_MODEL, DEFAULT_ROUGHNESS_WINDOW_M, MODEL_KEYS
+from ..errors import InputError
+from .paths import vehicle_input
+from .track import number_argument
+
+#: Defaults of the online selector, repeated here so that ``--help`` needs no numerical
+#: package; tests/cli/test_drive.py checks they equal :mod:`profileopt.online.selector`'s.
+SENSOR_RANGE_M, CYCLE_S, SEGMENT_LENGTH_M, UNSEEN = 50.0, 0.1, 1.0, "worst"
+
+
+def arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("route", help="route CSV: columns s,z or x,y,z (m), optional speed_limit (m/s), measured "
+                                      "terrain revealed to the vehicle only within --sensor-range")
+    parser.add_argument("--vehicle", default="atv", metavar="NAME_OR_TOML",
+                        help="bundled vehicle name or .toml file (default: atv)")
+    parser.add_argument("-o", "--output", metavar="CSV",
+                        help="write the driven profile here: time_s, s_m, speed_mps, accel_mps2, edge_m, "
+                             "edge_speed_mps ('-': standard output, the summary then goes to stderr)")
+    parser.add_argument("--sensor-range", type=number_argument, default=SENSOR_RANGE_M, metavar="M",
+                        help=f"how far ahead the sensors measure, m (default: {SENSOR_RANGE_M:g})")
+    parser.add_argument("--unseen", default=UNSEEN, metavar="CLASS_OR_RI",
+                        help="what terrain not yet measured is assumed to be: 'worst' (ISO 8608 class H), a class "
+                             "A-H, an RI (a number), or 'route' (the route's own roughest class, known only in an "
+                             f"experiment) (default: {UNSEEN})")
+    parser.add_argument("--cycle", type=number_argument, default=CYCLE_S, metavar="S",
+                        help=f"control cycle, s (default: {CYCLE_S:g})")
+    parser.add_argument("--sensor-noise", type=number_argument, default=0.0, metavar="M",
+                        help="standard deviation of noise on each sensed elevation, m (default: 0)")
+    parser.add_argument("--sensor-spacing", type=number_argument, default=None, metavar="M",
+                        help="sense an elevation every this many m along the path (default: the route's samples); "
+                             "terrain counts as measured only where samples are at most 0.1 m apart")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the sensor noise (default: 0)")
+    parser.add_argument("--segment-length", type=number_argument, default=SEGMENT_LENGTH_M, metavar="M",
+                        help=f"the selector's planning resolution, m (default: {SEGMENT_LENGTH_M:g})")
+    parser.add_argument("--roughness-window", type=number_argument, default=DEFAULT_ROUGHNESS_WINDOW_M, metavar="M",
+                        help=f"roughness window, m (default: {DEFAULT_ROUGHNESS_WINDOW_M:g})")
+    parser.add_argument("--model", default=DEFAULT_MODEL, choices=list(MODEL_KEYS),
+                        help="force model (default: sbem_tf)")
+    parser.add_argument("--plot", metavar="PNG",
+                        help="draw the driven speed beside the offline plan, how far ahead the selector had "
+                             "planned, and the simulated force per roughness window")
+    parser.add_argument("--json", action="store_true", help="print the results as JSON")
+    parser.add_argument("-q", "--quiet", action="store_true", help="no notes or progress display on stderr")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``profileopt drive``: drive online, plan offline, simulate, print the comparison."""
+    from ..core.vehicle import load_vehicle
+    from ..io.atomic import OutputSet
+    from .messages import printable
+
+    outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot)],
+                        inputs=[args.route, vehicle_input(args.vehicle)])
+    vehicle = load_vehicle(args.vehicle)
+    if Path(args.route).suffix.lower() in (".gpx", ".geojson", ".json", ".las", ".laz", ".tif", ".tiff"):
+        raise InputError(f"{args.route}: drive takes a route CSV of measured terrain (s,z or x,y,z); make one from "
+                         "a track and a terrain map with 'profileopt route' first")
+    from ..io.routes import read_route
+    from ..online import drive
+    from ..online.selector import unseen_roughness
+    from ..planning import plan
+    from ..progress import terminal_progress
+
+    route = read_route(args.route)
+    if not args.quiet:
+        for note in route.notes:
+            print(f"note: {printable(note)}", file=sys.stderr)
+    unseen = args.unseen
+    if unseen.strip().lower() == "route":
+        from ..core.segments import route_roughness_windows
+        from ..terrain.classes import smoothest_class_covering
+
+        windows = route_roughness_windows(route, vehicle, window_m=args.roughness_window)
+        unseen = smoothest_class_covering(float(windows.ri.max()), window_m=windows.window_m,
+                                          clearance_m=vehicle.ground_clearance_m)
+    with terminal_progress("profileopt drive", enabled=not args.quiet) as progress:
+        driven = drive(route, vehicle, sensor_range_m=args.sensor_range, unseen=unseen, model=args.model,
+                       cycle_s=args.cycle, segment_length_m=args.segment_length,
+                       roughness_window_m=args.roughness_window, sensor_noise_m=args.sensor_noise,
+                       sensor_spacing_m=args.sensor_spacing, seed=args.seed, progress=progress)
+        offline = plan(route, vehicle, model=args.model, roughness_window_m=args.roughness_window, progress=progress)
+        unseen_label = unseen_roughness(unseen).label
+        settings = {"route": Path(args.route).name, "vehicle": args.vehicle, "model": args.model,
+                    "sensor_range_m": args.sensor_range, "unseen": unseen_label, "cycle_s": args.cycle,
+                    "sensor_noise_m": args.sensor_noise, "sensor_spacing_m": args.sensor_spacing,
+                    "seed": args.seed, "segment_length_m": args.segment_length,
+                    "roughness_window_m": args.roughness_window}
+        with outputs:
+            if args.output is not None:
+                from ..io.drives import write_drive
+
+                write_drive(driven, args.output, settings=settings)
+            if args.plot is not None:
+                from ..viz.drives import plot_drive
+
+                plot_drive(driven, offline, args.plot, sensor_range_m=args.sensor_range, unseen=unseen_label,
+                           route=printable(Path(args.route).name),
+                           vehicle=printable(Path(vehicle.name).stem) if vehicle.name else None)
+    summary = {
+        "route": args.route, "vehicle": args.vehicle, "model": args.model, "sensor_range_m": args.sensor_range,
+        "unseen": unseen_label, "unseen_speed_mps": driven.unseen_speed_mps, "cycle_s": args.cycle,
+        "travel_time_s": driven.travel_time_s, "offline_travel_time_s": offline.travel_time_s,
+        "ratio_to_offline": driven.travel_time_s / offline.travel_time_s,
+        "worst_window_ratio": driven.worst_window_ratio, "worst_window_s_m": driven.worst_s_m,
+        "windows_over_limit": driven.windows_over, "emergency_cycles": driven.emergencies,
+        "cycles": int(driven.cycle_s_m.size), "max_jerk_mps3": driven.max_jerk_mps3,
+        "cycle_compute_ms": driven.compute_ms(), "notes": list(driven.notes),
+    }
+    out = sys.stderr if outputs.uses_stdout else sys.stdout
+    if args.json:
+        print(json.dumps(summary, indent=2), file=out)
+    else:
+        print(printable(_human(summary, args)), file=out)
+    return 0
+
+
+def _human(summary: dict, args: argparse.Namespace) -> str:
+    ms = summary["cycle_compute_ms"]
+    verdict = ("within the force limit in the exact simulation" if summary["windows_over_limit"] == 0 else
+               f"OVER the force limit in {summary['windows_over_limit']} roughness windows of the exact simulation")
+    lines = [
+        f"drove {summary['route']} with {summary['sensor_range_m']:g} m of sensing, unseen terrain assumed "
+        f"{summary['unseen']} ({summary['unseen_speed_mps']:.3g} m/s)",
+        f"travel time {summary['travel_time_s']:.2f} s; offline plan {summary['offline_travel_time_s']:.2f} s; "
+        f"ratio {summary['ratio_to_offline']:.3f}",
+        f"worst simulated window {summary['worst_window_ratio']:.3f} of the limit (at "
+        f"{summary['worst_window_s_m']:.6g} m): {verdict}",
+        f"selector compute per cycle: median {ms['median']:.2f} ms, 99th percentile {ms['p99']:.2f} ms, worst "
+        f"{ms['max']:.2f} ms over {summary['cycles']} cycles of {summary['cycle_s']:g} s",
+        f"largest change of the commanded acceleration: {summary['max_jerk_mps3']:.3g} m/s^3 (no jerk bound online)",
+    ]
+    if summary["emergency_cycles"]:
+        lines.append(f"emergency braking in {summary['emergency_cycles']} cycles: the terrain was worse than "
+                     "assumed where it came into view")
+    for note in summary["notes"]:
+        lines.append(f"note: {note}")
+    for name in (args.output, args.plot):
+        if name is not None and name != "-":
+            lines.append(f"wrote {name}")
+    return "\n".join(lines)
