@@ -118,6 +118,7 @@ def run(args: argparse.Namespace) -> int:
         "worst_window_ratio": driven.worst_window_ratio, "worst_window_s_m": driven.worst_s_m,
         "windows_over_limit": driven.windows_over, "emergency_cycles": driven.emergencies,
         "cycles": int(driven.cycle_s_m.size), "max_jerk_mps3": driven.max_jerk_mps3,
+        "jerk_bound_mps3": vehicle.max_jerk_mps3,
         "cycle_compute_ms": driven.compute_ms(), "notes": list(driven.notes),
     }
     out = sys.stderr if outputs.uses_stdout else sys.stdout
@@ -141,7 +142,8 @@ def _human(summary: dict, args: argparse.Namespace) -> str:
         f"{summary['worst_window_s_m']:.6g} m): {verdict}",
         f"selector compute per cycle: median {ms['median']:.2f} ms, 99th percentile {ms['p99']:.2f} ms, worst "
         f"{ms['max']:.2f} ms over {summary['cycles']} cycles of {summary['cycle_s']:g} s",
-        f"largest change of the commanded acceleration: {summary['max_jerk_mps3']:.3g} m/s^3 (no jerk bound online)",
+        f"largest jerk of the commands: {summary['max_jerk_mps3']:.3g} m/s^3 (the vehicle's bound: "
+        f"{summary['jerk_bound_mps3']:.3g} m/s^3)",
     ]
     if summary["emergency_cycles"]:
         lines.append(f"emergency braking in {summary['emergency_cycles']} cycles: the terrain was worse than "

@@ -78,7 +78,8 @@ class Drive:
     window_start_m, window_ratio : numpy.ndarray, shape (W,)
         Each roughness window's start (m) and its simulated peak force over the limit.
     max_jerk_mps3 : float
-        The largest change of the commanded acceleration between cycles over the cycle (m/s^3).
+        The largest change of the commanded acceleration between cycles over the cycle (m/s^3),
+        while moving (coming to rest ends the braking at once).
     unseen_speed_mps : float
         The speed allowed on unseen terrain (m/s).
     notes : tuple of str
@@ -251,14 +252,19 @@ def drive(route: "Route", vehicle: "Vehicle", *, sensor_range_m: float = DEFAULT
             knots_v.append(cmd.speed_mps)
             knots_c.append(len(cyc_s))  # the next cycle starts here
         pos, v = cmd.position_next_m, cmd.speed_mps
+        if pos > end:  # past the route's end (the selector could not stop in time): no terrain to drive on
+            b_end = np.interp(end, [knots_s[-2], knots_s[-1]], [knots_v[-2] ** 2, knots_v[-1] ** 2])
+            knots_s[-1], knots_v[-1] = end, math.sqrt(max(b_end, 0.0))
+            notes.append(f"the vehicle reached the route's end at {knots_v[-1]:.4g} m/s, unable to stop there")
+            break
     else:
         raise InputError(f"{route.source}: the drive took more than {MAX_CYCLES} cycles of {cycle_s:g} s; use a "
                          "longer --cycle or a shorter route")
     s_k, v_k, c_k = np.asarray(knots_s), np.asarray(knots_v), np.asarray(knots_c)
     keep = np.concatenate([[True], np.diff(s_k) > 1e-9])
     s_k, v_k, c_k = s_k[keep], v_k[keep], np.minimum(c_k[keep], len(cyc_s) - 1)
-    s_k[-1] = end
-    v_k[-1] = 0.0
+    if v_k[-1] == 0.0:
+        s_k[-1] = end  # at rest within END_TOLERANCE_M of it
     progress.step("simulating the driven speed on the route")
     run = simulate_quarter_car(route.s_m, route.z_m, s_k, v_k, vehicle)
     windows = route_roughness_windows(route, vehicle, window_m=roughness_window_m)
@@ -266,7 +272,8 @@ def drive(route: "Route", vehicle: "Vehicle", *, sensor_range_m: float = DEFAULT
     ratio = check.simulated_n / check.limit_n
     worst = int(np.argmax(ratio))
     accel = np.asarray(cyc_a)
-    jerk = float(np.max(np.abs(np.diff(accel))) / cycle_s) if accel.size > 1 else 0.0
+    moving = np.asarray(cyc_v)[1:] > 0  # starting from rest: the acceleration at rest is 0
+    jerk = float(np.max(np.abs(np.diff(accel))[moving], initial=0.0) / cycle_s) if accel.size > 1 else 0.0
     return Drive(s_m=s_k, speed_mps=v_k, time_s=boundary_times_s(s_k, v_k), knot_cycle=c_k,
                  cycle_s_m=np.asarray(cyc_s),
                  cycle_speed_mps=np.asarray(cyc_v), cycle_accel_mps2=accel, cycle_edge_m=np.asarray(cyc_edge),

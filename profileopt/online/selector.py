@@ -5,31 +5,35 @@ unknown terrain knows only what its sensors have measured ahead (:mod:`.sensed`)
 never go faster than it could if the terrain beyond were as bad as assumed. Each cycle the
 :class:`SpeedSelector`
 
-1. takes the newly sensed samples and, for every segment whose whole neighbourhood is now
-   measured (the roughness windows, the grade's fit and the steps' ramps that decide its
-   speeds: :attr:`SpeedSelector.margin_m`), computes once and for all the same admissible
-   speed bands, caps and acceleration bounds the offline planner computes
-   (:mod:`profileopt.planning.limits`: force windows, steps, speed limits and top speed, turns,
-   friction, grades, drive power), on the measured samples around it;
+1. takes the newly sensed samples and, for every segment whose neighbourhood is now measured
+   (the roughness windows, the grade's fit and the steps' ramps that decide its speeds:
+   :attr:`SpeedSelector.margin_m`), computes once and for all the same speed bands, caps and
+   acceleration bounds the offline planner computes (:mod:`profileopt.planning.limits`: force
+   windows, steps, speed limits and top speed, turns, friction, grades, drive power) on the
+   measured samples around it, in three stages over three cycles so that no cycle does it all;
+   of the force's bands it keeps the first, [0, v_first] (the paper-notes' "Which root": safe
+   for a vehicle that may have to slow down anywhere, as one that sees only so far must);
 2. appends, past the last such segment (the *planning edge*), the terrain not yet measured as
    the ``unseen`` assumption: a roughness class (or an RI) whose first admissible band,
-   [0, v_unseen], is the speed allowed there, stopping at rest eventually;
-3. chooses the bands and the minimum-time profile over that horizon from the vehicle's
-   current position and speed exactly (:func:`profileopt.planning.bands.choose_bands`, the
-   forward-backward pass the offline planner starts from): the *envelope*, under which every
-   speed keeps every limit but the jerk bound;
-4. commands the fastest acceleration for this cycle that changes by at most the jerk bound
-   and keeps the vehicle under the envelope, now and while braking with the jerk bound
-   afterwards (:mod:`.tracking`).
+   [0, v_unseen], is the speed allowed there;
+3. computes the *envelope* over that horizon: the greatest speed at every point from which
+   every later cap, the edge's v_unseen included, can still be met braking within the
+   deceleration bounds (:func:`profileopt.planning.bands.braking_profile`, the backward pass
+   of the offline planner's forward-backward profile); and, for the report, the
+   forward-backward plan from the current speed (:attr:`Command.horizon_speed_mps`);
+4. commands the fastest acceleration for this cycle that changes by at most the jerk bound,
+   keeps the acceleration and drive power bounds, and keeps the vehicle under the envelope,
+   now and while braking with the jerk bound afterwards (:mod:`.tracking`).
 
-Safety by construction (docs: guide/online.md). The horizon profile keeps every limit on the
-measured segments and ends at the planning edge no faster than v_unseen, from which the
-vehicle can keep to any terrain no worse than assumed. The next cycle's problem therefore has
-a feasible solution, the rest of this one's, whenever the newly measured terrain is no worse
-than assumed: the command is never faster than the offline plan of a route whose unmeasured
-part is exactly as bad as assumed, and never infeasible while the assumption holds. Where the
-terrain turns out worse (a kerb past the sensing range that the assumption does not cover,
-seen too late to slow down), the selector brakes as hard as the vehicle may and says so
+Safety by construction (docs: guide/online.md). Under the envelope every speed keeps every
+cap of the measured segments, and at the planning edge it is at most v_unseen, from which the
+vehicle can keep to any terrain no worse than assumed. The state after each command is
+*safe* (a jerk-limited braking manoeuvre from it stays under the envelope), so the next
+cycle has a command too, whenever the newly measured terrain is no worse than assumed (its
+caps are at least v_unseen): the vehicle is never faster than on the offline plan of a route
+whose unmeasured part is exactly as bad as assumed. Where the terrain turns out worse (a kerb
+past the sensing range that the assumption does not cover, seen too late), the selector
+brakes harder than the jerk bound, or as hard as the vehicle may, and says so
 (:attr:`Command.emergency`).
 
 What it does not keep: the offline planner's simulation gate (:mod:`profileopt.planning.gate`:
@@ -59,11 +63,11 @@ from ..defaults import (
     MAX_ROUGHNESS_SPACING_M,
     MODEL_KEYS,
 )
-from ..errors import InfeasibleError, InputError
+from ..errors import InputError
 from ..physics.motion import power_accel_mps2
 from ..physics.speeds import speed_bands
 from ..physics.steps import MAX_RAMP_M, TREND_HALF_WIDTH_M
-from ..planning.bands import DrivePower, choose_bands, snap_to_band
+from ..planning.bands import DrivePower, braking_profile, greatest_profile
 from ..planning.limits import PlanContext, default_limits
 from ..terrain.assumed import AssumedRoughness
 from ..terrain.geometry import route_geometry
@@ -89,6 +93,9 @@ MIN_ONLINE_SEGMENT_LENGTH_M = MAX_ROUGHNESS_SPACING_M
 #: The most segments a horizon may hold (sensor_range_m / segment_length_m): a bound on the time
 #: and memory of a cycle.
 MAX_HORIZON_SEGMENTS = 10_000
+#: Where a segment's higher cap begins after the boundary's lower one (m): the envelope's
+#: step up, a knot this far after the boundary.
+JUMP_M = 1e-6
 #: The assumption for terrain not yet measured when none is given.
 DEFAULT_UNSEEN = "worst"
 #: What ``unseen="worst"`` means: the roughest ISO 8608 class, H.
@@ -206,11 +213,9 @@ class Command:
 class _Grown:
     """Per-segment arrays that grow at the end and are forgotten at the start."""
 
-    def __init__(self, bands: int) -> None:
+    def __init__(self) -> None:
         self.offset = 0  # global index of row 0
-        self.lower = np.empty((0, bands))
-        self.upper = np.empty((0, bands))
-        self.count = np.empty(0, dtype=int)
+        self.top = np.empty(0)  # the first band's top, capped (m/s)
         self.decel = np.empty(0)
         self.accel = np.empty(0)
         self.grade_hi = np.empty(0)
@@ -218,26 +223,46 @@ class _Grown:
 
     @property
     def end(self) -> int:
-        return self.offset + self.count.size
+        return self.offset + self.top.size
 
-    def append(self, lower: np.ndarray, upper: np.ndarray, count: np.ndarray, decel: np.ndarray,
-               accel: np.ndarray, grade_hi: np.ndarray, power_binds: np.ndarray) -> None:
-        width = max(self.lower.shape[1], lower.shape[1])
-        self.lower = np.concatenate([_padded(self.lower, width), _padded(lower, width)])
-        self.upper = np.concatenate([_padded(self.upper, width), _padded(upper, width)])
-        self.count = np.concatenate([self.count, count])
+    def append(self, top: np.ndarray, decel: np.ndarray, accel: np.ndarray, grade_hi: np.ndarray,
+               power_binds: np.ndarray) -> None:
+        self.top = np.concatenate([self.top, top])
         self.decel = np.concatenate([self.decel, decel])
         self.accel = np.concatenate([self.accel, accel])
         self.grade_hi = np.concatenate([self.grade_hi, grade_hi])
         self.power_binds = np.concatenate([self.power_binds, power_binds])
 
     def forget_before(self, index: int) -> None:
-        drop = min(max(index - self.offset, 0), self.count.size)
+        drop = min(max(index - self.offset, 0), self.top.size)
         if drop:
-            self.lower, self.upper = self.lower[drop:], self.upper[drop:]
-            self.count, self.decel, self.accel = self.count[drop:], self.decel[drop:], self.accel[drop:]
+            self.top, self.decel, self.accel = self.top[drop:], self.decel[drop:], self.accel[drop:]
             self.grade_hi, self.power_binds = self.grade_hi[drop:], self.power_binds[drop:]
             self.offset += drop
+
+
+def _envelope(where: np.ndarray, top_b: np.ndarray, braking: np.ndarray, decel: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """The envelope as knots and b = v^2 there, piecewise linear in s: at each boundary the
+    braking profile; inside segment i the least of its cap top_b[i] and the braking line from
+    the next boundary, braking[i + 1] + 2 d_i (s_{i+1} - s), with a knot where they cross and
+    one :data:`JUMP_M` after the boundary (where a higher cap begins)."""
+    length = np.diff(where)
+    slope = 2.0 * np.maximum(decel, 1e-300)
+    after = np.minimum(top_b, braking[1:] + slope * length)  # just after each segment's start
+    cross = where[1:] - (top_b - braking[1:]) / slope
+    inside = (cross > where[:-1] + JUMP_M) & (cross < where[1:])
+    room = length > 2.0 * JUMP_M
+    knots = np.concatenate([where, where[:-1][room] + JUMP_M, cross[inside]])
+    values = np.concatenate([braking, after[room], top_b[inside]])
+    order = np.argsort(knots, kind="stable")
+    return knots[order], values[order]
+
+
+def _piece_values(knots: np.ndarray, where: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Per piece between ``knots``, the value of the segment (between ``where``) it lies in."""
+    mid = 0.5 * (knots[:-1] + knots[1:])
+    return values[np.clip(np.searchsorted(where, mid, side="right") - 1, 0, values.size - 1)]
 
 
 def _sliding_min(values: np.ndarray, half_width: int) -> np.ndarray:
@@ -245,12 +270,6 @@ def _sliding_min(values: np.ndarray, half_width: int) -> np.ndarray:
     if values.size <= 1 or half_width <= 0:
         return values
     return minimum_filter1d(values, size=2 * half_width + 1, mode="nearest")
-
-
-def _padded(a: np.ndarray, width: int) -> np.ndarray:
-    if a.shape[1] == width:
-        return a
-    return np.concatenate([a, np.full((a.shape[0], width - a.shape[1]), np.nan)], axis=1)
 
 
 class SpeedSelector:
@@ -342,9 +361,11 @@ class SpeedSelector:
             raise InputError(f"max_jerk_mps3 = {max_jerk_mps3!r}: must be a number > 0 (m/s^3; inf: no bound)")
         self.max_jerk_mps3 = float(jerk)
         #: How much measured terrain (m) a segment needs on either side before its speeds are
-        #: final: a roughness window, and the trend and ramp a step's cap looks at (or the
-        #: grade's fit over two windows, whichever is longer).
-        self.margin_m = self.roughness_window_m + max(self.roughness_window_m, MAX_RAMP_M + TREND_HALF_WIDTH_M)
+        #: final: the longer of a roughness window (the windows that share a point with it; the
+        #: grade's fit, centred, over two) and the ramp and trend a step's cap looks at
+        #: (tests/online/test_selector.py: equal to the offline planner's on kerbs and washboard,
+        #: and not with 5 m).
+        self.margin_m = max(self.roughness_window_m, MAX_RAMP_M + TREND_HALF_WIDTH_M)
         if self.margin_m >= self.sensor_range_m:
             raise InputError(f"sensor_range_m = {sensor_range_m:g} m: a segment's speeds need {self.margin_m:g} m of "
                              "measured terrain beyond it (a roughness window and a step's ramp), so no terrain would "
@@ -356,10 +377,12 @@ class SpeedSelector:
         self.limits = default_limits(vehicle, model=model, max_jerk_mps3=math.inf)
         self._power = next((limit for limit in self.limits if limit.name == "power"), None)
         self.terrain = SensedTerrain(start_m=self.start_m)
-        self._segments = _Grown(bands=1)
+        self._segments = _Grown()
         self._tail_decel = float(vehicle.max_decel_mps2)
         self._last_accel = 0.0
         self._work: Iterator[None] | None = None
+        self._driven: list[tuple[float, float]] = []  # positions and speeds on ground not yet planned
+        self._late = ""
         #: Segments whose speeds are computed together (a stretch of at least one roughness
         #: window): each computation has a fixed cost, about 5 ms, so fewer are cheaper.
         self._chunk = max(int(math.ceil(self.roughness_window_m / self.segment_length_m - 1e-9)), 1)
@@ -444,6 +467,13 @@ class SpeedSelector:
         if bounds[0] < route.s_m[0] - 1e-9 or bounds[-1] > route.s_m[-1] + 1e-9:
             return  # not measured around them yet (forgotten, or a gap): later
         bounds = np.clip(bounds, route.s_m[0], route.s_m[-1])
+        # the limits see segments from the stretch's start to its end (a speed limit's cap, for
+        # one, takes the least limit of each segment's samples up to the next segment's first):
+        # one segment before the new ones and one after, computed and dropped
+        lead = bounds[0] > route.s_m[0] + 1e-9
+        trail = bounds[-1] < route.s_m[-1] - 1e-9
+        bounds = np.concatenate([[route.s_m[0]] if lead else [], bounds, [route.s_m[-1]] if trail else []])
+        new = slice(1 if lead else 0, bounds.size - 1 - (1 if trail else 0))
         starts, stops = segment_samples(route.s_m, bounds)
         windows = route_roughness_windows(route, self.vehicle, window_m=self.roughness_window_m)
         seg = segments_at(bounds, windows, self.vehicle, starts=starts, stops=stops)
@@ -475,11 +505,29 @@ class SpeedSelector:
             inner_b = limit.inner_bounds(context, cap, decel, accel)
             if inner_b is not None:
                 cap, decel, accel = inner_b
-        usable = bands.capped(cap)
+        top = bands.first_band_only().capped(cap).first()
         # the forward pass keeps the power limit step by step (slow) only where it can bind
         binds = self._power is not None and self._power.nlp_rows(context, cap, decel, accel) is not None
-        self._segments.append(usable.lower_mps, usable.upper_mps, usable.count, decel, accel, path.grade_hi_rad,
-                              np.full(n, binds))
+        self._segments.append(top[new], decel[new], accel[new], path.grade_hi_rad[new],
+                              np.full(new.stop - new.start, binds))
+        self._check_passed(bounds[new.start:new.stop + 1], top[new])
+
+    def _check_passed(self, bounds: np.ndarray, top: np.ndarray) -> None:
+        """Whether the vehicle already drove faster than the caps of segments just computed
+        (terrain worse than assumed, measured too late): then the next command says so."""
+        if not self._driven:
+            return
+        s, v = np.array(self._driven).T
+        seg = np.searchsorted(bounds, s, side="right") - 1
+        inside = (seg >= 0) & (seg < top.size)
+        over = inside & (v > top[np.clip(seg, 0, top.size - 1)] * (1 + 1e-9) + 1e-12)
+        if np.any(over):
+            k = int(np.flatnonzero(over)[0])
+            cap = float(top[seg[k]])
+            self._late = (f"the terrain at {s[k]:.6g} m came into view after the vehicle was there at {v[k]:.4g} m/s, "
+                          f"above its cap of {cap:.4g} m/s: worse than the unseen assumption "
+                          f"({self.unseen.label})")
+        self._driven = [(p, w) for p, w in self._driven if p >= bounds[-1]]
 
     # -- one cycle -----------------------------------------------------------------------------
     def update(self, position_m: float, speed_mps: float, accel_mps2: float | None = None) -> Command:
@@ -507,30 +555,25 @@ class SpeedSelector:
                              "give a finite position (m), a speed >= 0 (m/s) and a finite acceleration (m/s^2)")
         if v0 <= 0:
             a0 = max(a0, 0.0)  # at rest nothing pulls backwards
+        if pos >= self.planned_to_m:
+            self._driven.append((pos, v0))
         self._advance()
         segs = self._segments
         k0 = self._segment_of(pos)
         segs.forget_before(k0)
         self.terrain.forget_before(pos - 2.0 * self.margin_m)
-        ready = segs.end
         total = self._segment_count()
-        finished = total is not None and ready >= total
+        finished = total is not None and segs.end >= total
         if self.end_m is not None and pos >= self.end_m - 1e-9:
+            if v0 > 0:
+                return self._braking(pos, v0, pos, t0, f"{v0:.4g} m/s at the path's end ({self.end_m:.6g} m)")
             return self._finish(pos, v0, 0.0, np.array([pos]), np.array([v0]), pos, t0, emergency=False, note="")
-        ks = np.arange(max(k0, segs.offset), ready)
-        if ks.size and k0 >= segs.offset:
-            where = np.concatenate([[pos], self._boundary_m(ks + 1)])
-            rows = ks - segs.offset
-            lower, upper, count = segs.lower[rows], segs.upper[rows], segs.count[rows]
-            decel, accel, grade_hi = segs.decel[rows], segs.accel[rows], segs.grade_hi[rows]
-            power_binds = bool(np.any(segs.power_binds[rows]))
-        else:
-            where = np.array([pos])
-            width = segs.lower.shape[1]
-            lower, upper = np.empty((0, width)), np.empty((0, width))
-            count = np.empty(0, dtype=int)
-            decel, accel, grade_hi = np.empty(0), np.empty(0), np.empty(0)
-            power_binds = False
+        rows = np.arange(max(k0, segs.offset), segs.end) - segs.offset
+        if k0 < segs.offset:  # behind what is kept: nothing measured is known here
+            rows = rows[:0]
+        where = np.concatenate([[pos], self._boundary_m(rows + segs.offset + 1)])
+        top, decel, accel = segs.top[rows], segs.decel[rows], segs.accel[rows]
+        grade_hi, power_binds = segs.grade_hi[rows], bool(np.any(segs.power_binds[rows]))
         edge = float(where[-1])
         if not finished:  # the unseen terrain: [0, v_unseen], long enough to stop from it
             vu = self.unseen_speed_mps
@@ -538,54 +581,57 @@ class SpeedSelector:
             # long enough that its end does not hold the speed at the edge below v_unseen, even
             # braking with the jerk bound; two pieces, so that a vehicle at rest may start into it
             tail = vu * vu / (2.0 * d) + braking_margin_m(vu, d, self.max_jerk_mps3) + self.segment_length_m
+            ends = self.end_m is not None and edge + tail >= self.end_m
+            if ends:  # the path ends within it: there the vehicle stops (or leaves at vend)
+                tail = max(self.end_m - edge, 2e-9)
             where = np.append(where, [edge + tail / 2, edge + tail])
-            row_lo = np.full((2, lower.shape[1]), np.nan)
-            row_hi = np.full((2, lower.shape[1]), np.nan)
-            row_lo[:, 0], row_hi[:, 0] = 0.0, vu
-            lower, upper = np.concatenate([lower, row_lo]), np.concatenate([upper, row_hi])
-            count = np.append(count, [1, 1])
+            top = np.append(top, [vu, vu])
             decel = np.append(decel, [d, d])
             accel = np.append(accel, [float(self.vehicle.max_accel_mps2)] * 2)
             grade_hi = np.append(grade_hi, [0.0, 0.0])
-            vend = 0.0
+            end_b = self.vend_mps ** 2 if ends else 0.0
         else:
-            vend = self.vend_mps
-        length = np.diff(where)
-        if length.size and length[0] <= 1e-9:  # at a boundary: drop the empty first piece
-            where, length = where[1:], length[1:]
-            lower, upper, count = lower[1:], upper[1:], count[1:]
-            decel, accel, grade_hi = decel[1:], accel[1:], grade_hi[1:]
-        if length.size == 0:
+            end_b = self.vend_mps ** 2
+        if where[1:].size and where[1] - where[0] <= 1e-9:  # at a boundary: drop the empty first piece
+            where, top, decel, accel, grade_hi = where[1:], top[1:], decel[1:], accel[1:], grade_hi[1:]
+        if top.size == 0:
             return self._finish(pos, v0, 0.0, np.array([pos]), np.array([v0]), edge, t0, emergency=False, note="")
         # a command holds one acceleration for a cycle, which may cross segment boundaries: each
         # segment's bounds become the tightest of the segments within a cycle's travel
         reach = int(math.ceil(self.vehicle.max_speed_mps * self.cycle_s / self.segment_length_m)) + 1
         decel, accel = _sliding_min(decel, reach), _sliding_min(accel, reach)
+        length = np.diff(where)
+        top_b = top * top
+        upper = np.concatenate([[top_b[0]], np.minimum(top_b[:-1], top_b[1:]), [min(top_b[-1], end_b)]])
+        braking = braking_profile(upper, length, decel)
+        if v0 * v0 > braking[0] * (1 + 1e-9) + 1e-12:  # faster than any limit-keeping profile allows
+            return self._braking(pos, v0, edge, t0, f"{v0:.4g} m/s, where at most {math.sqrt(braking[0]):.4g} m/s "
+                                                    "keeps the limits of the terrain ahead")
+        knots, envelope = _envelope(where, top_b, braking, decel)
         power = None
         if self._power is not None and power_binds:
             power = DrivePower(self._power.max_power_w / self._power.mass_kg, grade_hi)
-        start, _ = snap_to_band(v0, lower[0], upper[0], int(count[0]), "speed_mps")
-        try:
-            chosen = choose_bands(lower, upper, count, length, accel, decel, start, vend, where, power)
-        except InfeasibleError as exc:
-            return self._braking(pos, v0, edge, t0, str(exc))
-        b_env = chosen.greatest_b
+        plan_upper = upper.copy()
+        plan_upper[0] = v0 * v0
+        plan = np.sqrt(np.maximum(greatest_profile(plan_upper, plan_upper, length, accel, decel, power), 0.0))
         max_accel = float(accel[0])
         if self._power is not None and v0 > 0:
             faster = v0 + max(max_accel, 0.0) * self.cycle_s  # the power bound at the cycle's highest speed
             max_accel = min(max_accel, float(power_accel_mps2(self._power.max_power_w, self._power.mass_kg, faster,
                                                               grade_hi[0])))
-        step = jerk_limited_step(pos, v0, a0, where_m=where, envelope_b=b_env, max_accel_mps2=max_accel,
-                                 decel_mps2=decel, jerk_mps3=self.max_jerk_mps3, cycle_s=self.cycle_s)
-        speed = np.sqrt(np.maximum(b_env, 0.0))
+        step = jerk_limited_step(pos, v0, a0, where_m=knots, envelope_b=envelope, max_accel_mps2=max_accel,
+                                 decel_mps2=_piece_values(knots, where, decel), jerk_mps3=self.max_jerk_mps3,
+                                 cycle_s=self.cycle_s)
         keep = where.size - (0 if finished else 2)
         note = "" if step.jerk_kept else (f"braking harder than the jerk bound allows at {pos:.6g} m to stay within "
                                           "the limits of terrain that came into view worse than assumed")
-        self._last_accel = step.accel_mps2
+        late, self._late = self._late, ""
+        note = "; ".join(n for n in (late, note) if n)
+        self._last_accel = step.accel_after_mps2
         return Command(speed_mps=step.speed_mps, accel_mps2=step.accel_mps2, position_next_m=step.position_m,
-                       horizon_s_m=where[:keep].copy(), horizon_speed_mps=speed[:keep].copy(), edge_m=edge,
-                       edge_speed_mps=float(np.interp(edge, where, speed)), unseen_speed_mps=self.unseen_speed_mps,
-                       emergency=not step.jerk_kept, note=note, compute_s=time.perf_counter() - t0)
+                       horizon_s_m=where[:keep].copy(), horizon_speed_mps=plan[:keep].copy(), edge_m=edge,
+                       edge_speed_mps=float(plan[keep - 1]), unseen_speed_mps=self.unseen_speed_mps,
+                       emergency=not step.jerk_kept or bool(late), note=note, compute_s=time.perf_counter() - t0)
 
     def _finish(self, pos: float, v0: float, accel: float, where: np.ndarray, speed: np.ndarray, edge: float,
                 t0: float, *, emergency: bool, note: str) -> Command:
@@ -604,5 +650,4 @@ class SpeedSelector:
     def _braking(self, pos: float, v0: float, edge: float, t0: float, why: str) -> Command:
         """Brake as hard as the vehicle may: no profile keeps the limits from here."""
         return self._finish(pos, v0, -float(self.vehicle.max_decel_mps2), np.array([pos]), np.array([v0]), edge,
-                            t0, emergency=True,
-                            note=f"no profile keeps every limit from {v0:.3g} m/s at {pos:.6g} m: {why}; braking")
+                            t0, emergency=True, note=f"at {pos:.6g} m: {why}; braking as hard as the vehicle may")

@@ -38,7 +38,7 @@ RAMP_SAMPLES = 12
 #: leaves none: then the command brakes as the envelope needs).
 MIN_BRAKING_MPS2 = 0.01
 #: Accelerations tried per cycle, evenly over [a - J dt, a + J dt] (the largest safe one wins).
-CANDIDATES = 33
+CANDIDATES = 21
 
 
 @dataclasses.dataclass(frozen=True)
@@ -48,7 +48,9 @@ class TrackingStep:
     Attributes
     ----------
     accel_mps2 : float
-        The acceleration held over the cycle (m/s^2); 0 once stopped.
+        The acceleration held over the cycle (m/s^2), until the vehicle stops if it does.
+    accel_after_mps2 : float
+        The acceleration at the end of the cycle (m/s^2): ``accel_mps2``, or 0 at rest.
     position_m, speed_mps : float
         Where the vehicle is at the end of the cycle (m) and its speed (m/s).
     jerk_kept : bool
@@ -57,6 +59,7 @@ class TrackingStep:
     """
 
     accel_mps2: float
+    accel_after_mps2: float
     position_m: float
     speed_mps: float
     jerk_kept: bool
@@ -146,13 +149,15 @@ def _safe(where: np.ndarray, b_env: np.ndarray, s1: np.ndarray, v1: np.ndarray, 
     bow = jt * v_piece * dt_piece[:, None] ** 2 / 4.0
     b_t = v_t * v_t
     at_samples = np.all(b_t[:, 1:] + bow <= np.interp(s_t[:, 1:], where, b_env) + tol, axis=1)
-    inner = (where[None, None, :] > s_t[:, :-1, None]) & (where[None, None, :] < s_t[:, 1:, None])
     ramp_ok = at_samples
-    if np.any(inner):
+    lo_k, hi_k = np.searchsorted(where, [float(s_t.min()), float(s_t.max())], side="right")
+    w_in, b_in = where[lo_k:hi_k], b_env[lo_k:hi_k]  # the knots the ramps can pass
+    if w_in.size:
+        inner = (w_in[None, None, :] > s_t[:, :-1, None]) & (w_in[None, None, :] < s_t[:, 1:, None])
         span = np.maximum(s_t[:, 1:] - s_t[:, :-1], 1e-300)
-        frac = (where[None, None, :] - s_t[:, :-1, None]) / span[:, :, None]
+        frac = (w_in[None, None, :] - s_t[:, :-1, None]) / span[:, :, None]
         chord = b_t[:, :-1, None] + frac * (b_t[:, 1:] - b_t[:, :-1])[:, :, None] + bow[:, :, None]
-        ramp_ok &= ~np.any(inner & (chord > b_env[None, None, :] + tol), axis=(1, 2))
+        ramp_ok &= ~np.any(inner & (chord > b_in[None, None, :] + tol), axis=(1, 2))
     # then each piece's own deceleration bound from the ramp's end: b piecewise linear in s
     # with the envelope's knots, b(s) = b2 - (C(s) - C(s2)), C the integral of 2 D ds
     s2, b2 = s_t[:, -1], v_t[:, -1] ** 2
@@ -206,11 +211,11 @@ def jerk_limited_step(position_m: float, speed_mps: float, accel_mps2: float, *,
         ok &= _safe(where_m, envelope_b, s1, v1, a1, decel, jerk_mps3)
         if np.any(ok):
             k = int(np.argmax(ok))
-            return TrackingStep(float(a1[k]), float(s1[k]), float(v1[k]), True)
+            return TrackingStep(float(cand[k]), float(a1[k]), float(s1[k]), float(v1[k]), True)
     # nothing within the jerk bound: brake harder, as little as the envelope needs
     cand = np.linspace(min(lo, hi), -d_now, CANDIDATES)
     s1, v1, a1 = _cycle(s, v, cand, cycle_s)
     ok = _under(where_m, envelope_b, np.full(cand.size, s), s1, np.full(cand.size, v * v), v1 * v1)
     ok &= _safe(where_m, envelope_b, s1, v1, a1, decel, np.inf)
     k = int(np.argmax(ok)) if np.any(ok) else cand.size - 1
-    return TrackingStep(float(a1[k]), float(s1[k]), float(v1[k]), False)
+    return TrackingStep(float(cand[k]), float(a1[k]), float(s1[k]), float(v1[k]), False)

@@ -19,7 +19,8 @@ import numpy as np
 
 from ..errors import InfeasibleError
 
-__all__ = ["BandChoice", "DrivePower", "boundary_bounds", "choose_bands", "greatest_profile", "snap_to_band",
+__all__ = ["BandChoice", "DrivePower", "boundary_bounds", "braking_profile", "choose_bands", "greatest_profile",
+           "snap_to_band",
            "BOUNDARY_SNAP_RTOL"]
 
 #: A boundary speed (v0_mps, vend_mps) this close to an admissible band, relative to the
@@ -152,20 +153,42 @@ def greatest_profile(
         b (m^2/s^2).
     """
     del lower_b  # the greatest solution does not depend on the lower bounds
-    down = np.concatenate([[0.0], np.cumsum(2.0 * decel_mps2 * length_m)])
     if power is None:
         up = np.concatenate([[0.0], np.cumsum(2.0 * accel_mps2 * length_m)])
         forward = up + np.minimum.accumulate(upper_b - up)
-        backward = np.minimum.accumulate((forward + down)[::-1])[::-1] - down
-        return np.minimum(forward, backward)
+        return np.minimum(forward, braking_profile(forward, length_m, decel_mps2))
     b = np.asarray(upper_b, dtype=float)
     for _ in range(100):
         forward = _forward_with_power(b, length_m, accel_mps2, power)
-        backward = np.minimum(forward, np.minimum.accumulate((forward + down)[::-1])[::-1] - down)
+        backward = np.minimum(forward, braking_profile(forward, length_m, decel_mps2))
         if np.array_equal(backward, b):
             break
         b = backward
     return b
+
+
+def braking_profile(upper_b: np.ndarray, length_m: np.ndarray, decel_mps2: float | np.ndarray) -> np.ndarray:
+    """The greatest squared-speed profile within bounds from which every later bound can still be
+    met braking within the deceleration bounds: the backward pass of :func:`greatest_profile`.
+
+    Solves b_j <= upper_b[j] and b_j - b_{j+1} <= 2 d_j ds_j exactly (a min-plus suffix scan).
+
+    Parameters
+    ----------
+    upper_b : numpy.ndarray, shape (N+1,)
+        Bounds on b = v^2 at the boundaries (m^2/s^2).
+    length_m : numpy.ndarray, shape (N,)
+        Segment lengths (m).
+    decel_mps2 : float or numpy.ndarray, shape (N,)
+        Deceleration bounds (m/s^2).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N+1,)
+        b (m^2/s^2).
+    """
+    down = np.concatenate([[0.0], np.cumsum(2.0 * decel_mps2 * length_m)])
+    return np.minimum.accumulate((upper_b + down)[::-1])[::-1] - down
 
 
 @dataclasses.dataclass(frozen=True)

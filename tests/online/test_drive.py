@@ -1,0 +1,103 @@
+"""Driving a route seen only within the sensing range (profileopt.online.drive): safe on surprises,
+never faster than the whole route's own plan, an emergency said when the assumption fails."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from conftest import ROUTES
+
+from profileopt.core.route import Route
+from profileopt.errors import InputError
+from profileopt.io.routes import read_route
+from profileopt.online import drive
+from profileopt.planning import plan
+from profileopt.terrain.synthetic import iso8608_profile, step
+
+SPACING_M = 0.05
+
+
+def _kerb_route(length_m: float = 120.0, kerb_at_m: float = 70.0, height_m: float = 0.08) -> Route:
+    """Smooth ISO 8608 class B ground with a kerb up: a surprise that the class-H assumption
+    does not describe (a step), met at speed."""
+    ground = iso8608_profile("B", length_m, SPACING_M, seed=3)
+    return Route(s_m=ground.s_m, z_m=ground.z_m + step(ground.s_m, kerb_at_m, height_m), source="kerb")
+
+
+def _class_h_route(length_m: float = 100.0, start_m: float = 60.0, stretch_m: float = 6.0) -> Route:
+    """Class B ground with a stretch of class H: rough ground just beyond the sensing range."""
+    smooth = iso8608_profile("B", length_m, SPACING_M, seed=4)
+    rough = iso8608_profile("H", length_m, SPACING_M, seed=5)
+    inside = (smooth.s_m >= start_m) & (smooth.s_m <= start_m + stretch_m)
+    return Route(s_m=smooth.s_m, z_m=np.where(inside, rough.z_m, smooth.z_m), source="class H stretch")
+
+
+@pytest.mark.parametrize("vehicle_name, sensor_range_m", [
+    ("atv", 20.0),
+    pytest.param("atv", 50.0, marks=pytest.mark.slow),
+    pytest.param("atv_resonant", 20.0, marks=pytest.mark.slow),
+    pytest.param("atv_resonant", 50.0, marks=pytest.mark.slow),
+])
+@pytest.mark.parametrize("make_route", [_kerb_route, _class_h_route])
+def test_surprises_beyond_the_sensing_range_stay_within_the_force_limit(make_route, vehicle_name, sensor_range_m,
+                                                                         request):
+    """The exact simulation of the driven speed (the one verify uses) has no roughness window
+    over the force limit, and the selector never had to break its promise (no emergency)."""
+    vehicle = request.getfixturevalue(vehicle_name)
+    driven = drive(make_route(), vehicle, sensor_range_m=sensor_range_m)
+    assert driven.windows_over == 0, driven.worst_window_ratio
+    assert driven.worst_window_ratio <= 1.0
+    assert driven.emergencies == 0
+    assert driven.max_jerk_mps3 <= vehicle.max_jerk_mps3 * (1 + 1e-9)
+
+
+def test_never_faster_than_the_plan_that_knows_the_whole_route(atv):
+    """Knowing less can only slow the vehicle: the driven speed is nowhere above the exact
+    minimum-time profile of the whole route (plan() with the first band, 1 m segments, no
+    jerk bound or smoothing: the greatest profile under the same caps), here on the bundled
+    kerbs with speed limits."""
+    vehicle = dataclasses.replace(atv, max_lateral_accel_mps2=None, track_width_m=None, cg_height_m=None,
+                                  friction_coefficient=None, mass_kg=None, max_power_w=None,
+                                  min_turn_radius_m=None)
+    route = read_route(ROUTES / "curb.csv")
+    known = plan(route, vehicle, segment_length_m=1.0, refine=False, smoothing=0.0, max_jerk_mps3=float("inf"),
+                 band="first", simulation_gate=False)
+    driven = drive(route, vehicle, sensor_range_m=50.0)
+    allowed_b = np.interp(driven.s_m, known.s_m, known.speed_mps ** 2)  # v^2 linear in s inside segments
+    assert np.all(driven.speed_mps ** 2 <= allowed_b + 1e-9)
+    assert driven.travel_time_s > known.travel_time_s
+    # and the knots are a real drive: times from the speeds, ending at rest at the route's end
+    assert driven.s_m[-1] == route.s_m[-1] and driven.speed_mps[-1] == 0.0
+    assert driven.time_s[-1] == pytest.approx(driven.travel_time_s)
+
+
+def test_an_assumption_that_fails_is_said_not_hidden(atv):
+    """Assuming class A (20 m/s) on unseen ground with 10 m of sensing, a kerb (capped at
+    8.5 m/s) comes into view too late, when the vehicle is past it: the drive counts
+    emergencies and says where and why."""
+    driven = drive(_kerb_route(kerb_at_m=80.0, height_m=0.09), atv, sensor_range_m=10.0, unseen="A")
+    assert driven.emergencies > 0
+    assert "came into view after the vehicle was there" in driven.notes[0]
+    assert "worse than the unseen assumption (ISO 8608 class A)" in driven.notes[0]
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    ({"cycle_s": float("nan")}, "cycle_s"),
+    ({"cycle_s": 1e-9}, "cycles even at the top speed"),
+    ({"sensor_noise_m": -1.0}, "sensor_noise_m"),
+    ({"sensor_spacing_m": 0.0}, "sensor_spacing_m"),
+])
+def test_bad_options_are_refused_in_one_line(atv, kwargs, words):
+    with pytest.raises(InputError, match=words):
+        drive(_kerb_route(length_m=20.0, kerb_at_m=10.0), atv, **kwargs)
+
+
+def test_a_route_of_assumed_roughness_has_nothing_to_sense(atv):
+    from profileopt.terrain.assumed import AssumedRoughness
+
+    route = dataclasses.replace(_kerb_route(length_m=20.0, kerb_at_m=10.0),
+                                assumed_roughness=AssumedRoughness(road_class="C"))
+    with pytest.raises(InputError, match="nothing for a sensor to see"):
+        drive(route, atv)

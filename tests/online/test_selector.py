@@ -1,0 +1,94 @@
+"""The online speed selector (profileopt.online.selector): the offline planner's limits on what is
+measured, the unseen assumption beyond, never faster than what is known allows."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from conftest import ROUTES
+
+from profileopt.errors import InputError
+from profileopt.io.routes import read_route
+from profileopt.online.selector import SpeedSelector, unseen_speed_mps
+from profileopt.physics.speeds import allowable_speed
+from profileopt.planning import plan
+from profileopt.terrain.classes import iso8608_ri
+
+
+def _level(vehicle):
+    """The vehicle without the keys of turns and hills, so that the offline plan is the exact
+    forward-backward profile (no friction rows for an NLP)."""
+    return dataclasses.replace(vehicle, max_lateral_accel_mps2=None, track_width_m=None, cg_height_m=None,
+                               friction_coefficient=None, mass_kg=None, max_power_w=None, min_turn_radius_m=None)
+
+
+@pytest.mark.parametrize("name", ["curb.csv", "washboard.csv"])
+def test_with_the_whole_route_measured_the_plan_is_the_offline_exact_plan(name, atv_resonant):
+    """Every segment's speeds are computed on the measured stretch around it only (a window
+    and a step's ramp either side): if that stretch were too short, a kerb's or a window's cap
+    would differ from the offline planner's, which sees the whole route. The route is revealed a
+    metre at a time, so that its segments are computed in chunks. Reference: plan() with
+    the first band, 1 m uniform segments, no smoothing or jerk: the exact forward-backward
+    profile (status "exact") on the same segments."""
+    route = read_route(ROUTES / name)
+    vehicle = _level(atv_resonant)
+    offline = plan(route, vehicle, segment_length_m=1.0, refine=False, smoothing=0.0, max_jerk_mps3=float("inf"),
+                   band="first", simulation_gate=False)
+    assert offline.status == "exact"
+    selector = SpeedSelector(vehicle, sensor_range_m=50.0, start_m=route.s_m[0], end_m=route.s_m[-1])
+    revealed = 0
+    for ahead in np.arange(route.s_m[0] + 1.0, route.s_m[-1] + 1.0, 1.0):  # 1 m more at a time
+        upto = int(np.searchsorted(route.s_m, ahead, side="right"))
+        part = slice(revealed, upto)
+        limit = None if route.speed_limit_mps is None else route.speed_limit_mps[part]
+        selector.sense(route.s_m[part], route.z_m[part], speed_limit_mps=limit)
+        revealed = upto
+        for _ in range(3):  # the three stages of the work, one per cycle, standing at the start
+            selector.update(route.s_m[0], 0.0)
+    assert selector.planned_to_m == route.s_m[-1]
+    command = selector.update(route.s_m[0], 0.0)
+    np.testing.assert_allclose(command.horizon_s_m, offline.s_m, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(command.horizon_speed_mps, offline.speed_mps, rtol=1e-9, atol=1e-9)
+
+
+def test_unseen_worst_is_the_first_band_at_class_h(atv):
+    """'worst' is ISO 8608 class H; for the atv, whose force grows with speed, the first band
+    over RIs up to H's is the allowable speed at H's RI (Eq. 13, solved by allowable_speed)."""
+    ri = iso8608_ri("H", window_m=5.0, clearance_m=atv.ground_clearance_m)
+    assert unseen_speed_mps("worst", atv) == pytest.approx(float(allowable_speed(ri, atv)), rel=1e-9)
+    assert unseen_speed_mps("worst", atv) == unseen_speed_mps("H", atv)
+    assert unseen_speed_mps("A", atv) > unseen_speed_mps("E", atv) > unseen_speed_mps("H", atv)
+    assert unseen_speed_mps(0.0, atv) == atv.max_speed_mps
+
+
+def test_nothing_measured_means_the_unseen_speed_and_no_faster(atv):
+    selector = SpeedSelector(atv, sensor_range_m=50.0, unseen="F")
+    speed = 0.0
+    position = 0.0
+    for _ in range(100):  # 10 s on ground never measured
+        command = selector.update(position, speed)
+        position, speed = command.position_next_m, command.speed_mps
+        assert speed <= selector.unseen_speed_mps * (1 + 1e-9)
+    assert speed == pytest.approx(selector.unseen_speed_mps, rel=1e-3)
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    ({"sensor_range_m": 7.0}, "7.5 m of measured terrain"),
+    ({"segment_length_m": 1e-9}, "at least 0.1 m"),
+    ({"model": "dynamic"}, "dynamic model simulates the whole route"),
+    ({"unseen": "Q"}, "ISO 8608 class"),
+    ({"unseen": "fast"}, "'worst', an ISO 8608 class"),
+    ({"cycle_s": 0.0}, "cycle_s"),
+    ({"max_jerk_mps3": -1.0}, "max_jerk_mps3"),
+    ({"end_m": -5.0}, "end_m"),
+])
+def test_bad_options_are_refused_in_one_line(atv, kwargs, words):
+    with pytest.raises(InputError, match=words):
+        SpeedSelector(atv, **kwargs)
+
+
+def test_a_vehicle_name_is_refused_with_what_to_pass():
+    with pytest.raises(InputError, match="load_vehicle"):
+        SpeedSelector("atv")
