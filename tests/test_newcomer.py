@@ -53,6 +53,7 @@ EXAMPLES = {
     "examples/mpc_rockit.py": ["atv", "trail.csv", "washboard.csv", "40"],
     "examples/routes/make_routes.py": ["beside this script"],
     "examples/geo_route.py": ["hexbin-track.gpx", "atv-low-range", "geo_route.png"],
+    "examples/online_stream.py": ["trail.csv", "atv", "50", "worst", "0.1"],
 }
 #: the examples that import do-mpc or rockit before reading their options (the mpc extra)
 MPC_EXAMPLES = {"examples/mpc_dompc.py", "examples/mpc_rockit.py"}
@@ -80,6 +81,26 @@ def test_example_refuses_an_unknown_option_and_writes_nothing(tmp_path: Path, sc
                             text=True, timeout=120, cwd=tmp_path, env=_env())
     assert result.returncode == 2, (result.stdout, result.stderr)
     assert "--no-such-option" in result.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+# --- the online selector's loop ----------------------------------------------------------
+
+
+def test_the_online_example_drives_a_route_to_its_end_in_its_cycles(tmp_path: Path) -> None:
+    """examples/online_stream.py, the loop a robotics user adapts: it reaches the route's end
+    at rest, and its clock agrees with the library's own closed loop (profileopt.online.drive)
+    on the same route, to a cycle."""
+    from profileopt.online import drive
+
+    route = ROOT / "examples" / "routes" / "curb.csv"
+    result = subprocess.run([sys.executable, str(ROOT / "examples" / "online_stream.py"), "--route", str(route),
+                             "--every", "1000"], capture_output=True, text=True, timeout=300, cwd=tmp_path,
+                            env=_env())
+    assert result.returncode == 0, result.stderr
+    arrived = float(result.stdout.split("arrived after ")[1].split(" s")[0])
+    driven = drive(read_route(route), load_vehicle("atv"), sensor_range_m=50.0)
+    assert abs(arrived - driven.travel_time_s) <= 0.1 + 1e-9
     assert list(tmp_path.iterdir()) == []
 
 

@@ -260,6 +260,9 @@ def drive(route: "Route", vehicle: "Vehicle", *, sensor_range_m: float = DEFAULT
     else:
         raise InputError(f"{route.source}: the drive took more than {MAX_CYCLES} cycles of {cycle_s:g} s; use a "
                          "longer --cycle or a shorter route")
+    if selector.blind_m > 0:
+        notes.append(f"{selector.blind_m:.4g} m of the route were never sensed with samples at most "
+                     f"{selector.terrain.max_spacing_m:g} m apart: driven as unseen terrain")
     s_k, v_k, c_k = np.asarray(knots_s), np.asarray(knots_v), np.asarray(knots_c)
     keep = np.concatenate([[True], np.diff(s_k) > 1e-9])
     s_k, v_k, c_k = s_k[keep], v_k[keep], np.minimum(c_k[keep], len(cyc_s) - 1)

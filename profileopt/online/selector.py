@@ -383,6 +383,7 @@ class SpeedSelector:
         self._work: Iterator[None] | None = None
         self._driven: list[tuple[float, float]] = []  # positions and speeds on ground not yet planned
         self._late = ""
+        self._blind_m = 0.0
         #: Segments whose speeds are computed together (a stretch of at least one roughness
         #: window): each computation has a fixed cost, about 5 ms, so fewer are cheaper.
         self._chunk = max(int(math.ceil(self.roughness_window_m / self.segment_length_m - 1e-9)), 1)
@@ -410,6 +411,12 @@ class SpeedSelector:
         return max(k, 0)
 
     @property
+    def blind_m(self) -> float:
+        """Length (m) of the gaps in the sensed terrain given up on so far (blind spots, or
+        samples sparser than the rule): driven as unseen terrain."""
+        return self._blind_m
+
+    @property
     def planned_to_m(self) -> float:
         """The planning edge (m): the end of the last segment whose speeds are final."""
         return float(self._boundary_m(self._segments.end))
@@ -430,6 +437,25 @@ class SpeedSelector:
             Speed limits at the samples (m/s), from a map.
         """
         self.terrain.add(s_m, z_m, x_m=x_m, y_m=y_m, speed_limit_mps=speed_limit_mps)
+
+    def _skip_blind_spot(self, pos: float) -> None:
+        """Give up on a gap in the measured terrain that is still open when the vehicle comes
+        within :attr:`margin_m` of it (a blind spot): the segments whose neighbourhood meets it
+        are unseen (v_unseen), and the measured stretch starts again beyond it."""
+        gap = self.terrain.gap_m
+        if gap is None or self._work is not None or pos + self.margin_m < gap[0]:
+            return
+        first = self._segments.end
+        upto = int(math.ceil((gap[1] + self.margin_m - self.start_m) / self.segment_length_m - 1e-9))
+        total = self._segment_count()
+        if total is not None:
+            upto = min(upto, total)
+        n = max(upto - first, 0)
+        if n:
+            self._segments.append(np.full(n, self.unseen_speed_mps), np.full(n, self._tail_decel),
+                                  np.full(n, float(self.vehicle.max_accel_mps2)), np.zeros(n), np.zeros(n, bool))
+        self.terrain.skip_gap()
+        self._blind_m += gap[1] - gap[0]
 
     def _advance(self) -> None:
         """One stage of the work on newly measured segments (:meth:`_chunk_stages`), so that no
@@ -557,11 +583,15 @@ class SpeedSelector:
             a0 = max(a0, 0.0)  # at rest nothing pulls backwards
         if pos >= self.planned_to_m:
             self._driven.append((pos, v0))
+        self._skip_blind_spot(pos)
         self._advance()
         segs = self._segments
         k0 = self._segment_of(pos)
         segs.forget_before(k0)
-        self.terrain.forget_before(pos - 2.0 * self.margin_m)
+        behind = min(pos, self.planned_to_m) - 2.0 * self.margin_m  # nothing before is needed again
+        self.terrain.forget_before(behind)
+        if self._driven and self._driven[0][0] < behind:
+            self._driven = [(p, w) for p, w in self._driven if p >= behind]
         total = self._segment_count()
         finished = total is not None and segs.end >= total
         if self.end_m is not None and pos >= self.end_m - 1e-9:

@@ -11,8 +11,10 @@ filled.
 
 Measured terrain is frozen: a later sample at a position already measured is ignored, so the
 speeds the selector allows there never change under it (and a noisy re-measurement cannot
-undo a plan under way). Samples far behind the vehicle are forgotten, so memory stays bounded
-however long the route.
+undo a plan under way). A gap that is never filled (a blind spot) is given up on when the
+vehicle comes near it (:meth:`SensedTerrain.skip_gap`): the stretch starts again beyond it,
+and the gap stays unseen. Samples far behind the vehicle are forgotten, so memory stays
+bounded however long the route.
 """
 
 from __future__ import annotations
@@ -56,18 +58,19 @@ class SensedTerrain:
         self._measured = np.empty((0, 5))
         self._pending = np.empty((0, 5))
         self._has_xy: bool | None = None
+        self._from_m = self.start_m  # where the measured stretch starts (moved by skip_gap)
         self._has_limit = False
 
     @property
     def measured_to_m(self) -> float:
-        """Where the measured terrain ends (m): the last sample of the dense stretch, or
-        ``start_m`` before any (then nothing is measured)."""
-        return float(self._measured[-1, 0]) if self._measured.shape[0] else self.start_m
+        """Where the measured terrain ends (m): the last sample of the dense stretch, or where
+        the stretch starts (``start_m``, or the end of a skipped gap) before any."""
+        return float(self._measured[-1, 0]) if self._measured.shape[0] else self._from_m
 
     @property
     def measured_from_m(self) -> float:
-        """The first measured sample still kept (m); ``start_m`` before any."""
-        return float(self._measured[0, 0]) if self._measured.shape[0] else self.start_m
+        """The first measured sample still kept (m); where the stretch starts before any."""
+        return float(self._measured[0, 0]) if self._measured.shape[0] else self._from_m
 
     @property
     def sample_count(self) -> int:
@@ -125,30 +128,58 @@ class SensedTerrain:
                              "passing the samples")
         if speed_limit_mps is not None and not np.all(rows[:, 4] > 0):
             raise InputError(f"{self.source}: speed limits must be numbers > 0 (m/s)")
-        floor = self.measured_to_m if self._measured.shape[0] else self.start_m - self.max_spacing_m
+        floor = self.measured_to_m if self._measured.shape[0] else self._from_m - self.max_spacing_m
         rows = rows[rows[:, 0] > floor]
         if not rows.shape[0]:
             return
         pending = np.concatenate([self._pending, rows])
         pending = pending[np.argsort(pending[:, 0], kind="stable")]
         keep = np.concatenate([[True], np.diff(pending[:, 0]) > 0])  # the first at each position
-        pending = pending[keep]
-        # absorb the dense prefix of the pending samples into the measured stretch
-        edge = self.measured_to_m if self._measured.shape[0] else None
-        if edge is None:
-            if pending[0, 0] > self.start_m + self.max_spacing_m:
-                self._pending = pending
+        self._pending = pending[keep]
+        self._absorb()
+
+    def _absorb(self) -> None:
+        """Move the dense prefix of the pending samples into the measured stretch."""
+        pending = self._pending
+        if not pending.shape[0]:
+            return
+        if self._measured.shape[0]:
+            gaps = np.diff(np.concatenate([[self.measured_to_m], pending[:, 0]]))
+            wide = np.flatnonzero(gaps > self.max_spacing_m * (1 + 1e-9))
+            dense = int(wide[0]) if wide.size else pending.shape[0]
+        else:  # the stretch starts at start_m: its first sample within the spacing of it
+            if pending[0, 0] > self._from_m + self.max_spacing_m * (1 + 1e-9):
                 return
-            gaps = np.diff(pending[:, 0])
-            first_gap = 0  # index of the first pending sample after a wide gap
-            wide = np.flatnonzero(gaps > self.max_spacing_m * (1 + 1e-9))
-            first_gap = int(wide[0]) + 1 if wide.size else pending.shape[0]
-        else:
-            gaps = np.diff(np.concatenate([[edge], pending[:, 0]]))
-            wide = np.flatnonzero(gaps > self.max_spacing_m * (1 + 1e-9))
-            first_gap = int(wide[0]) if wide.size else pending.shape[0]
-        self._measured = np.concatenate([self._measured, pending[:first_gap]])
-        self._pending = pending[first_gap:]
+            wide = np.flatnonzero(np.diff(pending[:, 0]) > self.max_spacing_m * (1 + 1e-9))
+            dense = int(wide[0]) + 1 if wide.size else pending.shape[0]
+        self._measured = np.concatenate([self._measured, pending[:dense]])
+        self._pending = pending[dense:]
+
+    @property
+    def gap_m(self) -> tuple[float, float] | None:
+        """The gap after the measured stretch, (from, to) in m, when samples were sensed beyond
+        it; None when there are none."""
+        if not self._pending.shape[0]:
+            return None
+        return self.measured_to_m, float(self._pending[0, 0])
+
+    def skip_gap(self) -> tuple[float, float] | None:
+        """Give up on the gap after the measured stretch (a blind spot that was never filled):
+        the measured stretch starts again at the first sample beyond it, and the samples before
+        are dropped.
+
+        Returns
+        -------
+        (from_m, to_m) or None
+            The gap skipped (m); None when there is none.
+        """
+        gap = self.gap_m
+        if gap is None:
+            return None
+        self._measured = np.empty((0, 5))
+        self._from_m = gap[1]
+        self._absorb()
+        return gap
 
     def forget_before(self, s_m: float) -> None:
         """Drop measured samples before ``s_m`` (m), keeping the last one before it.

@@ -92,3 +92,30 @@ def test_bad_options_are_refused_in_one_line(atv, kwargs, words):
 def test_a_vehicle_name_is_refused_with_what_to_pass():
     with pytest.raises(InputError, match="load_vehicle"):
         SpeedSelector("atv")
+
+
+def test_a_blind_spot_is_driven_as_unseen_and_the_terrain_beyond_it_is_planned(atv):
+    """Samples missing over 1 m (a puddle without returns): the selector slows to the unseen
+    speed there, and plans the ground beyond it again instead of treating the rest of the
+    route as unseen."""
+    s = np.arange(0.0, 200.0001, 0.05)
+    z = 0.002 * np.sin(2 * np.pi * s / 7.0)
+    seen = (s < 100.0) | (s > 101.0)
+    selector = SpeedSelector(atv, sensor_range_m=50.0, start_m=0.0, end_m=200.0)
+    position, speed, revealed = 0.0, 0.0, 0
+    path = []
+    for _ in range(5000):
+        if position >= 199.99 and speed <= 0:
+            break
+        upto = int(np.searchsorted(s, position + 50.0, side="right"))
+        part = slice(revealed, upto)
+        selector.sense(s[part][seen[part]], z[part][seen[part]])
+        revealed = upto
+        command = selector.update(position, speed)
+        path.append((position, speed))
+        position, speed = command.position_next_m, command.speed_mps
+    at, v = np.array(path).T
+    near = (at > 100.0 - selector.margin_m) & (at < 101.0 + selector.margin_m)
+    assert v[near].max() <= selector.unseen_speed_mps * (1 + 1e-9)
+    assert v[(at > 130.0) & (at < 150.0)].min() > 3 * selector.unseen_speed_mps
+    assert selector.blind_m == pytest.approx(1.0, abs=0.11)
