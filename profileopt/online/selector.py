@@ -178,8 +178,10 @@ class Command:
     position_next_m : float
         Where the vehicle is one cycle from now holding it (m).
     horizon_s_m, horizon_speed_mps : numpy.ndarray, shape (K,)
-        The envelope over the measured horizon: positions from the current one to the planning
-        edge (m) and the greatest admissible speeds there (m/s).
+        The plan over the measured horizon: positions from the current one to the planning edge
+        (m), and the speeds there (m/s) of the fastest profile from the current speed that keeps
+        every limit but the jerk bound (the forward-backward pass), ending at most at
+        :attr:`unseen_speed_mps`.
     edge_m : float
         The planning edge (m): where measured, planned terrain ends and the ``unseen``
         assumption begins (the route's end when it is measured to there).
@@ -490,7 +492,8 @@ class SpeedSelector:
             return
         # only the new segments: the stretch around them is there for their windows, grades and steps
         bounds = np.asarray(self._boundary_m(np.arange(first, last + 1)), dtype=float)
-        if bounds[0] < route.s_m[0] - 1e-9 or bounds[-1] > route.s_m[-1] + 1e-9:
+        slack = self.terrain.max_spacing_m * (1 + 1e-9)  # a first sample within the spacing of the start
+        if bounds[0] < route.s_m[0] - slack or bounds[-1] > route.s_m[-1] + 1e-9:
             return  # not measured around them yet (forgotten, or a gap): later
         bounds = np.clip(bounds, route.s_m[0], route.s_m[-1])
         # the limits see segments from the stretch's start to its end (a speed limit's cap, for

@@ -119,3 +119,15 @@ def test_a_blind_spot_is_driven_as_unseen_and_the_terrain_beyond_it_is_planned(a
     assert v[near].max() <= selector.unseen_speed_mps * (1 + 1e-9)
     assert v[(at > 130.0) & (at < 150.0)].min() > 3 * selector.unseen_speed_mps
     assert selector.blind_m == pytest.approx(1.0, abs=0.11)
+
+
+def test_samples_that_start_a_little_after_the_path_are_planned(atv):
+    """A sensor whose first sample is 5 cm after the path's start (within the 0.1 m rule):
+    the first segments are planned, not left unseen for ever."""
+    s = np.arange(0.05, 100.0001, 0.05)
+    selector = SpeedSelector(atv, sensor_range_m=50.0, start_m=0.0, end_m=100.0)
+    selector.sense(s[s <= 50.0], np.zeros(np.count_nonzero(s <= 50.0)))
+    for _ in range(30):
+        command = selector.update(0.0, 0.0)
+    assert selector.planned_to_m >= 40.0
+    assert command.edge_m >= 40.0
