@@ -3,20 +3,24 @@ within its limit against the terrain ahead, beside the offline minimum-time plan
 
 Run:  python examples/mpc_terrain_preview.py [--route ROUTE.csv] [--vehicle atv]
                                               [--cruise 12] [--from-m 0] [--until-m 2000]
-                                              [--out mpc_out]
+                                              [--sensor-range 60] [--unseen worst] [--out mpc_out]
 
 A longitudinal vehicle (states: position s and speed v; input: acceleration a) drives a
-bundled route in closed loop. Every 0.25 s it solves a 4 s horizon with IPOPT through one
-``casadi.Opti`` built once (the current state is a parameter; each solve is warm-started
-from the previous one shifted by a step): track a cruise speed, respect the acceleration
-bounds, and keep the model's force within its limit against the terrain the vehicle will
-reach. Two helpers of ``profileopt.mpc.constraints`` make the limit hold between the grid
-points: ``terrain_envelope`` (the largest e_max of every roughness window an interval
-starting at the predicted position s can reach, as a smooth function of s) and
-``interval_force_constraints`` (every speed between an interval's two speeds admissible at
-that e_max, the resonance peak between them included). The closed-loop speed is plotted
-beside the offline plan of ``profileopt.plan``, and the closed loop is checked
-independently of the controller, window by window (examples/mpc_window_check.py).
+bundled route in closed loop, seeing its terrain only within ``--sensor-range`` metres ahead.
+Every 0.25 s it solves a 4 s horizon with IPOPT through one ``casadi.Opti`` built once (the
+current state, the terrain ahead and where the measured terrain ends are parameters; each
+solve is warm-started from the previous one shifted by a step): track a cruise speed, respect
+the acceleration bounds, and keep the model's force within its limit against the terrain the
+vehicle will reach. ``profileopt.mpc.preview.TerrainPreview`` gives the terrain as parameters
+of a fixed-size expression, set each step from what is measured: the largest e_max of every
+roughness window an interval starting at the predicted position s can reach (the ``unseen``
+class's beyond the measured terrain) and the speed cap of steps and speed limits;
+``interval_force_constraints`` keeps every speed between an interval's two speeds admissible
+at that e_max, the resonance peak between them included; and a terminal row keeps the last
+stage able to brake to the unseen terrain's speed by the end of the measured terrain, so the
+next step has a plan too. The closed-loop speed is plotted beside the offline plan of
+``profileopt.plan``, and the closed loop is checked independently of the controller, window
+by window (examples/mpc_window_check.py).
 """
 
 from __future__ import annotations
@@ -35,8 +39,9 @@ import numpy as np  # noqa: E402
 
 from profileopt import get_model, load_vehicle  # noqa: E402
 from profileopt.io import atomic_path, read_route  # noqa: E402
-from profileopt.mpc.constraints import (  # noqa: E402
-    force_limit_n, interval_force_constraints, terrain_envelope)
+from profileopt.mpc.constraints import force_limit_n, interval_force_constraints  # noqa: E402
+from profileopt.mpc.preview import TerrainPreview  # noqa: E402
+from profileopt.online import unseen_speed_mps  # noqa: E402
 from profileopt.planning import plan  # noqa: E402
 
 from mpc_window_check import report, worst_window  # noqa: E402  (beside this file)
@@ -50,6 +55,10 @@ parser.add_argument("--model", default="sbem_tf", choices=["iecm", "sbem_ef", "s
 parser.add_argument("--cruise", type=float, default=12.0, help="desired cruise speed in m/s (default: %(default)s)")
 parser.add_argument("--from-m", type=float, default=0.0, help="start (from rest) this far along the route, m (default: %(default)s)")
 parser.add_argument("--until-m", type=float, default=None, help="stop after driving this distance, m (default: to the end of the route)")
+parser.add_argument("--sensor-range", type=float, default=60.0,
+                    help="the terrain is known this far ahead of the vehicle, m (default: %(default)s)")
+parser.add_argument("--unseen", default="worst",
+                    help="terrain beyond it assumed: worst (ISO 8608 class H), a class A-H or an RI (default: %(default)s)")
 parser.add_argument("--out", default="mpc_out", help="folder for the plot (default: %(default)s)")
 args = parser.parse_args()
 
@@ -72,48 +81,31 @@ BACK_OFF = 1e-6  # force rows held 1e-6 below 0: IPOPT meets constraints to abou
 # Over interval k the vehicle moves from s_k to s_{k+1} <= s_k + REACH with constant
 # acceleration, so its speed passes through every value between v_k and v_{k+1}, inside
 # every roughness window that overlaps [s_k, s_k + REACH]. e_ahead(s_k) is never below the
-# e_max of any of those windows (terrain_envelope with reach_m=REACH), and
-# interval_force_constraints(v_k, v_{k+1}, e_ahead(s_k)) holds every speed between v_k and
-# v_{k+1} at every elevation up to it, the force peak near resonance included: so a
-# lightly damped suspension (atv-resonant) cannot jump over a forbidden band of speeds
-# between two stages. The proof is in the docstring of interval_force_constraints.
-# e_ahead is a C2 cubic B-spline of s (IPOPT cycles at the kinks of a piecewise-linear
-# table). Its expression grows with the stretch it covers (every knot interval is evaluated
-# at every call), so the controller is built for a tile of TILE metres plus what a horizon
-# can see beyond it, and built again for the next tile when the vehicle leaves this one.
-TILE = 150.0
+# e_max of any of those windows (TerrainPreview with reach_m=REACH: measured windows, and the
+# unseen class's e_max past the measured terrain), and interval_force_constraints(v_k,
+# v_{k+1}, e_ahead(s_k)) holds every speed between v_k and v_{k+1} at every elevation up to
+# it, the force peak near resonance included: so a lightly damped suspension (atv-resonant)
+# cannot jump over a forbidden band of speeds between two stages. The proof is in the
+# docstring of interval_force_constraints. e_ahead is a C2 cubic B-spline of s (IPOPT cycles
+# at the kinks of a piecewise-linear table) whose coefficients are parameters: the problem is
+# built once, whatever the route's length, and each step sets them.
+HORIZON_M = (N + 1) * REACH + WINDOW  # the farthest a last stage's windows can lie ahead (m)
+preview = TerrainPreview(vehicle, horizon_m=HORIZON_M, reach_m=REACH, window_m=WINDOW, unseen=args.unseen)
+v_unseen = unseen_speed_mps(args.unseen, vehicle, model=model, roughness_window_m=WINDOW)
 
 
-def tile_end(tile_start: float) -> float:
-    """The last position a controller built at ``tile_start`` must know (m)."""
-    return tile_start + TILE + (N + 2) * REACH + WINDOW
-
-
-def speed_ceiling(tile_start: float) -> ca.Function | None:
-    """The route's speed_limit column (if any) as a smooth ceiling of s: a cubic B-spline
-    whose coefficient j is the smallest limit of the samples within reach of its support,
-    so that it never overstates the limit anywhere an interval starting at s can reach."""
-    if route.speed_limit_mps is None:
-        return None
-    h, degree = 0.5, 3
-    knots = np.arange(tile_start - REACH - degree * h, tile_end(tile_start) + 2 * h, h)
-    lo = np.searchsorted(route.s_m, knots[: -degree - 1] - 0.5 * WINDOW, side="left")
-    hi = np.searchsorted(route.s_m, knots[degree + 1:] + REACH + 0.5 * WINDOW, side="right")
-    limits = np.minimum(route.speed_limit_mps, v_max)
-    coef = np.array([limits[max(a - 1, 0):min(b + 1, limits.size)].min() for a, b in zip(lo, hi)])
-    return ca.Function.bspline("ceiling_mps", [knots.tolist()], coef.tolist(), [degree], 1, {})
-
-
-def build_controller(tile_start: float) -> dict:
-    """The optimal-control problem for the tile starting at ``tile_start`` (m), built once
-    per tile: the current state and the last acceleration are parameters."""
-    keep = (route.s_m >= tile_start - WINDOW) & (route.s_m <= tile_end(tile_start))
-    e_ahead = terrain_envelope(route.s_m[keep], route.z_m[keep], vehicle, window_m=WINDOW, reach_m=REACH)
+def build_controller() -> dict:
+    """The optimal-control problem, built once: the current state, the last acceleration, the
+    preview's coefficients and the end of the measured terrain are parameters."""
     opti = ca.Opti()
     X = opti.variable(2, N + 1)  # rows: position s (m), speed v (m/s)
     U = opti.variable(1, N)  # acceleration a (m/s^2), constant over each interval
     x_now = opti.parameter(2)
     a_before = opti.parameter()  # the acceleration applied last, for the smoothness term
+    origin = opti.parameter()  # where the preview's horizon starts (m): the vehicle's position
+    e_coef = opti.parameter(preview.n_coefficients)
+    cap_coef = opti.parameter(preview.n_coefficients)
+    measured_to = opti.parameter()  # the end of the measured terrain (m)
     s, v, a = X[0, :].T, X[1, :].T, U.T
     opti.subject_to(X[:, 0] == x_now)
     opti.subject_to(s[1:] == s[:-1] + v[:-1] * DT + a * DT**2 / 2)  # exact for constant a
@@ -123,19 +115,29 @@ def build_controller(tile_start: float) -> dict:
     # 1e-8 harder than the actuator can leave the next step's problem infeasible (the state
     # driven is then not the one planned)
     opti.subject_to(opti.bounded(-vehicle.max_decel_mps2 * (1 - 1e-7), a, vehicle.max_accel_mps2 * (1 - 1e-7)))
-    terrain_k = e_ahead.map(N)(s[:-1].T).T  # the largest e_max each interval can meet (m)
+    terrain_k = preview.e_max.map(N)(s[:-1].T, origin, e_coef).T  # the largest e_max each interval can meet (m)
     rows = interval_force_constraints(v[:-1], v[1:], terrain_k, vehicle, model=model)
     opti.subject_to(rows.g <= -BACK_OFF)  # every speed of every interval
-    ceiling = speed_ceiling(tile_start)
-    if ceiling is not None:  # the route's speed limits: both ends of each interval below
-        cap_k = ceiling.map(N)(s[:-1].T).T
-        opti.subject_to(v[:-1] <= cap_k)
-        opti.subject_to(v[1:] <= cap_k)
+    cap_k = preview.speed_cap.map(N)(s[:-1].T, origin, cap_coef).T  # steps and speed limits
+    opti.subject_to(v[:-1] <= cap_k)
+    opti.subject_to(v[1:] <= cap_k)
+    # the last stage can still brake to the unseen terrain's speed where the measured one ends
+    room = ca.fmax(measured_to - s[-1], 0)
+    opti.subject_to(v[-1] ** 2 <= v_unseen**2 + 2 * vehicle.max_decel_mps2 * (1 - 1e-7) * room)
     jerk = ca.diff(ca.vertcat(a_before, a))
     opti.minimize(ca.sumsqr(v[1:] - args.cruise) + 0.1 * ca.sumsqr(a) + 1.0 * ca.sumsqr(jerk))
     opti.solver("ipopt", {"print_time": False, "expand": True},
                 {"print_level": 0, "sb": "yes", "tol": 1e-8, "max_iter": 200})
-    return {"opti": opti, "X": X, "U": U, "x_now": x_now, "a_before": a_before, "start": tile_start}
+    return {"opti": opti, "X": X, "U": U, "x_now": x_now, "a_before": a_before, "origin": origin,
+            "e_coef": e_coef, "cap_coef": cap_coef, "measured_to": measured_to}
+
+
+def sensed(position_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """The route's samples the vehicle knows at ``position_m``: a window behind it and the
+    sensing range ahead (and the map's speed limits there, if the route has them)."""
+    keep = (route.s_m >= position_m - 2 * WINDOW) & (route.s_m <= position_m + args.sensor_range)
+    limits = None if route.speed_limit_mps is None else route.speed_limit_mps[keep]
+    return route.s_m[keep], route.z_m[keep], limits
 
 
 # --- Closed loop ------------------------------------------------------------------------------
@@ -146,13 +148,17 @@ U_guess = np.zeros((1, N))
 log = {"t": [0.0], "s": [state[0]], "v": [state[1]], "a": []}
 solve_times, failures = [], 0
 t_loop = time.perf_counter()
-ctrl, tiles = build_controller(s_start), 1
+ctrl = build_controller()
 while state[0] < s_stop and len(solve_times) < 20000:
-    if state[0] > ctrl["start"] + TILE:  # the next tile: a new controller, the same warm start
-        ctrl, tiles = build_controller(state[0]), tiles + 1
     opti, X, U = ctrl["opti"], ctrl["X"], ctrl["U"]
+    s_seen, z_seen, limits_seen = sensed(state[0])
+    coef = preview.coefficients(s_seen, z_seen, state[0], speed_limit_mps=limits_seen)
     opti.set_value(ctrl["x_now"], state)
     opti.set_value(ctrl["a_before"], a_last)
+    opti.set_value(ctrl["origin"], coef.origin_m)
+    opti.set_value(ctrl["e_coef"], coef.e_max)
+    opti.set_value(ctrl["cap_coef"], coef.speed_cap)
+    opti.set_value(ctrl["measured_to"], coef.measured_to_m)
     opti.set_initial(X, X_guess)
     opti.set_initial(U, U_guess)
     t0 = time.perf_counter()
@@ -192,10 +198,10 @@ steps = len(solve_times)
 ms = 1e3 * np.array(solve_times)
 print(f"route {Path(args.route).name} ({s_stop - s_start:g} m driven), vehicle {Path(vehicle.name).stem}, "
       f"model {model}; horizon {N} x {DT:g} s, cruise {args.cruise:g} m/s")
-print(f"closed loop: {log['t'][-1]:.1f} s of driving in {steps} MPC steps ({tiles} tiles of {TILE:g} m); "
-      f"IPOPT failures: {failures}")
+print(f"closed loop: {log['t'][-1]:.1f} s of driving in {steps} MPC steps, the terrain known {args.sensor_range:g} m "
+      f"ahead ({preview.n_coefficients} preview coefficients per step); IPOPT failures: {failures}")
 print(f"solve time per step: mean {ms.mean():.1f} ms, median {np.median(ms):.1f} ms, max {ms.max():.1f} ms; "
-      f"first solve {ms[0]:.0f} ms (CasADi builds the solver at each tile); closed loop {t_loop:.1f} s")
+      f"first solve {ms[0]:.0f} ms (CasADi builds the solver once); closed loop {t_loop:.1f} s")
 print(f"offline plan ({profile.status}): {profile.travel_time_s:.1f} s for the whole route, planned in {t_plan:.2f} s")
 print(report(check, label, limit_n, WINDOW))
 
@@ -216,8 +222,8 @@ ax_r.set_ylabel("force / limit (-)")
 ax_r.set_xlabel("distance along the route s (m)")
 ax_r.set_xlim(s_start, s_stop)
 ax_r.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
-fig.suptitle(f"{Path(args.route).name}, {Path(args.vehicle).stem}, {label}: closed-loop MPC "
-             f"with terrain preview against the offline plan, {s_start:g}-{s_stop:g} m", fontsize=11)
+fig.suptitle(f"{Path(args.route).name}, {Path(args.vehicle).stem}, {label}: closed-loop MPC seeing "
+             f"{args.sensor_range:g} m ahead against the offline plan, {s_start:g}-{s_stop:g} m", fontsize=11)
 fig.tight_layout()
 csv = out / "mpc_closed_loop.csv"  # one row per control step: the state, then the input applied
 with atomic_path(csv) as tmp:

@@ -48,7 +48,7 @@ EXAMPLES = {
     "examples/paper_figures.py": ["figures"],
     "examples/safety_study.py": ["print"],
     "examples/lidar_roughness.py": ["hexbin-crop.las", "lidar_roughness.png", "10"],
-    "examples/mpc_terrain_preview.py": ["trail.csv", "atv", "sbem_tf", "12", "mpc_out"],
+    "examples/mpc_terrain_preview.py": ["trail.csv", "atv", "sbem_tf", "12", "mpc_out", "60", "worst"],
     "examples/mpc_dompc.py": ["atv", "trail.csv", "washboard.csv", "950"],
     "examples/mpc_rockit.py": ["atv", "trail.csv", "washboard.csv", "40"],
     "examples/routes/make_routes.py": ["beside this script"],

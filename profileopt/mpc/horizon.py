@@ -357,8 +357,44 @@ def _spline_function(coef: np.ndarray, grid: _SplineGrid, name: str, output: str
     clamped to its end intervals outside, NaN for a non-finite s). At every s it is a weighted
     mean, with non-negative weights summing to one, of the four coefficients whose support
     holds s."""
-    start, h, n_intervals = grid.start_m, grid.h_m, grid.n_intervals
-    c0, c1, c2, c3 = (coef[k:k + n_intervals] for k in range(4))
+    s_sym = ca.SX.sym("s_m")
+    value = spline_value(s_sym, coef, start_m=grid.start_m, h_m=grid.h_m, n_intervals=grid.n_intervals)
+    fn = ca.Function(name, [s_sym], [value], ["s_m"], [output])
+    fn.__doc__ = doc
+    return fn
+
+
+def spline_value(s_m: Any, coef: Any, *, start_m: Any, h_m: float, n_intervals: int) -> Any:
+    """The uniform cubic B-spline with knots ``h_m`` apart from ``start_m`` and coefficients
+    ``coef`` at ``s_m``, as an ``SX`` expression: the one formula of the envelopes.
+
+    Interval i is [start + i h, start + (i + 1) h] and uses coefficients i .. i + 3; outside
+    [start, start + n_intervals h] the spline holds its end intervals' edge values (the clamp's
+    kinks lie where the envelopes are constant, so they stay smooth); a non-finite s gives
+    NaN. At every s the value is a weighted mean, with non-negative weights summing to one, of
+    the four coefficients whose support holds s.
+
+    Parameters
+    ----------
+    s_m : casadi.SX, shape (1, 1)
+        Position (m).
+    coef : numpy.ndarray or casadi.SX, shape (n_intervals + 3,)
+        Coefficients: numbers (a fixed envelope) or symbols (a parametric one,
+        :class:`profileopt.mpc.preview.TerrainPreview`).
+    start_m : float or casadi.SX
+        The first knot (m).
+    h_m : float
+        Knot spacing (m), > 0.
+    n_intervals : int
+        Number of knot intervals.
+
+    Returns
+    -------
+    casadi.SX
+    """
+    numeric = isinstance(coef, np.ndarray)
+    c = coef if numeric else ca.vec(coef)
+    c0, c1, c2, c3 = (c[k:k + n_intervals] for k in range(4))
     # the cubic of interval i in u in [0, 1]: sum_k c_{i+k} b_k(u), b_k the uniform cubic
     # B-spline pieces, in powers of u (written so that four equal coefficients give
     # exactly that constant)
@@ -366,11 +402,7 @@ def _spline_function(coef: np.ndarray, grid: _SplineGrid, name: str, output: str
     a0 = c1 + a2 / 3.0
     a1 = (c2 - c0) / 2.0
     a3 = (c3 - c0 + 3.0 * (c1 - c2)) / 6.0
-
-    s_sym = ca.SX.sym("s_m")
-    # beyond the ends: the edges of the flat end intervals (the clamp's kinks lie where the
-    # spline is constant, so it stays smooth; inside, u has the exact derivative 1 / h)
-    y = ca.fmin(ca.fmax((s_sym - start) / h, 0), n_intervals)
+    y = ca.fmin(ca.fmax((s_m - start_m) / h_m, 0), n_intervals)
     index = ca.fmin(ca.floor(y), n_intervals - 1)
     u = y - index
     # The active interval's four coefficients, picked by its index (exactly one term is
@@ -380,13 +412,11 @@ def _spline_function(coef: np.ndarray, grid: _SplineGrid, name: str, output: str
     selected = [ca.SX(0.0)] * 4
     for i in range(n_intervals):
         here = index == i
-        selected = [acc + float(power[i]) * here for acc, power in zip(selected, (a0, a1, a2, a3))]
+        selected = [acc + (float(power[i]) if numeric else power[i]) * here
+                    for acc, power in zip(selected, (a0, a1, a2, a3))]
     b0, b1, b2, b3 = selected
     value = b0 + u * (b1 + u * (b2 + u * b3))
-    value = ca.if_else(ca.fabs(s_sym) < math.inf, value, math.nan)
-    fn = ca.Function(name, [s_sym], [value], ["s_m"], [output])
-    fn.__doc__ = doc
-    return fn
+    return ca.if_else(ca.fabs(s_m) < math.inf, value, math.nan)
 
 
 def _finite_number(value: Any, name: str, unit: str) -> float:

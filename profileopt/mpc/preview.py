@@ -1,0 +1,239 @@
+"""The terrain envelopes over a moving horizon, as parameters: build a controller once, update
+what it sees every step.
+
+:func:`~profileopt.mpc.horizon.terrain_envelope` and
+:func:`~profileopt.mpc.horizon.step_speed_envelope` are fixed functions of a whole stretch of
+route: a controller that drives a long route must rebuild its solver for each stretch, or
+carry an expression that grows with the route (7,573 nodes for 300 m, 70,590 for 3 km). A
+:class:`TerrainPreview` is the same two envelopes on a horizon of fixed length that moves with
+the vehicle: the B-spline's knots are placed from a parameter ``origin_m`` and its
+coefficients are a parameter vector, so the expression has a fixed size, the solver is built
+once, and each step only sets the parameters from the terrain measured so far
+(:meth:`TerrainPreview.coefficients`).
+
+Terrain that is not measured (beyond the last sample given, less the margin a window or a
+step's ramp needs to be seen whole, or before the first) is taken as
+the ``unseen`` assumption of the online selector (:func:`profileopt.online.selector.unseen_speed_mps`):
+its e_max is that of an ISO 8608 class (``"worst"``: class H) or an RI, so a controller whose
+horizon reaches past what its sensors measured keeps the force limit there for any terrain no
+rougher than assumed. Steps are not part of that assumption: beyond the samples the step cap
+is the vehicle's top speed, and a step that comes into view is kept from then on.
+
+Units: positions and elevations in m, speeds in m/s.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import TYPE_CHECKING
+
+import casadi as ca
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..errors import InputError
+from ..physics.steps import MAX_RAMP_M, TREND_HALF_WIDTH_M, step_caps
+from ..terrain.roughness import range_extremes, roughness_windows, worst_case_elevation
+from .horizon import spline_value
+
+if TYPE_CHECKING:
+    from ..core.vehicle import Vehicle
+
+__all__ = ["TerrainPreview", "PreviewCoefficients", "DEFAULT_PREVIEW_KNOT_SPACING_M", "MAX_PREVIEW_INTERVALS"]
+
+#: Knot spacing (m) of a preview when none is given: 1 m. With 0.25 m knots a kerb's cap
+#: falls within 1 m and a time-domain MPC near it met IPOPT's iteration limit four times in a
+#: row (do-mpc, atv-resonant); with 1 m it converged at every step. The price: the envelope
+#: rises up to 4 knots (4 m) before a rougher stretch and falls up to 4 m after it.
+DEFAULT_PREVIEW_KNOT_SPACING_M = 1.0
+#: The most knot intervals a preview may have (horizon / knot spacing): a bound on the size of
+#: its expression (about 9 operations per interval).
+MAX_PREVIEW_INTERVALS = 20_000
+#: Knot intervals of the preview outside its horizon, before and after (so that the spline's
+#: clamped ends lie outside it).
+_PAD = 3
+#: Relative margin of the coefficients over the requirement, for the rounding of the evaluation.
+_ROUNDING_MARGIN = 1e-12
+
+
+@dataclasses.dataclass(frozen=True)
+class PreviewCoefficients:
+    """The parameter values of one step.
+
+    Attributes
+    ----------
+    origin_m : float
+        Where the horizon starts (m): the value of the preview's ``origin_m`` parameter, a
+        multiple of the knot spacing at most the origin asked for.
+    e_max : numpy.ndarray, shape (K,)
+        Coefficients of the e_max envelope (m).
+    speed_cap : numpy.ndarray, shape (K,)
+        Coefficients of the speed cap (m/s): the step limit and the speed limits.
+    measured_to_m : float
+        Where the trusted terrain ends (m): the last sample given less
+        :attr:`TerrainPreview.margin_m`; beyond it the terrain is the ``unseen`` assumption.
+    """
+
+    origin_m: float
+    e_max: np.ndarray
+    speed_cap: np.ndarray
+    measured_to_m: float
+
+
+class TerrainPreview:
+    """The e_max envelope and the step speed cap over a moving horizon (module docstring).
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        The quarter car: ground clearance and confidence (e_max), wheel radius and force limit
+        (steps), top speed.
+    horizon_m : float
+        Length of the horizon from ``origin_m`` (m), > 0: at least the farthest a controller's
+        last stage can start from its first, plus ``reach_m``.
+    reach_m : float, default 0
+        How far beyond s a stage can take the vehicle (m), >= 0: for a controller with
+        interval dt and top speed v_max, ``v_max * dt``.
+    knot_spacing_m : float, default :data:`DEFAULT_PREVIEW_KNOT_SPACING_M` (1)
+        Knot spacing h (m), > 0.
+    window_m : float, default 5
+        Roughness window W (m), > 0.
+    unseen : str or float, default ``"worst"``
+        The assumption for terrain not measured: ``"worst"`` (ISO 8608 class H), a class A-H
+        or an RI.
+
+    Attributes
+    ----------
+    e_max : casadi.Function
+        ``preview_e_max(s_m, origin_m, e_coef) -> e_max_m``: never below the e_max of any
+        roughness window overlapping [s, s + reach_m], for s in [origin_m, origin_m +
+        horizon_m] (behind the origin it is not a bound), with ``e_coef`` from
+        :meth:`coefficients` for that origin. Twice
+        continuously differentiable in s; ``SX`` inside (``expand`` it), callable on ``MX``.
+    speed_cap : casadi.Function
+        ``preview_speed_cap(s_m, origin_m, cap_coef) -> speed_cap_mps``: never above SBEM:TF's
+        step cap of any ramp of the wheel's path overlapping [s, s + reach_m] (as
+        :func:`~profileopt.mpc.horizon.step_speed_envelope`) nor above any speed limit given
+        there. A stage from s_k to at most s_k + reach_m at constant acceleration keeps both
+        when v_k <= cap(s_k) and v_k+1 <= cap(s_k).
+    n_coefficients : int
+        K, the length of each coefficient vector.
+    unseen_e_max_m : float
+        e_max (m) of unmeasured terrain.
+    """
+
+    def __init__(self, vehicle: "Vehicle", *, horizon_m: float, reach_m: float = 0.0,
+                 knot_spacing_m: float = DEFAULT_PREVIEW_KNOT_SPACING_M, window_m: float = 5.0,
+                 unseen: str | float = "worst") -> None:
+        from ..core.vehicle import Vehicle
+        from ..online.selector import unseen_roughness
+
+        if not isinstance(vehicle, Vehicle):
+            raise InputError(f"TerrainPreview: vehicle = {vehicle!r} is a {type(vehicle).__name__}; give a Vehicle "
+                             "(profileopt.load_vehicle('atv'))")
+        for name, value, least in (("horizon_m", horizon_m, "> 0"), ("knot_spacing_m", knot_spacing_m, "> 0"),
+                                   ("window_m", window_m, "> 0"), ("reach_m", reach_m, ">= 0")):
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or (
+                    value < 0 if least == ">= 0" else value <= 0):
+                raise InputError(f"TerrainPreview: {name} = {value!r} m must be a finite number {least}")
+        self.vehicle = vehicle
+        self.horizon_m, self.reach_m = float(horizon_m), float(reach_m)
+        self.h_m, self.window_m = float(knot_spacing_m), float(window_m)
+        self.n_intervals = int(math.ceil(self.horizon_m / self.h_m - 1e-9)) + 2 * _PAD
+        if self.n_intervals > MAX_PREVIEW_INTERVALS:
+            raise InputError(f"TerrainPreview: horizon_m = {horizon_m:g} m at knot_spacing_m = {knot_spacing_m:g} m "
+                             f"makes {self.n_intervals} knot intervals, above {MAX_PREVIEW_INTERVALS}; choose a "
+                             "larger knot spacing or a shorter horizon")
+        self.n_coefficients = self.n_intervals + 3
+        #: The samples' last metres that are not trusted (m): a roughness window, or a step's
+        #: ramp and trend (:attr:`profileopt.online.SpeedSelector.margin_m`), reaching past them.
+        self.margin_m = max(self.window_m, MAX_RAMP_M + TREND_HALF_WIDTH_M)
+        ri = unseen_roughness(unseen).ri_for(clearance_m=vehicle.ground_clearance_m, window_m=self.window_m)
+        self.unseen_e_max_m = float(worst_case_elevation(ri, vehicle))
+        s, origin = ca.SX.sym("s_m"), ca.SX.sym("origin_m")
+        coef = ca.SX.sym("coef", self.n_coefficients)
+        value = spline_value(s, coef, start_m=origin - _PAD * self.h_m, h_m=self.h_m, n_intervals=self.n_intervals)
+        self.e_max = ca.Function("preview_e_max", [s, origin, coef], [value], ["s_m", "origin_m", "e_coef"],
+                                 ["e_max_m"])
+        self.speed_cap = ca.Function("preview_speed_cap", [s, origin, coef], [value],
+                                     ["s_m", "origin_m", "cap_coef"], ["speed_cap_mps"])
+
+    def _supports(self, origin_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """Each basis function's support [lo, hi] (m) for a horizon starting at ``origin_m``."""
+        start = origin_m - _PAD * self.h_m
+        j = np.arange(self.n_coefficients)
+        return start + (j - 3) * self.h_m, start + (j + 1) * self.h_m
+
+    def coefficients(self, positions_m: ArrayLike, elevations_m: ArrayLike, origin_m: float, *,
+                     speed_limit_mps: ArrayLike | None = None) -> PreviewCoefficients:
+        """The parameter values for a horizon starting at ``origin_m`` over the measured samples.
+
+        Coefficient j of the e_max envelope is the largest e_max (Eq. 8) of the roughness windows
+        of the samples that overlap basis function j's support widened by ``reach_m``, and at
+        least the unseen e_max where that support reaches past the samples; of the speed cap,
+        the lowest cap of the wheel's ramps there (:func:`profileopt.physics.steps.step_caps`)
+        and the lowest speed limit of the samples there, at most the top speed. (The spline is
+        a weighted mean of the coefficients that cover s, so a coefficient-wise least of two
+        caps is below both.)
+
+        Parameters
+        ----------
+        positions_m : array_like, shape (M,)
+            Distance along the path of each measured sample (m), strictly increasing, M >= 2.
+        elevations_m : array_like, shape (M,)
+            Elevation of each sample (m).
+        origin_m : float
+            Where the horizon starts (m), normally the vehicle's position; moved down to a
+            multiple of the knot spacing (:attr:`PreviewCoefficients.origin_m`: pass that to
+            the Functions), so that the knots stay where they are from step to step.
+        speed_limit_mps : array_like, shape (M,), optional
+            A speed limit at each sample (m/s), > 0, from a map.
+
+        Returns
+        -------
+        PreviewCoefficients
+
+        Raises
+        ------
+        InputError
+            Bad samples (as for a route) or a non-finite origin.
+        """
+        from ..core.route import Route
+
+        if isinstance(origin_m, bool) or not isinstance(origin_m, (int, float)) or not math.isfinite(origin_m):
+            raise InputError(f"TerrainPreview.coefficients: origin_m = {origin_m!r} must be a finite position (m)")
+        route = Route(s_m=np.asarray(positions_m, dtype=float), z_m=np.asarray(elevations_m, dtype=float),
+                      source="TerrainPreview.coefficients")
+        s, z = route.s_m, route.z_m
+        # knots at multiples of h: the origin moved down to one, so that the envelope at a
+        # position does not change from one step to the next while the terrain there does not
+        origin_m = math.floor(float(origin_m) / self.h_m + 1e-9) * self.h_m
+        # the samples' last margin_m are not trusted: windows and ramps that reach past the
+        # last sample are seen only in part there
+        trusted = max(float(s[-1]) - self.margin_m, float(s[0]))
+        lo, hi = self._supports(float(origin_m))
+        # only positions from the origin on are bounded: the support's part behind it does not count
+        lo, hi = np.maximum(lo, float(origin_m)), np.maximum(hi + self.reach_m, float(origin_m))
+        # the windows of the measured samples
+        windows = roughness_windows(s, z, self.vehicle.ground_clearance_m, window_m=self.window_m,
+                                    source="TerrainPreview.coefficients")
+        e_window = np.asarray(worst_case_elevation(windows.ri, self.vehicle), dtype=float)
+        inside_lo, inside_hi = np.clip(lo, s[0], trusted), np.clip(hi, s[0], trusted)
+        first, stop = windows.overlapping(inside_lo, inside_hi)
+        measured = range_extremes(e_window, first, stop)[1]
+        beyond = (hi > trusted) | (lo < s[0])
+        e_coef = np.where(beyond, np.maximum(measured, self.unseen_e_max_m), measured)
+        e_coef = e_coef + _ROUNDING_MARGIN * float(np.max(e_coef))
+        top = float(self.vehicle.max_speed_mps)
+        caps = step_caps(s, z, self.vehicle).lowest_over(inside_lo, inside_hi, top)
+        if speed_limit_mps is not None:
+            limit = np.asarray(speed_limit_mps, dtype=float)
+            if limit.shape != s.shape or not np.all(limit > 0):
+                raise InputError("TerrainPreview.coefficients: give one speed limit > 0 (m/s) per sample")
+            a = np.searchsorted(s, inside_lo, side="right") - 1  # the samples whose limit holds there
+            b = np.searchsorted(s, inside_hi, side="left") + 1
+            running = [float(np.min(limit[max(i, 0):max(k, i + 1)])) for i, k in zip(a, b)]
+            caps = np.minimum(caps, running)
+        caps = np.where((hi < s[0]) | (lo > trusted), top, caps) - _ROUNDING_MARGIN * top
+        return PreviewCoefficients(origin_m=float(origin_m), e_max=e_coef, speed_cap=caps, measured_to_m=trusted)

@@ -1,0 +1,136 @@
+"""The parametric terrain preview (profileopt.mpc.preview): one expression of fixed size, its
+parameters set from the terrain measured so far, never below the requirement it bounds."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import ROUTES
+
+from profileopt.core.vehicle import load_vehicle
+from profileopt.errors import InputError
+from profileopt.io.routes import read_route
+from profileopt.mpc.horizon import step_speed_envelope, terrain_envelope
+from profileopt.mpc.preview import TerrainPreview
+from profileopt.physics.steps import step_caps
+from profileopt.terrain.classes import iso8608_ri
+from profileopt.terrain.roughness import roughness_windows
+
+ATV = load_vehicle("atv")
+Z = 4.753424308816257  # sqrt(2) erfinv(2 Pe - 1) for Pe = 0.999999 (docs/paper-notes.md, Eq. 8)
+W, REACH = 5.0, 5.0
+
+
+def _piece(start_m: float, stop_m: float) -> tuple[np.ndarray, np.ndarray]:
+    route = read_route(ROUTES / "curb.csv")
+    keep = (route.s_m >= start_m) & (route.s_m <= stop_m)
+    return route.s_m[keep], route.z_m[keep]
+
+
+def _requirement(x: np.ndarray, s: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """Brute force: the largest e_max (Eq. 8: z RI h) of the windows sharing a point with
+    [x, x + REACH], over the measured samples only."""
+    win = roughness_windows(s, z, ATV.ground_clearance_m, window_m=W)
+    e = Z * ATV.ground_clearance_m * win.ri
+    meets = (win.start_m[None, :] <= x[:, None] + REACH + 1e-9) & (win.stop_m[None, :] >= x[:, None] - 1e-9)
+    return np.max(np.where(meets, e[None, :], -np.inf), axis=1)
+
+
+@pytest.mark.parametrize("origin", [60.0, 93.3, 140.7])
+def test_never_below_any_window_it_can_reach_and_the_unseen_beyond_the_samples(origin):
+    s, z = _piece(origin - 10.0, origin + 60.0)  # 60 m measured ahead, over the kerbs at 100 and 150 m
+    preview = TerrainPreview(ATV, horizon_m=100.0, reach_m=REACH)
+    coef = preview.coefficients(s, z, origin)
+    x = np.linspace(origin, origin + 100.0, 801)
+    value = np.array(preview.e_max.map(x.size)(x, coef.origin_m, coef.e_max)).ravel()
+    measured = x + REACH <= s[-1] - preview.margin_m
+    assert np.all(value[measured] >= _requirement(x[measured], s, z) * (1 - 1e-12))
+    # past the samples: at least the e_max of class H, e = Z RI h with RI that of class H
+    e_h = Z * ATV.ground_clearance_m * iso8608_ri("H", window_m=W, clearance_m=ATV.ground_clearance_m)
+    assert preview.unseen_e_max_m == pytest.approx(e_h, rel=1e-9)
+    assert np.all(value[~measured] >= e_h * (1 - 1e-12))
+
+
+def test_where_its_knots_meet_a_fixed_envelopes_the_values_agree():
+    """The preview is terrain_envelope with its coefficients as parameters: on knots that
+    coincide (both 1 m apart, from integer positions) and inside the samples they are equal."""
+    s, z = _piece(80.0, 180.0)
+    preview = TerrainPreview(ATV, horizon_m=60.0, reach_m=REACH)
+    fixed = terrain_envelope(s, z, ATV, window_m=W, reach_m=REACH, knot_spacing_m=1.0)
+    coef = preview.coefficients(s, z, 100.0)
+    x = np.linspace(100.0, 160.0, 241)
+    ours = np.array(preview.e_max.map(x.size)(x, coef.origin_m, coef.e_max)).ravel()
+    theirs = np.array(fixed.map(x.size)(x)).ravel()
+    np.testing.assert_allclose(ours, theirs, rtol=1e-9)
+    cap = step_speed_envelope(s, z, ATV, reach_m=REACH, knot_spacing_m=1.0)
+    ours = np.array(preview.speed_cap.map(x.size)(x, coef.origin_m, coef.speed_cap)).ravel()
+    np.testing.assert_allclose(ours, np.array(cap.map(x.size)(x)).ravel(), rtol=1e-9)
+
+
+def test_the_step_cap_is_never_above_a_ramp_it_can_reach():
+    s, z = _piece(60.0, 200.0)
+    preview = TerrainPreview(ATV, horizon_m=120.0, reach_m=REACH)
+    coef = preview.coefficients(s, z, 70.0)
+    x = np.linspace(70.0, 190.0, 600)
+    value = np.array(preview.speed_cap.map(x.size)(x, coef.origin_m, coef.speed_cap)).ravel()
+    lowest = step_caps(s, z, ATV).lowest_over(x, x + REACH, ATV.max_speed_mps)
+    assert np.all(value <= lowest * (1 + 1e-12))
+    assert value.min() < 0.5 * ATV.max_speed_mps  # the kerbs are in it
+
+
+def test_speed_limits_are_folded_into_the_cap():
+    route = read_route(ROUTES / "curb.csv")
+    keep = (route.s_m >= 0.0) & (route.s_m <= 120.0)
+    s, z, limit = route.s_m[keep], route.z_m[keep], route.speed_limit_mps[keep]
+    preview = TerrainPreview(ATV, horizon_m=100.0, reach_m=REACH)
+    coef = preview.coefficients(s, z, 10.0, speed_limit_mps=limit)
+    x = np.linspace(10.0, 110.0, 500)
+    value = np.array(preview.speed_cap.map(x.size)(x, coef.origin_m, coef.speed_cap)).ravel()
+    # never above the least limit of the samples an interval from x can reach
+    for xi, vi in zip(x, value):
+        reach = (s >= xi - 0.05) & (s <= xi + REACH + 0.05)
+        assert vi <= limit[reach].min() * (1 + 1e-12)
+
+
+def test_the_knots_stay_put_from_step_to_step():
+    """The origin moves down to a multiple of the knot spacing, so the envelope at a position
+    is the same whichever step computed it (a moving knot grid changed it between steps, and
+    a controller's last plan could become infeasible)."""
+    s, z = _piece(40.0, 200.0)
+    preview = TerrainPreview(ATV, horizon_m=80.0, reach_m=REACH)
+    x = np.linspace(100.0, 120.0, 81)
+    values = []
+    for origin in (95.0, 95.4, 96.7, 99.99):
+        coef = preview.coefficients(s, z, origin)
+        assert coef.origin_m == np.floor(origin) and coef.origin_m <= origin
+        values.append(np.array(preview.e_max.map(x.size)(x, coef.origin_m, coef.e_max)).ravel())
+    for other in values[1:]:
+        np.testing.assert_allclose(other, values[0], rtol=1e-12)
+
+
+def test_one_expression_for_any_route_length():
+    """Built once: its size depends on the horizon and the knots, not on the route; the
+    coefficients of any stretch fit it."""
+    preview = TerrainPreview(ATV, horizon_m=80.0, reach_m=REACH)
+    nodes = preview.e_max.n_nodes()
+    for length in (20.0, 200.0):
+        s, z = _piece(0.0, length)
+        assert preview.coefficients(s, z, 0.0).e_max.shape == (preview.n_coefficients,)
+    assert TerrainPreview(ATV, horizon_m=80.0, reach_m=REACH).e_max.n_nodes() == nodes
+    assert TerrainPreview(ATV, horizon_m=160.0, reach_m=REACH).e_max.n_nodes() > nodes
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    ({"horizon_m": -1.0}, "horizon_m"),
+    ({"horizon_m": 10.0, "knot_spacing_m": 0.0}, "knot_spacing_m"),
+    ({"horizon_m": 1e9, "knot_spacing_m": 1.0}, "knot intervals"),
+    ({"horizon_m": 10.0, "unseen": "Q"}, "ISO 8608"),
+])
+def test_bad_options_are_one_line(kwargs, words):
+    with pytest.raises(InputError, match=words):
+        TerrainPreview(ATV, **kwargs)
+
+
+def test_a_vehicle_name_is_refused_with_what_to_pass():
+    with pytest.raises(InputError, match="load_vehicle"):
+        TerrainPreview("atv", horizon_m=10.0)
