@@ -1,24 +1,30 @@
 """Closed-loop do-mpc speed controller that keeps the force limit between its grid points.
 
 Run:  python examples/mpc_dompc.py [--vehicle atv] [--route ROUTE.csv] [--from-m 950]
-                                   [--distance-m 100] [--cruise 14] [--out FOLDER]
+                                   [--distance-m 100] [--cruise 14] [--sensor-range 60]
+                                   [--unseen worst] [--out FOLDER]
 
 Needs the ``mpc`` extra (``pip install 'profileopt[mpc]'``: do-mpc and rockit-meco).
 
 A longitudinal vehicle (states: position s and speed v; input: acceleration a, held over
 each interval of dt seconds, so the discrete model below is exact) starts from rest and
-tracks a cruise speed along a stretch of a bundled route. do-mpc solves a horizon of N
-intervals each step and the plant (do-mpc's simulator of the same model) applies the first
-acceleration. The force limit enters through ``set_nl_cons`` with the two helpers of
-``profileopt.mpc.constraints``:
+tracks a cruise speed along a stretch of a bundled route, whose terrain it knows only
+``--sensor-range`` metres ahead. do-mpc solves a horizon of N intervals each step and the
+plant (do-mpc's simulator of the same model) applies the first acceleration. The force limit
+enters through ``set_nl_cons`` with two helpers of ``profileopt.mpc``:
 
-* ``env = terrain_envelope(s, z, vehicle, reach_m=v_max * dt)``: a smooth function of the
-  predicted position, never below the e_max of any roughness window an interval starting
-  there can reach (an interval covers at most v_max * dt);
-* ``interval_force_constraints(v, v + a * dt, env(s), vehicle)``: every speed between the
-  interval's two speeds is admissible at every elevation up to env(s), the resonance peak
+* ``preview = TerrainPreview(vehicle, horizon_m=..., reach_m=v_max * dt)``: ``preview.e_max(s,
+  origin, e_coef)`` is a smooth function of the predicted position, never below the e_max of
+  any roughness window an interval starting there can reach (an interval covers at most
+  v_max * dt), and ``preview.speed_cap`` the cap of steps and speed limits; their
+  coefficients are do-mpc time-varying parameters, set each step from the measured terrain
+  (``preview.coefficients``), so the controller is built once;
+* ``interval_force_constraints(v, v + a * dt, e_max, vehicle)``: every speed between the
+  interval's two speeds is admissible at every elevation up to e_max, the resonance peak
   between them included.
 
+A third row keeps every stage able to brake to the unseen terrain's speed where the measured
+terrain ends, so that the next step has a plan too.
 So every interval the controller applies keeps the force limit in every window it passes
 (the proof is in the docstring of interval_force_constraints). The example then checks its
 own closed-loop trajectory independently (examples/mpc_window_check.py: every window, the
@@ -34,6 +40,7 @@ import time
 import warnings
 from pathlib import Path
 
+import casadi as ca
 import numpy as np
 
 try:
@@ -46,6 +53,8 @@ except ImportError:
 from profileopt import get_model, load_vehicle  # noqa: E402
 from profileopt.mpc.constraints import (  # noqa: E402
     force_constraints, force_limit_n, interval_force_constraints, terrain_envelope)
+from profileopt.mpc.preview import TerrainPreview  # noqa: E402
+from profileopt.online import unseen_speed_mps  # noqa: E402
 from profileopt.io import read_route  # noqa: E402
 
 from mpc_window_check import report, worst_window  # noqa: E402  (beside this file)
@@ -70,6 +79,10 @@ parser.add_argument("--horizon", type=int, default=12, help="intervals per horiz
 parser.add_argument("--max-steps", type=int, default=400, help="stop after this many steps (default: %(default)s)")
 parser.add_argument("--pointwise", action="store_true", help="for comparison, the force limit only at the grid "
                     "points, on the e_max at each point (the constraint issue 10 found unsafe)")
+parser.add_argument("--sensor-range", type=float, default=60.0,
+                    help="the terrain is known this far ahead of the vehicle, m (default: %(default)s)")
+parser.add_argument("--unseen", default="worst",
+                    help="terrain beyond it assumed: worst (ISO 8608 class H), a class A-H or an RI (default: %(default)s)")
 parser.add_argument("--out", default=None, help="folder for the closed-loop log mpc_dompc_<vehicle>.csv")
 args = parser.parse_args()
 
@@ -88,18 +101,35 @@ REACH = vehicle.max_speed_mps * dt  # the furthest one interval can take the veh
 # applied intervals are within the limit, not only within IPOPT's tolerance of it
 BACK_OFF = 1e-6
 
-# --- The terrain ahead: the envelope over the stretch any horizon can see ---------------------
-# (a horizon reaches at most n_horizon * REACH beyond the stop; its cost grows with the stretch)
-keep = (route.s_m >= s_start - WINDOW) & (route.s_m <= s_stop + (n_horizon + 1) * REACH + WINDOW)
+# --- The terrain ahead, as parameters set each step from what the vehicle has measured -------
+# TerrainPreview: the e_max envelope and the speed cap (steps, speed limits) on a horizon that
+# moves with the vehicle, their coefficients do-mpc time-varying parameters: the controller is
+# built once, whatever the route's length, and sees only --sensor-range metres ahead (past
+# that, the --unseen class)
 t0 = time.perf_counter()
-env = terrain_envelope(route.s_m[keep], route.z_m[keep], vehicle, window_m=WINDOW, reach_m=REACH)
+preview = TerrainPreview(vehicle, horizon_m=(n_horizon + 1) * REACH + WINDOW, reach_m=REACH, window_m=WINDOW,
+                         unseen=args.unseen)
+v_unseen = unseen_speed_mps(args.unseen, vehicle, model=model_key, roughness_window_m=WINDOW)
 t_env = time.perf_counter() - t0
+
+
+def sensed(position_m: float):  # noqa: ANN201
+    """The preview's coefficients from the samples known at ``position_m``: a window behind
+    the vehicle and --sensor-range ahead."""
+    keep = (route.s_m >= position_m - 2 * WINDOW) & (route.s_m <= position_m + args.sensor_range)
+    limits = None if route.speed_limit_mps is None else route.speed_limit_mps[keep]
+    return preview.coefficients(route.s_m[keep], route.z_m[keep], position_m, speed_limit_mps=limits)
+
 
 # --- do-mpc: model, controller, plant -------------------------------------------------------
 model = do_mpc.model.Model("discrete")
 s = model.set_variable("_x", "s")  # position (m)
 v = model.set_variable("_x", "v")  # speed (m/s)
 a = model.set_variable("_u", "a")  # acceleration over the interval (m/s^2)
+origin = model.set_variable("_tvp", "origin")  # where the preview's horizon starts (m)
+e_coef = model.set_variable("_tvp", "e_coef", shape=(preview.n_coefficients, 1))
+cap_coef = model.set_variable("_tvp", "cap_coef", shape=(preview.n_coefficients, 1))
+measured_to = model.set_variable("_tvp", "measured_to")  # where the trusted measured terrain ends (m)
 model.set_rhs("s", s + v * dt + a * dt**2 / 2)  # exact for constant a
 model.set_rhs("v", v + a * dt)
 model.setup()
@@ -116,15 +146,40 @@ mpc.bounds["upper", "_x", "v"] = vehicle.max_speed_mps
 mpc.bounds["lower", "_u", "a"] = -vehicle.max_decel_mps2
 mpc.bounds["upper", "_u", "a"] = vehicle.max_accel_mps2
 if args.pointwise:  # the unsafe way, for comparison: the terrain under each grid point only
+    keep = (route.s_m >= s_start - WINDOW) & (route.s_m <= s_stop + (n_horizon + 1) * REACH + WINDOW)
     point_env = terrain_envelope(route.s_m[keep], route.z_m[keep], vehicle, window_m=WINDOW)
     rows = force_constraints(v, vehicle, e_max_m=point_env(s), model=model_key)
 else:
-    rows = interval_force_constraints(v, v + a * dt, env(s), vehicle, model=model_key)
+    rows = interval_force_constraints(v, v + a * dt, preview.e_max(s, origin, e_coef), vehicle, model=model_key)
+    cap = preview.speed_cap(s, origin, cap_coef)  # steps and speed limits: both ends of the interval
+    mpc.set_nl_cons("cap_start", v - cap, ub=-BACK_OFF)
+    mpc.set_nl_cons("cap_end", v + a * dt - cap, ub=-BACK_OFF)
+    # every stage can still brake to the unseen terrain's speed where the measured terrain ends,
+    # so that the next step has a plan too
+    room = ca.fmax(measured_to - s, 0)
+    mpc.set_nl_cons("braking", (v + a * dt) ** 2 - 2 * vehicle.max_decel_mps2 * room, ub=v_unseen**2)
 mpc.set_nl_cons("force", rows.g, ub=-BACK_OFF)
+tvp = mpc.get_tvp_template()
+now = {"coef": sensed(s_start)}
+
+
+def tvp_now(t_now: float):  # noqa: ANN201
+    """The preview's parameters for every stage of this step's horizon."""
+    coef = now["coef"]
+    for k in range(n_horizon + 1):
+        tvp["_tvp", k, "origin"] = coef.origin_m
+        tvp["_tvp", k, "e_coef"] = coef.e_max
+        tvp["_tvp", k, "cap_coef"] = coef.speed_cap
+        tvp["_tvp", k, "measured_to"] = coef.measured_to_m
+    return tvp
+
+
+mpc.set_tvp_fun(tvp_now)
 mpc.setup()
 
 plant = do_mpc.simulator.Simulator(model)
 plant.settings.t_step = dt
+plant.set_tvp_fun(lambda t_now: plant.get_tvp_template())  # the plant does not use them
 plant.setup()
 
 # --- Closed loop ------------------------------------------------------------------------------
@@ -134,6 +189,7 @@ mpc.set_initial_guess()
 log_t, log_s, log_v, log_a, solve_s, failures = [0.0], [s_start], [0.0], [], [], 0
 t_loop = time.perf_counter()
 while x0[0, 0] < s_stop and len(log_a) < args.max_steps:
+    now["coef"] = sensed(float(x0[0, 0]))  # what the sensors have measured, as parameters
     t0 = time.perf_counter()
     u0 = mpc.make_step(x0)
     solve_s.append(time.perf_counter() - t0)
@@ -150,7 +206,8 @@ check = worst_window(route.s_m, route.z_m, vehicle, log_t, log_s, log_v, log_a, 
 ms = 1e3 * np.array(solve_s)
 print(f"route {Path(route.source).name}, vehicle {Path(vehicle.name).stem}, model {model_key}: from rest at "
       f"{s_start:g} m to {log_s[-1]:.1f} m, cruise {cruise:g} m/s; horizon {n_horizon} x {dt:g} s")
-print(f"envelope: {keep.sum()} samples, reach {REACH:g} m, built in {t_env:.2f} s")
+print(f"preview: {preview.n_coefficients} coefficients per step, terrain known {args.sensor_range:g} m ahead, reach "
+      f"{REACH:g} m, built in {t_env:.2f} s")
 print(f"closed loop: {log_t[-1]:.2f} s of driving in {len(log_a)} do-mpc steps; IPOPT failures: {failures}; "
       f"solve time per step: median {np.median(ms):.1f} ms, max {ms.max():.1f} ms; loop {t_loop:.1f} s")
 print(f"speeds driven: {min(log_v):.3f} to {max(log_v):.3f} m/s")

@@ -87,6 +87,39 @@ def _check_log(path: Path, route_name: str, vehicle_name: str, stdout: str) -> f
     return sampled
 
 
+def _hidden_route(folder: Path) -> Path:
+    """A route the controller has never seen: class B ground with a kerb block (8 cm up at
+    30 m, down at 45 m), 30 m of washboard (3 cm, 0.8 m waves) from 60 m and a pothole (8 cm
+    deep, 0.8 m wide) at 120 m, sampled every 0.05 m."""
+    from profileopt.terrain.synthetic import iso8608_profile, step, washboard
+
+    ground = iso8608_profile("B", 170.0, 0.05, seed=11)
+    s = ground.s_m
+    z = (ground.z_m + step(s, 30.0, 0.08) - step(s, 45.0, 0.08) + washboard(s, 0.03, 0.8, 60.0, 90.0)
+         - 0.08 * ((s >= 120.0) & (s <= 120.8)))
+    path = folder / "hidden.csv"
+    np.savetxt(path, np.column_stack([s, z]), delimiter=",", fmt="%.10g", header="s,z", comments="")
+    return path
+
+
+@pytest.mark.slow
+@pytest.mark.mpc
+@needs_mpc_extra
+@pytest.mark.parametrize("vehicle, cruise", [("atv", "12"), ("atv-resonant", "8")])
+def test_dompc_example_converges_every_step_on_hidden_terrain(tmp_path: Path, vehicle: str, cruise: str) -> None:
+    """Issue 31: the do-mpc controller of the docs, over a route it sees only 60 m ahead with a
+    kerb, a washboard and a pothole, converges at every step with both vehicles and keeps
+    every window within the limit (checked here at 400 instants of every interval)."""
+    route = _hidden_route(tmp_path)
+    run = _run("mpc_dompc.py", "--vehicle", vehicle, "--route", str(route), "--from-m", "0", "--distance-m", "150",
+               "--cruise", cruise, "--max-steps", "2000", "--out", str(tmp_path))
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert "IPOPT failures: 0" in run.stdout
+    _check_log(tmp_path / f"mpc_dompc_{vehicle}.csv", route, vehicle, run.stdout)
+    log = np.genfromtxt(tmp_path / f"mpc_dompc_{vehicle}.csv", delimiter=",", names=True)
+    assert log["s_m"][-1] >= 150.0  # it got there
+
+
 @pytest.mark.slow
 @pytest.mark.mpc
 @needs_mpc_extra
