@@ -49,8 +49,8 @@ def main(argv: list[str] | None = None) -> int:
     drive(warm, load_vehicle("atv"), sensor_range_m=50.0)  # imports, CasADi's first builds
     print("| route | vehicle | unseen | range (m) | cycles | median (ms) | p99 (ms) | worst (ms) | driven (s) "
           "| offline (s) | driven / offline | offline, first band (s) | driven / that | worst window / limit "
-          "| emergencies |")
-    print("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+          "| emergencies | max jerk (m/s^3) |")
+    print("|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for name in args.routes.split(","):
         route = read_route(folder / f"{name}.csv")
         for vehicle_name in args.vehicles.split(","):
@@ -71,7 +71,7 @@ def main(argv: list[str] | None = None) -> int:
                           f"| {ms['median']:.2f} | {ms['p99']:.2f} | {ms['max']:.2f} | {driven.travel_time_s:.1f} "
                           f"| {offline:.1f} | {driven.travel_time_s / offline:.3f} | {first:.1f} "
                           f"| {driven.travel_time_s / first:.3f} | {driven.worst_window_ratio:.3f} "
-                          f"| {driven.emergencies} |", flush=True)
+                          f"| {driven.emergencies} | {driven.max_jerk_mps3:.2f} |", flush=True)
                     print(f"  {name} {vehicle_name} {label} {sensing:g} m: {time.perf_counter() - started:.0f} s",
                           file=sys.stderr)
     return 0

@@ -64,7 +64,7 @@ from ..defaults import (
     MODEL_KEYS,
 )
 from ..errors import InputError
-from ..physics.motion import power_accel_mps2
+from ..physics.motion import plans_on_grades, power_accel_mps2, tyre_accel_mps2
 from ..physics.speeds import speed_bands
 from ..physics.steps import MAX_RAMP_M, TREND_HALF_WIDTH_M
 from ..planning.bands import DrivePower, braking_profile, greatest_profile
@@ -78,7 +78,8 @@ if TYPE_CHECKING:
     from ..core.vehicle import Vehicle
 
 __all__ = ["SpeedSelector", "Command", "unseen_speed_mps", "unseen_roughness", "DEFAULT_SENSOR_RANGE_M",
-           "DEFAULT_CYCLE_S", "DEFAULT_ONLINE_SEGMENT_LENGTH_M", "DEFAULT_UNSEEN", "WORST_CLASS"]
+           "DEFAULT_CYCLE_S", "DEFAULT_ONLINE_SEGMENT_LENGTH_M", "DEFAULT_UNSEEN", "DEFAULT_UNSEEN_DESCENT",
+           "WORST_CLASS"]
 
 #: Sensing range (m) when none is given: what a vehicle LiDAR resolves at wheel scale.
 DEFAULT_SENSOR_RANGE_M = 50.0
@@ -96,6 +97,8 @@ MAX_HORIZON_SEGMENTS = 10_000
 #: Where a segment's higher cap begins after the boundary's lower one (m): the envelope's
 #: step up, a knot this far after the boundary.
 JUMP_M = 1e-6
+#: The steepest descent (rise over run) assumed on unseen ground when none is given: 10 %.
+DEFAULT_UNSEEN_DESCENT = 0.05
 #: The assumption for terrain not yet measured when none is given.
 DEFAULT_UNSEEN = "worst"
 #: What ``unseen="worst"`` means: the roughest ISO 8608 class, H.
@@ -309,6 +312,9 @@ class SpeedSelector:
     max_jerk_mps3 : float, optional
         Jerk bound (m/s^3): the command's acceleration changes by at most this times
         ``cycle_s`` per cycle (:mod:`.tracking`); None: the vehicle's; inf: none.
+    unseen_descent : float, default :data:`DEFAULT_UNSEEN_DESCENT` (0.1)
+        The steepest descent assumed on unseen ground (rise over run), for a vehicle that
+        plans on grades: the braking it allows there.
 
     Raises
     ------
@@ -322,7 +328,7 @@ class SpeedSelector:
                  roughness_window_m: float = DEFAULT_ROUGHNESS_WINDOW_M,
                  path_tolerance_m: float | None = DEFAULT_PATH_TOLERANCE_M, start_m: float = 0.0,
                  end_m: float | None = None, vend_mps: float = 0.0, cycle_s: float = DEFAULT_CYCLE_S,
-                 max_jerk_mps3: float | None = None) -> None:
+                 max_jerk_mps3: float | None = None, unseen_descent: float = DEFAULT_UNSEEN_DESCENT) -> None:
         from ..core.vehicle import Vehicle
 
         if not isinstance(vehicle, Vehicle):
@@ -362,6 +368,11 @@ class SpeedSelector:
         if isinstance(jerk, bool) or not isinstance(jerk, (int, float)) or math.isnan(jerk) or not jerk > 0:
             raise InputError(f"max_jerk_mps3 = {max_jerk_mps3!r}: must be a number > 0 (m/s^3; inf: no bound)")
         self.max_jerk_mps3 = float(jerk)
+        if isinstance(unseen_descent, bool) or not isinstance(unseen_descent, (int, float)) or not (
+                0.0 <= unseen_descent <= 1.0):
+            raise InputError(f"unseen_descent = {unseen_descent!r}: must be a grade from 0 to 1 (rise over run, "
+                             "e.g. 0.1 for 10 %)")
+        self.unseen_descent = float(unseen_descent)
         #: How much measured terrain (m) a segment needs on either side before its speeds are
         #: final: the longer of a roughness window (the windows that share a point with it; the
         #: grade's fit, centred, over two) and the ramp and trend a step's cap looks at
@@ -381,6 +392,8 @@ class SpeedSelector:
         self.terrain = SensedTerrain(start_m=self.start_m)
         self._segments = _Grown()
         self._tail_decel = float(vehicle.max_decel_mps2)
+        if plans_on_grades(vehicle):  # the deceleration bound on the steepest descent assumed
+            self._tail_decel = float(tyre_accel_mps2(vehicle.max_decel_mps2, -math.atan(self.unseen_descent)))
         self._last_accel = 0.0
         self._work: Iterator[None] | None = None
         self._driven: list[tuple[float, float]] = []  # positions and speeds on ground not yet planned
@@ -610,7 +623,10 @@ class SpeedSelector:
         edge = float(where[-1])
         if not finished:  # the unseen terrain: [0, v_unseen], long enough to stop from it
             vu = self.unseen_speed_mps
-            d = self._tail_decel
+            # braking on unseen ground: on the assumed descent, and no harder than on the ground
+            # in sight (else the ground it turns out to be could lower the envelope already
+            # driven under, through the bounds of a cycle that crosses into it)
+            d = min(self._tail_decel, float(np.min(decel))) if decel.size else self._tail_decel
             # long enough that its end does not hold the speed at the edge below v_unseen, even
             # braking with the jerk bound; two pieces, so that a vehicle at rest may start into it
             tail = vu * vu / (2.0 * d) + braking_margin_m(vu, d, self.max_jerk_mps3) + self.segment_length_m

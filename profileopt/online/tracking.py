@@ -8,8 +8,8 @@ a cap. The vehicle instead changes its acceleration by at most J dt per cycle of
 
 A state (s, v, a) is *safe* when a jerk-limited braking manoeuvre from it stays under the
 envelope until the vehicle stops: the acceleration ramps down from a to -D at rate J, then
-follows each segment's own deceleration bound (the envelope's braking curve); D is the least
-bound within the ramp's reach. Each cycle the command is the
+holds -D, D the least deceleration bound of the pieces the manoeuvre can cross (so it keeps
+every bound on its way without a jump). Each cycle the command is the
 largest acceleration a1 in [a - J dt, a + J dt] (and within the bounds) whose cycle stays under
 the envelope and ends in a safe state. It exists whenever the current state is safe and the
 envelope has not come down (terrain no worse than assumed): a1 = a - J dt follows the braking
@@ -111,18 +111,38 @@ def _under(where: np.ndarray, b_env: np.ndarray, s_lo: np.ndarray, s_hi: np.ndar
     return ok
 
 
+def _manoeuvre_decel(where: np.ndarray, decel_seg: np.ndarray, s1: np.ndarray, v1: np.ndarray, a1: np.ndarray,
+                     jerk: float) -> np.ndarray:
+    """D of the braking manoeuvre from each state: the largest deceleration that is at most the
+    bound of every piece the manoeuvre at D crosses (a fixed point, found from the bound where
+    it starts downwards), so that it keeps every bound without a jump; and the remainder of a
+    manoeuvre, a cycle later, crosses only pieces it crossed, so it has the same D."""
+    pieces = decel_seg.size
+    first = np.clip(np.searchsorted(where, s1, side="right") - 1, 0, pieces - 1)
+    decel = np.maximum(decel_seg[first], MIN_BRAKING_MPS2)
+    span = np.arange(pieces)[None, :]
+    for _ in range(8):
+        ramp = np.maximum(a1 + decel, 0.0) / jerk if np.isfinite(jerk) else 0.0 * v1
+        # the distance the ramp and the stop at -D can cover: at most v1 ramp + a1+ ramp^2 / 2
+        # + v^2 / (2 D), v the largest speed in the ramp
+        v_top = v1 + np.maximum(a1, 0.0) * ramp
+        reach = v_top * ramp + v_top * v_top / (2.0 * decel)
+        last = np.clip(np.searchsorted(where, s1 + reach + 1e-9, side="right") - 1, 0, pieces - 1)
+        crossed = (span >= first[:, None]) & (span <= last[:, None])
+        lower = np.maximum(np.where(crossed, decel_seg[None, :], np.inf).min(axis=1), MIN_BRAKING_MPS2)
+        if np.all(lower >= decel):
+            break
+        decel = np.minimum(decel, lower)
+    return decel
+
+
 def _safe(where: np.ndarray, b_env: np.ndarray, s1: np.ndarray, v1: np.ndarray, a1: np.ndarray,
           decel_seg: np.ndarray, jerk: float) -> np.ndarray:
-    """Whether braking with jerk ``jerk`` from (s1, v1, a1) down to -D (the least deceleration
-    bound the ramp can reach), then at each piece's own bound, stays under the envelope until
-    the stop (module docstring), for K states."""
+    """Whether braking with jerk ``jerk`` from (s1, v1, a1) down to -D, then at -D, stays under
+    the envelope until the stop (module docstring), for K states (D:
+    :func:`_manoeuvre_decel`)."""
     tol = 1e-9 * max(float(np.max(b_env)), 1.0)
-    # the ramp's target: the least bound within the distance it may cover
-    reach = v1 * (np.maximum(a1, 0.0) + float(np.max(decel_seg))) / jerk if np.isfinite(jerk) else 0.0 * v1
-    first = np.clip(np.searchsorted(where, s1, side="right") - 1, 0, decel_seg.size - 1)
-    last = np.clip(np.searchsorted(where, s1 + reach + 1e-9, side="right") - 1, 0, decel_seg.size - 1)
-    span = np.arange(decel_seg.size)[None, :]
-    decel = np.where((span >= first[:, None]) & (span <= last[:, None]), decel_seg[None, :], np.inf).min(axis=1)
+    decel = _manoeuvre_decel(where, decel_seg, s1, v1, a1, jerk)
     ramp_t = np.maximum((a1 + decel) / jerk, 0.0) if np.isfinite(jerk) else np.zeros_like(a1)
     # the ramp: v(t) = v1 + a1 t - J t^2 / 2 until it ends or the vehicle stops
     t = ramp_t[:, None] * np.linspace(0.0, 1.0, RAMP_SAMPLES + 1)[None, :]
@@ -158,15 +178,9 @@ def _safe(where: np.ndarray, b_env: np.ndarray, s1: np.ndarray, v1: np.ndarray, 
         frac = (w_in[None, None, :] - s_t[:, :-1, None]) / span[:, :, None]
         chord = b_t[:, :-1, None] + frac * (b_t[:, 1:] - b_t[:, :-1])[:, :, None] + bow[:, :, None]
         ramp_ok &= ~np.any(inner & (chord > b_in[None, None, :] + tol), axis=(1, 2))
-    # then each piece's own deceleration bound from the ramp's end: b piecewise linear in s
-    # with the envelope's knots, b(s) = b2 - (C(s) - C(s2)), C the integral of 2 D ds
-    s2, b2 = s_t[:, -1], v_t[:, -1] ** 2
-    c_knots = np.concatenate([[0.0], np.cumsum(2.0 * decel_seg * np.diff(where))])
-    c2 = np.interp(s2, where, c_knots)
-    ok = b2 <= np.interp(s2, where, b_env) + tol
-    after = where[None, :] > s2[:, None]
-    b_cont = b2[:, None] - (c_knots[None, :] - c2[:, None])
-    ok &= ~np.any(after & (b_cont > b_env[None, :] + tol), axis=1)
+    # then -D from the ramp's end to the stop: b linear in s
+    s2, v2 = s_t[:, -1], v_t[:, -1]
+    ok = _under(where, b_env, s2, s2 + v2 * v2 / (2.0 * decel), v2 * v2, np.zeros_like(v2))
     return ramp_ok & ok
 
 

@@ -83,6 +83,7 @@ def test_nothing_measured_means_the_unseen_speed_and_no_faster(atv):
     ({"cycle_s": 0.0}, "cycle_s"),
     ({"max_jerk_mps3": -1.0}, "max_jerk_mps3"),
     ({"end_m": -5.0}, "end_m"),
+    ({"unseen_descent": 2.0}, "unseen_descent"),
 ])
 def test_bad_options_are_refused_in_one_line(atv, kwargs, words):
     with pytest.raises(InputError, match=words):
