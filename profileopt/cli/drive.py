@@ -19,7 +19,7 @@ from .track import number_argument
 
 #: Defaults of the online selector, repeated here so that ``--help`` needs no numerical
 #: package; tests/cli/test_drive.py checks they equal :mod:`profileopt.online.selector`'s.
-SENSOR_RANGE_M, CYCLE_S, SEGMENT_LENGTH_M, UNSEEN = 50.0, 0.1, 1.0, "worst"
+SENSOR_RANGE_M, CYCLE_S, SEGMENT_LENGTH_M, UNSEEN, UNSEEN_DESCENT = 50.0, 0.1, 1.0, "worst", 0.05
 
 
 def arguments(parser: argparse.ArgumentParser) -> None:
@@ -36,6 +36,9 @@ def arguments(parser: argparse.ArgumentParser) -> None:
                         help="what terrain not yet measured is assumed to be: 'worst' (ISO 8608 class H), a class "
                              "A-H, an RI (a number), or 'route' (the route's own roughest class, known only in an "
                              f"experiment) (default: {UNSEEN})")
+    parser.add_argument("--unseen-descent", type=number_argument, default=UNSEEN_DESCENT, metavar="GRADE",
+                        help="the steepest descent assumed on unseen ground, rise over run: the braking it leaves "
+                             f"(default: {UNSEEN_DESCENT:g})")
     parser.add_argument("--cycle", type=number_argument, default=CYCLE_S, metavar="S",
                         help=f"control cycle, s (default: {CYCLE_S:g})")
     parser.add_argument("--sensor-noise", type=number_argument, default=0.0, metavar="M",
@@ -91,13 +94,14 @@ def run(args: argparse.Namespace) -> int:
         driven = drive(route, vehicle, sensor_range_m=args.sensor_range, unseen=unseen, model=args.model,
                        cycle_s=args.cycle, segment_length_m=args.segment_length,
                        roughness_window_m=args.roughness_window, sensor_noise_m=args.sensor_noise,
-                       sensor_spacing_m=args.sensor_spacing, seed=args.seed, progress=progress)
+                       sensor_spacing_m=args.sensor_spacing, seed=args.seed, unseen_descent=args.unseen_descent,
+                       progress=progress)
         offline = plan(route, vehicle, model=args.model, roughness_window_m=args.roughness_window, progress=progress)
         unseen_label = unseen_roughness(unseen).label
         settings = {"route": Path(args.route).name, "vehicle": args.vehicle, "model": args.model,
                     "sensor_range_m": args.sensor_range, "unseen": unseen_label, "cycle_s": args.cycle,
                     "sensor_noise_m": args.sensor_noise, "sensor_spacing_m": args.sensor_spacing,
-                    "seed": args.seed, "segment_length_m": args.segment_length,
+                    "seed": args.seed, "segment_length_m": args.segment_length, "unseen_descent": args.unseen_descent,
                     "roughness_window_m": args.roughness_window}
         with outputs:
             if args.output is not None:

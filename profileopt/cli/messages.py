@@ -16,7 +16,7 @@ API_FLAGS = {"segment_length_m": "--segment-length", "roughness_window_m": "--ro
              "max_gap_m": "--max-gap", "track_crs": "--track-crs", "terrain_crs": "--terrain-crs",
              "track_index": "--track-index", "roughness_class": "--roughness-class",
              "sensor_range_m": "--sensor-range", "cycle_s": "--cycle", "sensor_noise_m": "--sensor-noise",
-             "sensor_spacing_m": "--sensor-spacing"}
+             "sensor_spacing_m": "--sensor-spacing", "unseen_descent": "--unseen-descent"}
 #: max_jerk_mps3 is a vehicle file's key too: only ``max_jerk_mps3 = ...`` (or a message's
 #: ``ri VALUE``, the form of an option and its argument) is the option.
 API_FLAGS_ASSIGNED = {"model": "--model", "smoothing": "--smoothing", "method": "--method", "band": "--band",

@@ -29,6 +29,7 @@ from .selector import (
     DEFAULT_ONLINE_SEGMENT_LENGTH_M,
     DEFAULT_SENSOR_RANGE_M,
     DEFAULT_UNSEEN,
+    DEFAULT_UNSEEN_DESCENT,
     SpeedSelector,
 )
 
@@ -136,7 +137,7 @@ def drive(route: "Route", vehicle: "Vehicle", *, sensor_range_m: float = DEFAULT
           roughness_window_m: float = DEFAULT_ROUGHNESS_WINDOW_M,
           path_tolerance_m: float | None = DEFAULT_PATH_TOLERANCE_M, sensor_noise_m: float = 0.0,
           sensor_spacing_m: float | None = None, seed: int = 0, max_jerk_mps3: float | None = None,
-          progress: Progress = NO_PROGRESS) -> Drive:
+          unseen_descent: float = DEFAULT_UNSEEN_DESCENT, progress: Progress = NO_PROGRESS) -> Drive:
     """Drive ``route`` with the online selector, revealing it only within ``sensor_range_m``.
 
     Parameters
@@ -163,6 +164,8 @@ def drive(route: "Route", vehicle: "Vehicle", *, sensor_range_m: float = DEFAULT
         Seed of the noise.
     max_jerk_mps3 : float, optional
         Jerk bound of the commands (m/s^3); None: the vehicle's; inf: none.
+    unseen_descent : float, default 0.05
+        The steepest descent assumed on unseen ground (rise over run), as the selector's.
     progress : Progress, optional
         Told once when the drive starts and once when the simulation does.
 
@@ -208,7 +211,7 @@ def drive(route: "Route", vehicle: "Vehicle", *, sensor_range_m: float = DEFAULT
     selector = SpeedSelector(vehicle, sensor_range_m=sensor_range_m, unseen=unseen, model=model,
                              segment_length_m=segment_length_m, roughness_window_m=roughness_window_m,
                              path_tolerance_m=path_tolerance_m, start_m=float(s_true[0]), end_m=float(s_true[-1]),
-                             cycle_s=cycle_s, max_jerk_mps3=max_jerk_mps3)
+                             cycle_s=cycle_s, max_jerk_mps3=max_jerk_mps3, unseen_descent=unseen_descent)
     progress.expect(2)
     progress.step(f"driving {route.length_m:.0f} m with {sensor_range_m:g} m of sensing")
     pos, v = float(s_true[0]), 0.0

@@ -55,6 +55,7 @@ def test_the_human_summary_names_the_numbers(capsys) -> None:
     (["--segment-length", "1e-9"], "--segment-length"),
     (["--roughness-window", "1e9"], "--sensor-range"),
     (["--model", "dynamic"], "invalid choice"),
+    (["--unseen-descent", "3"], "--unseen-descent"),
 ])
 def test_bad_options_are_one_line_and_exit_2(argv, words, capsys) -> None:
     try:
@@ -86,3 +87,4 @@ def test_the_help_defaults_are_the_selectors() -> None:
     assert drive_command.CYCLE_S == selector.DEFAULT_CYCLE_S
     assert drive_command.SEGMENT_LENGTH_M == selector.DEFAULT_ONLINE_SEGMENT_LENGTH_M
     assert drive_command.UNSEEN == selector.DEFAULT_UNSEEN
+    assert drive_command.UNSEEN_DESCENT == selector.DEFAULT_UNSEEN_DESCENT
