@@ -144,7 +144,8 @@ def test_at_most_eight_modules_directly_under_the_package() -> None:
     ("profileopt.verification", ("planning", "studies", "mpc", "viz", "cli")),
     ("profileopt.planning", ("verification", "studies", "mpc", "viz", "cli")),
     ("profileopt.io", ("planning", "verification", "studies", "mpc", "viz", "cli")),
-    ("profileopt.mpc", ("planning", "verification", "studies", "viz", "cli")),
+    ("profileopt.mpc", ("planning", "verification", "studies", "viz", "cli", "online")),
+    ("profileopt.online", ("studies", "mpc", "viz", "cli")),
 ])
 def test_each_package_imports_only_what_lies_below_it(package: str, forbidden: tuple[str, ...]) -> None:
     """Directly or through other modules: verification judges a plan from physics and core

@@ -74,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
                          "a track and a terrain map with 'profileopt route' first")
     from ..io.routes import read_route
     from ..online import drive
-    from ..online.selector import unseen_roughness
+    from ..terrain.assumed import unseen_roughness
     from ..planning import plan
     from ..progress import terminal_progress
 
@@ -105,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
                     "roughness_window_m": args.roughness_window}
         with outputs:
             if args.output is not None:
-                from ..io.drives import write_drive
+                from ..online.drive import write_drive
 
                 write_drive(driven, args.output, settings=settings)
             if args.plot is not None:

@@ -13,7 +13,8 @@ once, and each step only sets the parameters from the terrain measured so far
 
 Terrain that is not measured (beyond the last sample given, less the margin a window or a
 step's ramp needs to be seen whole, or before the first) is taken as
-the ``unseen`` assumption of the online selector (:func:`profileopt.online.selector.unseen_speed_mps`):
+the ``unseen`` assumption of the online selector (:func:`profileopt.terrain.assumed.unseen_roughness`,
+:func:`profileopt.online.selector.unseen_speed_mps`):
 its e_max is that of an ISO 8608 class (``"worst"``: class H) or an RI, so a controller whose
 horizon reaches past what its sensors measured keeps the force limit there for any terrain no
 rougher than assumed. Steps are not part of that assumption: beyond the samples the step cap
@@ -34,6 +35,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import InputError
 from ..physics.steps import MAX_RAMP_M, TREND_HALF_WIDTH_M, step_caps
+from ..terrain.assumed import unseen_roughness
 from ..terrain.roughness import range_extremes, roughness_windows, worst_case_elevation
 from .horizon import spline_value
 
@@ -127,7 +129,6 @@ class TerrainPreview:
                  knot_spacing_m: float = DEFAULT_PREVIEW_KNOT_SPACING_M, window_m: float = 5.0,
                  unseen: str | float = "worst") -> None:
         from ..core.vehicle import Vehicle
-        from ..online.selector import unseen_roughness
 
         if not isinstance(vehicle, Vehicle):
             raise InputError(f"TerrainPreview: vehicle = {vehicle!r} is a {type(vehicle).__name__}; give a Vehicle "

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import time
 from typing import TYPE_CHECKING
 
@@ -20,6 +21,7 @@ import numpy as np
 from ..core.segments import route_roughness_windows
 from ..defaults import DEFAULT_MODEL, DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M
 from ..errors import InputError, PlanningError
+from ..io.atomic import atomic_write
 from ..physics.forces import get_model
 from ..physics.simulate import boundary_times_s, simulate_quarter_car
 from ..progress import NO_PROGRESS, Progress
@@ -37,7 +39,7 @@ if TYPE_CHECKING:
     from ..core.route import Route
     from ..core.vehicle import Vehicle
 
-__all__ = ["Drive", "drive", "MAX_CYCLES", "END_TOLERANCE_M"]
+__all__ = ["Drive", "drive", "write_drive", "DRIVE_COLUMNS", "MAX_CYCLES", "END_TOLERANCE_M"]
 
 #: How close to the route's end (m) a vehicle at rest has arrived (it creeps the last
 #: centimetres within the jerk bound).
@@ -290,3 +292,34 @@ def drive(route: "Route", vehicle: "Vehicle", *, sensor_range_m: float = DEFAULT
                  window_ratio=ratio, max_jerk_mps3=jerk,
                  unseen_speed_mps=selector.unseen_speed_mps, notes=tuple(notes))
 
+
+#: The columns of a drive CSV, in order.
+DRIVE_COLUMNS = ("time_s", "s_m", "speed_mps", "accel_mps2", "edge_m", "edge_speed_mps")
+
+
+def write_drive(drive: Drive, path: str | os.PathLike, *, settings: dict[str, object]) -> None:
+    """Write a driven profile atomically: a settings comment line, the header, one row per knot.
+
+    Each row is a knot of the driven profile (every cycle's start and every segment boundary
+    crossed): the time (s), position (m) and speed (m/s) there, the constant acceleration
+    driven to the next knot (m/s^2), and the planning edge (m) and the horizon's speed there
+    (m/s) of the cycle being driven. Numbers have 9 significant digits.
+
+    Parameters
+    ----------
+    drive : Drive
+        The closed-loop drive (:func:`profileopt.online.drive`).
+    path : str or os.PathLike
+        Output file ('-': standard output, inside an :class:`~profileopt.io.atomic.OutputSet`).
+    settings : dict
+        What the drive was run with, written as ``key=value`` on the first line (``# drive:``).
+    """
+    cycle = drive.knot_cycle
+    columns = (drive.time_s, drive.s_m, drive.speed_mps, drive.knot_accel_mps2(), drive.cycle_edge_m[cycle],
+               drive.cycle_edge_speed_mps[cycle])
+    table = np.column_stack([np.asarray(c, dtype=float) + 0.0 for c in columns])
+    meta = " ".join(f"{key}={str(value).replace(' ', '_')}" for key, value in settings.items())
+    with atomic_write(path) as handle:
+        handle.write(f"# drive: {meta}\n")
+        handle.write(",".join(DRIVE_COLUMNS) + "\n")
+        handle.write("".join(",".join(f"{x:.9g}" for x in row) + "\n" for row in table.tolist()))

@@ -69,7 +69,7 @@ from ..physics.speeds import speed_bands
 from ..physics.steps import MAX_RAMP_M, TREND_HALF_WIDTH_M
 from ..planning.bands import DrivePower, braking_profile, greatest_profile
 from ..planning.limits import PlanContext, default_limits
-from ..terrain.assumed import AssumedRoughness
+from ..terrain.assumed import unseen_roughness
 from ..terrain.geometry import route_geometry
 from .sensed import SensedTerrain
 from .tracking import braking_margin_m, jerk_limited_step
@@ -77,9 +77,8 @@ from .tracking import braking_margin_m, jerk_limited_step
 if TYPE_CHECKING:
     from ..core.vehicle import Vehicle
 
-__all__ = ["SpeedSelector", "Command", "unseen_speed_mps", "unseen_roughness", "DEFAULT_SENSOR_RANGE_M",
-           "DEFAULT_CYCLE_S", "DEFAULT_ONLINE_SEGMENT_LENGTH_M", "DEFAULT_UNSEEN", "DEFAULT_UNSEEN_DESCENT",
-           "WORST_CLASS"]
+__all__ = ["SpeedSelector", "Command", "unseen_speed_mps", "DEFAULT_SENSOR_RANGE_M",
+           "DEFAULT_CYCLE_S", "DEFAULT_ONLINE_SEGMENT_LENGTH_M", "DEFAULT_UNSEEN", "DEFAULT_UNSEEN_DESCENT"]
 
 #: Sensing range (m) when none is given: what a vehicle LiDAR resolves at wheel scale.
 DEFAULT_SENSOR_RANGE_M = 50.0
@@ -101,43 +100,6 @@ JUMP_M = 1e-6
 DEFAULT_UNSEEN_DESCENT = 0.05
 #: The assumption for terrain not yet measured when none is given.
 DEFAULT_UNSEEN = "worst"
-#: What ``unseen="worst"`` means: the roughest ISO 8608 class, H.
-WORST_CLASS = "H"
-
-
-def unseen_roughness(unseen: str | float) -> AssumedRoughness:
-    """The roughness an ``unseen`` option names: ``"worst"`` (ISO 8608 class H), a class letter
-    A-H, or an RI (a number).
-
-    Parameters
-    ----------
-    unseen : str or float
-        The assumption.
-
-    Returns
-    -------
-    AssumedRoughness
-
-    Raises
-    ------
-    InputError
-        Anything else.
-    """
-    if isinstance(unseen, str):
-        text = unseen.strip()
-        if text.lower() == "worst":
-            return AssumedRoughness(road_class=WORST_CLASS)
-        if len(text) == 1 and text.isalpha():
-            return AssumedRoughness(road_class=text)
-        try:
-            value = float(text)
-        except ValueError:
-            raise InputError(f"unseen = {unseen!r}: give 'worst', an ISO 8608 class A to H, or an RI (a number, "
-                             "e.g. 0.05)") from None
-        return AssumedRoughness(ri=value)
-    if isinstance(unseen, bool) or not isinstance(unseen, (int, float)):
-        raise InputError(f"unseen = {unseen!r}: give 'worst', an ISO 8608 class A to H, or an RI (a number)")
-    return AssumedRoughness(ri=float(unseen))
 
 
 def unseen_speed_mps(unseen: str | float, vehicle: "Vehicle", *, model: str = DEFAULT_MODEL,
@@ -150,7 +112,8 @@ def unseen_speed_mps(unseen: str | float, vehicle: "Vehicle", *, model: str = DE
     Parameters
     ----------
     unseen : str or float
-        ``"worst"``, an ISO 8608 class A-H or an RI (:func:`unseen_roughness`).
+        ``"worst"``, an ISO 8608 class A-H or an RI
+        (:func:`profileopt.terrain.assumed.unseen_roughness`).
     vehicle : Vehicle
         The quarter car, its force limit and top speed.
     model : str, default ``"sbem_tf"``

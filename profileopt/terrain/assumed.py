@@ -22,7 +22,7 @@ from ..errors import InputError
 from .classes import iso8608_class_key, iso8608_expected_rms_m, iso8608_ri
 from .synthetic import ISO8608_N_MAX_CPM, ISO8608_N_MIN_CPM, iso8608_profile
 
-__all__ = ["AssumedRoughness", "MAX_ASSUMED_RI", "REALISATION_NYQUIST_SHARE"]
+__all__ = ["AssumedRoughness", "MAX_ASSUMED_RI", "REALISATION_NYQUIST_SHARE", "WORST_CLASS", "unseen_roughness"]
 
 #: An assumed RI above this (an RMS roughness twice the ground clearance) is no terrain a
 #: vehicle drives; the roughest class, H, over 5 m is 1.29 for a clearance of 0.1 m.
@@ -196,3 +196,43 @@ class AssumedRoughness:
         wanted = self.ri_for(clearance_m=clearance_m, window_m=window_m) * clearance_m
         scale = wanted / iso8608_expected_rms_m(shape, window_m=window_m, n_max_cpm=n_max)
         return scale * np.interp(s - s[0], base_s, base_z)
+
+
+#: What an ``unseen="worst"`` assumption means (:func:`unseen_roughness`): the roughest ISO 8608
+#: class, H.
+WORST_CLASS = "H"
+
+
+def unseen_roughness(unseen: str | float) -> AssumedRoughness:
+    """The roughness an ``unseen`` option names: ``"worst"`` (ISO 8608 class H, :data:`WORST_CLASS`), a class letter
+    A-H, or an RI (a number).
+
+    Parameters
+    ----------
+    unseen : str or float
+        The assumption.
+
+    Returns
+    -------
+    AssumedRoughness
+
+    Raises
+    ------
+    InputError
+        Anything else.
+    """
+    if isinstance(unseen, str):
+        text = unseen.strip()
+        if text.lower() == "worst":
+            return AssumedRoughness(road_class=WORST_CLASS)
+        if len(text) == 1 and text.isalpha():
+            return AssumedRoughness(road_class=text)
+        try:
+            value = float(text)
+        except ValueError:
+            raise InputError(f"unseen = {unseen!r}: give 'worst', an ISO 8608 class A to H, or an RI (a number, "
+                             "e.g. 0.05)") from None
+        return AssumedRoughness(ri=value)
+    if isinstance(unseen, bool) or not isinstance(unseen, (int, float)):
+        raise InputError(f"unseen = {unseen!r}: give 'worst', an ISO 8608 class A to H, or an RI (a number)")
+    return AssumedRoughness(ri=float(unseen))

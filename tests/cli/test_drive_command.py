@@ -9,7 +9,7 @@ import pytest
 
 from profileopt import cli
 from profileopt.cli import drive as drive_command
-from profileopt.io.drives import DRIVE_COLUMNS
+from profileopt.online.drive import DRIVE_COLUMNS
 from profileopt.online import selector
 
 from conftest import ROUTES
