@@ -204,8 +204,9 @@ WORST_CLASS = "H"
 
 
 def unseen_roughness(unseen: str | float) -> AssumedRoughness:
-    """The roughness an ``unseen`` option names: ``"worst"`` (ISO 8608 class H, :data:`WORST_CLASS`), a class letter
-    A-H, or an RI (a number).
+    """The roughness an ``unseen`` option names: ``"worst"`` (ISO 8608 class H,
+    :data:`WORST_CLASS`), a class letter A-H, or an RI (a number): what the online selector and
+    the MPC preview assume for terrain not yet measured.
 
     Parameters
     ----------
