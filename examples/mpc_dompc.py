@@ -156,7 +156,7 @@ else:
     mpc.set_nl_cons("cap_end", v + a * dt - cap, ub=-BACK_OFF)
     # every stage can still brake to the unseen terrain's speed where the measured terrain ends,
     # so that the next step has a plan too
-    room = ca.fmax(measured_to - s, 0)
+    room = ca.fmax(measured_to - (s + v * dt + a * dt**2 / 2), 0)  # from where the stage ends
     mpc.set_nl_cons("braking", (v + a * dt) ** 2 - 2 * vehicle.max_decel_mps2 * room, ub=v_unseen**2)
 mpc.set_nl_cons("force", rows.g, ub=-BACK_OFF)
 tvp = mpc.get_tvp_template()

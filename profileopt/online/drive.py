@@ -20,7 +20,7 @@ import numpy as np
 
 from ..core.segments import route_roughness_windows
 from ..defaults import DEFAULT_MODEL, DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M
-from ..errors import InputError, PlanningError
+from ..errors import InfeasibleError, InputError
 from ..io.atomic import atomic_write
 from ..physics.forces import get_model
 from ..physics.simulate import boundary_times_s, simulate_quarter_car
@@ -56,8 +56,8 @@ class Drive:
     Attributes
     ----------
     s_m, speed_mps : numpy.ndarray, shape (K,)
-        The driven profile: positions (m) and speeds (m/s), constant acceleration in between
-        (every cycle's end and every segment boundary crossed).
+        The driven profile: positions (m) and speeds (m/s) at every cycle's end, constant
+        acceleration in between.
     time_s : numpy.ndarray, shape (K,)
         Time at each position (s), from 0.
     knot_cycle : numpy.ndarray of int, shape (K,)
@@ -68,7 +68,9 @@ class Drive:
     cycle_compute_s : numpy.ndarray, shape (C,)
         Wall time of the selector per cycle, sensing and update (s).
     emergencies : int
-        Cycles in which the selector had to brake as hard as it may.
+        Cycles whose command said the terrain was worse than assumed
+        (:attr:`~.selector.Command.emergency`: braking harder than the jerk bound or as hard as
+        the vehicle may, or ground already driven over above its caps).
     travel_time_s : float
         Time to drive the route (s).
     worst_window_ratio : float
@@ -249,8 +251,10 @@ def drive(route: "Route", vehicle: "Vehicle", *, sensor_range_m: float = DEFAULT
         if cmd.position_next_m <= pos + 1e-12:
             stuck += 1
             if stuck > max(100, int(10.0 / cycle_s)):
-                raise PlanningError(f"{route.source}: the vehicle stopped at {pos:.6g} m and the selector did not "
-                                    "move it for 10 s; please report this with the route and vehicle")
+                raise InfeasibleError(
+                    f"{route.source}: the vehicle stopped at {pos:.6g} m and no command moved it on for 10 s: a climb "
+                    "steeper than its drive can hold, or a cap of 0 m/s there; 'profileopt plan' on the route "
+                    "names the reason")
         else:
             stuck = 0
             knots_s.append(cmd.position_next_m)
@@ -300,10 +304,10 @@ DRIVE_COLUMNS = ("time_s", "s_m", "speed_mps", "accel_mps2", "edge_m", "edge_spe
 def write_drive(drive: Drive, path: str | os.PathLike, *, settings: dict[str, object]) -> None:
     """Write a driven profile atomically: a settings comment line, the header, one row per knot.
 
-    Each row is a knot of the driven profile (every cycle's start and every segment boundary
-    crossed): the time (s), position (m) and speed (m/s) there, the constant acceleration
-    driven to the next knot (m/s^2), and the planning edge (m) and the horizon's speed there
-    (m/s) of the cycle being driven. Numbers have 9 significant digits.
+    Each row is a knot of the driven profile (every cycle's start): the time (s), position (m)
+    and speed (m/s) there, the constant acceleration driven to the next knot (m/s^2), and the
+    planning edge (m) and the horizon's speed there (m/s) of the cycle being driven. Numbers
+    have 9 significant digits.
 
     Parameters
     ----------

@@ -90,13 +90,16 @@ DEFAULT_ONLINE_SEGMENT_LENGTH_M = 1.0
 #: The shortest segment (m): the widest gap between samples of measured terrain, so that every
 #: segment holds samples.
 MIN_ONLINE_SEGMENT_LENGTH_M = MAX_ROUGHNESS_SPACING_M
-#: The most segments a horizon may hold (sensor_range_m / segment_length_m): a bound on the time
-#: and memory of a cycle.
+#: The most segments a horizon may hold (sensor_range_m / segment_length_m, and what a cycle
+#: plans over): a bound on the time and memory of a cycle.
 MAX_HORIZON_SEGMENTS = 10_000
+#: The most segments one chunk of work computes: samples given far ahead at once are planned a
+#: bounded piece at a time.
+MAX_CHUNK_SEGMENTS = 200
 #: Where a segment's higher cap begins after the boundary's lower one (m): the envelope's
 #: step up, a knot this far after the boundary.
 JUMP_M = 1e-6
-#: The steepest descent (rise over run) assumed on unseen ground when none is given: 10 %.
+#: The steepest descent (rise over run) assumed on unseen ground when none is given: 5 %.
 DEFAULT_UNSEEN_DESCENT = 0.05
 #: The assumption for terrain not yet measured when none is given.
 DEFAULT_UNSEEN = "worst"
@@ -275,7 +278,7 @@ class SpeedSelector:
     max_jerk_mps3 : float, optional
         Jerk bound (m/s^3): the command's acceleration changes by at most this times
         ``cycle_s`` per cycle (:mod:`.tracking`); None: the vehicle's; inf: none.
-    unseen_descent : float, default :data:`DEFAULT_UNSEEN_DESCENT` (0.1)
+    unseen_descent : float, default :data:`DEFAULT_UNSEEN_DESCENT` (0.05)
         The steepest descent assumed on unseen ground (rise over run), for a vehicle that
         plans on grades: the braking it allows there.
 
@@ -317,6 +320,10 @@ class SpeedSelector:
         if not (math.isfinite(vend_mps) and 0.0 <= vend_mps <= vehicle.max_speed_mps):
             raise InputError(f"vend_mps = {vend_mps!r}: must be a speed from 0 to the vehicle's top speed "
                              f"{vehicle.max_speed_mps:g} m/s")
+        if path_tolerance_m is not None and (isinstance(path_tolerance_m, bool) or not isinstance(
+                path_tolerance_m, (int, float)) or not (math.isfinite(path_tolerance_m) and path_tolerance_m > 0)):
+            raise InputError(f"path_tolerance_m = {path_tolerance_m!r}: must be a finite number > 0 (m), or None to "
+                             "estimate it")
         self.vehicle = vehicle
         self.model = model
         self.sensor_range_m = float(sensor_range_m)
@@ -444,6 +451,9 @@ class SpeedSelector:
             next(self._work)
         except StopIteration:
             self._work = None
+        except BaseException:
+            self._work = None  # not a dead generator: the next cycle starts the chunk again
+            raise
 
     def _chunk_stages(self) -> Iterator[None]:
         """Final speeds of the segments whose neighbourhood is measured (module docstring, 1), in
@@ -461,6 +471,8 @@ class SpeedSelector:
         first = self._segments.end
         if last <= first or (not at_end and last - first < self._chunk):
             return
+        if last - first > MAX_CHUNK_SEGMENTS:  # samples far ahead at once: a bounded piece per chunk
+            last, at_end = first + MAX_CHUNK_SEGMENTS, False
         lo_m = max(self._boundary_m(first) - self.margin_m, self.terrain.measured_from_m)
         hi_m = measured if at_end else min(measured, self._boundary_m(last) + self.margin_m)
         route = self.terrain.stretch(lo_m, hi_m)
@@ -566,7 +578,11 @@ class SpeedSelector:
         self._advance()
         segs = self._segments
         k0 = self._segment_of(pos)
-        segs.forget_before(k0)
+        if k0 < segs.offset:
+            raise InputError(f"position_m = {pos!r} m is {self._boundary_m(segs.offset) - pos:.3g} m behind the "
+                             f"earliest position still planned ({self._boundary_m(segs.offset):.6g} m): the selector "
+                             f"keeps {self.margin_m:g} m behind the vehicle; give positions that go back no further")
+        segs.forget_before(self._segment_of(pos - self.margin_m))  # some way back: positions jitter
         behind = min(pos, self.planned_to_m) - 2.0 * self.margin_m  # nothing before is needed again
         self.terrain.forget_before(behind)
         if self._driven and self._driven[0][0] < behind:
@@ -577,13 +593,12 @@ class SpeedSelector:
             if v0 > 0:
                 return self._braking(pos, v0, pos, t0, f"{v0:.4g} m/s at the path's end ({self.end_m:.6g} m)")
             return self._finish(pos, v0, 0.0, np.array([pos]), np.array([v0]), pos, t0, emergency=False, note="")
-        rows = np.arange(max(k0, segs.offset), segs.end) - segs.offset
-        if k0 < segs.offset:  # behind what is kept: nothing measured is known here
-            rows = rows[:0]
+        rows = np.arange(k0, min(segs.end, k0 + MAX_HORIZON_SEGMENTS)) - segs.offset
         where = np.concatenate([[pos], self._boundary_m(rows + segs.offset + 1)])
         top, decel, accel = segs.top[rows], segs.decel[rows], segs.accel[rows]
         grade_hi, power_binds = segs.grade_hi[rows], bool(np.any(segs.power_binds[rows]))
         edge = float(where[-1])
+        finished = finished and k0 + MAX_HORIZON_SEGMENTS >= segs.end
         if not finished:  # the unseen terrain: [0, v_unseen], long enough to stop from it
             vu = self.unseen_speed_mps
             # braking on unseen ground: on the assumed descent, and no harder than on the ground

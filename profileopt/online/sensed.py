@@ -106,21 +106,25 @@ class SensedTerrain:
         has_xy = x_m is not None or y_m is not None
         if has_xy and (x_m is None or y_m is None):
             raise InputError(f"{self.source}: give both x_m and y_m (the path in the horizontal plane) or neither")
+        columns = {}
+        for name, values in (("x_m", x_m), ("y_m", y_m), ("speed_limit_mps", speed_limit_mps)):
+            if values is not None:
+                column = np.atleast_1d(np.asarray(values, dtype=float))
+                if column.shape != s.shape:
+                    raise InputError(f"{self.source}: {name} has shape {column.shape} but s_m has {s.shape}; give one "
+                                     "value per sample")
+                columns[name] = column
         if s.size == 0:
             return
-        if self._has_xy is None:
-            self._has_xy = has_xy
-        elif self._has_xy != has_xy:
+        if self._has_xy is not None and self._has_xy != has_xy:
             raise InputError(f"{self.source}: x_m and y_m were given with {'earlier' if self._has_xy else 'these'} "
                              "samples but not with the others; give them with every call or never")
         rows = np.full((s.size, 5), np.nan)
         rows[:, 0], rows[:, 1] = s, z
         if has_xy:
-            rows[:, 2] = np.asarray(x_m, dtype=float).reshape(s.shape)
-            rows[:, 3] = np.asarray(y_m, dtype=float).reshape(s.shape)
+            rows[:, 2], rows[:, 3] = columns["x_m"], columns["y_m"]
         if speed_limit_mps is not None:
-            self._has_limit = True
-            rows[:, 4] = np.asarray(speed_limit_mps, dtype=float).reshape(s.shape)
+            rows[:, 4] = columns["speed_limit_mps"]
         checked = rows[:, :4] if has_xy else rows[:, :2]
         if not np.all(np.isfinite(checked)):
             bad = int(np.flatnonzero(~np.all(np.isfinite(checked), axis=1))[0])
@@ -128,6 +132,8 @@ class SensedTerrain:
                              "passing the samples")
         if speed_limit_mps is not None and not np.all(rows[:, 4] > 0):
             raise InputError(f"{self.source}: speed limits must be numbers > 0 (m/s)")
+        self._has_xy = has_xy  # only once every check has passed
+        self._has_limit = self._has_limit or speed_limit_mps is not None
         floor = self.measured_to_m if self._measured.shape[0] else self._from_m - self.max_spacing_m
         rows = rows[rows[:, 0] > floor]
         if not rows.shape[0]:

@@ -121,7 +121,7 @@ def _manoeuvre_decel(where: np.ndarray, decel_seg: np.ndarray, s1: np.ndarray, v
     first = np.clip(np.searchsorted(where, s1, side="right") - 1, 0, pieces - 1)
     decel = np.maximum(decel_seg[first], MIN_BRAKING_MPS2)
     span = np.arange(pieces)[None, :]
-    for _ in range(8):
+    for _ in range(pieces + 1):  # D only falls, a piece at a time: a fixed point within as many rounds
         ramp = np.maximum(a1 + decel, 0.0) / jerk if np.isfinite(jerk) else 0.0 * v1
         # the distance the ramp and the stop at -D can cover: at most v1 ramp + a1+ ramp^2 / 2
         # + v^2 / (2 D), v the largest speed in the ramp
@@ -215,7 +215,7 @@ def jerk_limited_step(position_m: float, speed_mps: float, accel_mps2: float, *,
     hi = min(a + step, max_accel_mps2)
     decel = np.maximum(np.asarray(decel_mps2, dtype=float), MIN_BRAKING_MPS2)
     d_now = float(decel[0])
-    lo = max(a - step, -d_now)
+    lo = min(max(a - step, -d_now), hi)  # a bound that falls faster than the jerk allows: the bound
     if not np.isfinite(step):
         lo, hi = -d_now, max_accel_mps2
     if hi >= lo:

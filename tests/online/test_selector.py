@@ -132,3 +132,31 @@ def test_samples_that_start_a_little_after_the_path_are_planned(atv):
         command = selector.update(0.0, 0.0)
     assert selector.planned_to_m >= 40.0
     assert command.edge_m >= 40.0
+
+
+def test_a_position_that_jitters_back_keeps_the_caps_and_one_far_back_is_refused(atv):
+    """Localisation jitter: a position a little behind the last one still sees the caps ahead
+    (here a speed limit of 0.5 m/s from 10.5 m); one behind all that is kept is refused."""
+    s = np.arange(0.0, 60.0001, 0.05)
+    limit = np.where(s >= 10.5, 0.5, 20.0)
+    selector = SpeedSelector(atv, sensor_range_m=50.0, start_m=0.0, end_m=60.0)
+    selector.sense(s, np.zeros(s.size), speed_limit_mps=limit)
+    for _ in range(30):
+        selector.update(0.0, 0.0)
+    for position in (10.001, 9.999, 9.5):
+        command = selector.update(position, 0.5, 0.0)
+        assert command.edge_m > 40.0  # the terrain planned ahead is still known
+        inside = command.horizon_s_m >= 10.0  # the segments holding the limit's samples
+        assert np.all(command.horizon_speed_mps[inside] <= 0.5 + 1e-9)
+    with pytest.raises(InputError, match="behind the earliest position still planned"):
+        selector.update(0.0, 0.5, 0.0)
+
+
+def test_samples_with_columns_of_the_wrong_length_are_one_line_and_change_nothing(atv):
+    selector = SpeedSelector(atv, sensor_range_m=50.0)
+    with pytest.raises(InputError, match="x_m has shape"):
+        selector.sense([0.0, 0.05, 0.1], [0.0, 0.0, 0.0], x_m=[0.0, 0.05], y_m=[0.0, 0.0])
+    with pytest.raises(InputError, match="speed_limit_mps has shape"):
+        selector.sense([0.0, 0.05, 0.1], [0.0, 0.0, 0.0], speed_limit_mps=[1.0, 2.0])
+    selector.sense([0.0, 0.05, 0.1], [0.0, 0.0, 0.0])  # refused calls left no trace
+    assert selector.terrain.measured_to_m == pytest.approx(0.1)

@@ -72,3 +72,18 @@ def test_without_a_jerk_bound_it_follows_the_envelope_at_the_acceleration_bound(
                              decel_mps2=np.full(1, D), jerk_mps3=np.inf, cycle_s=DT)
     assert step.accel_mps2 == pytest.approx(A_MAX)
     assert step.speed_mps == pytest.approx(5.0 + A_MAX * DT)
+
+
+def test_the_manoeuvres_deceleration_is_a_bound_of_every_piece_it_crosses():
+    """Deceleration bounds falling from 4 to 0.05 m/s^2 over 200 m: the braking manoeuvre
+    from 20 m/s may assume no more than the least bound of the pieces it crosses (checked by
+    integrating the manoeuvre it describes)."""
+    from profileopt.online.tracking import _manoeuvre_decel
+
+    where = np.linspace(0.0, 2000.0, 2001)
+    decel = np.interp(where[:-1], [0.0, 200.0, 2000.0], [4.0, 0.05, 0.05])
+    d = float(_manoeuvre_decel(where, decel, np.array([0.0]), np.array([20.0]), np.array([0.0]), J)[0])
+    ramp = d / J  # from a = 0 to -d
+    stop_m = 20.0 * ramp - J * ramp**3 / 6.0 + (20.0 - 0.5 * J * ramp**2) ** 2 / (2.0 * d)
+    crossed = decel[: int(np.ceil(stop_m)) + 1]
+    assert d <= crossed.min() * (1 + 1e-12)
