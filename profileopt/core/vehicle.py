@@ -18,7 +18,7 @@ from pathlib import Path
 from ..errors import InputError
 
 __all__ = ["Vehicle", "load_vehicle", "bundled_vehicles", "vehicle_reference", "names_vehicle_file", "PLAUSIBLE_RANGES",
-           "OPTIONAL_KEYS"]
+           "OPTIONAL_KEYS", "require_vehicle"]
 
 # key -> (unit, what it is). Order is the order of the dataclass fields and of the files.
 _UNITS: dict[str, tuple[str, str]] = {
@@ -390,3 +390,38 @@ def _read_vehicle_file(path: Path) -> str:
     from ..io.table import read_text
 
     return read_text(path, "vehicle file", max_bytes=inputs.MAX_VEHICLE_BYTES)
+
+
+def require_vehicle(value: object, where: str) -> Vehicle:
+    """``value`` if it is a :class:`Vehicle`; else one line saying what was given and what to give.
+
+    The mistakes made on the way (issue 31): a vehicle's name where a Vehicle is expected, or a
+    number there (arguments swapped with ``e_max_m`` or a speed).
+
+    Parameters
+    ----------
+    value : object
+        What was passed as the vehicle.
+    where : str
+        The function or class it was passed to, for the message.
+
+    Returns
+    -------
+    Vehicle
+
+    Raises
+    ------
+    InputError
+        ``value`` is not a Vehicle.
+    """
+    if isinstance(value, Vehicle):
+        return value
+    if value is None:
+        raise InputError(f"{where}: no vehicle was given; give one: profileopt.load_vehicle('atv')")
+    if isinstance(value, (str, Path)):
+        raise InputError(f"{where}: vehicle = {str(value)!r} is a name or a file; give a Vehicle: "
+                         f"profileopt.load_vehicle({str(value)!r})")
+    if isinstance(value, (int, float)) or hasattr(value, "shape"):  # a number, an array, a CasADi symbol
+        raise InputError(f"{where}: vehicle = {value!r} is a {type(value).__name__}, where a Vehicle goes: are two "
+                         "arguments swapped (e_max_m, a speed)? Give the vehicle as profileopt.load_vehicle('atv')")
+    raise InputError(f"{where}: vehicle is a {type(value).__name__}; give a Vehicle: profileopt.load_vehicle('atv')")

@@ -118,7 +118,7 @@ import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core.vehicle import Vehicle
+from ..core.vehicle import Vehicle, require_vehicle
 from ..errors import InputError
 from ..physics.forces import (
     DEFAULT_MODEL,
@@ -273,6 +273,10 @@ def force_constraints(
     spec = get_model(model)
     if (ri is None) == (e_max_m is None):
         raise InputError("force_constraints: give exactly one of ri (roughness index) and e_max_m (metres)")
+    if isinstance(e_max_m, Vehicle) or isinstance(ri, Vehicle):
+        raise InputError("force_constraints: e_max_m or ri is a Vehicle: give (speed_mps, vehicle, e_max_m=...) "
+                         "or ri=...")
+    vehicle = require_vehicle(vehicle, "force_constraints")
     terrain = "ri" if e_max_m is None else "e_max"
     if terrain == "e_max":
         check_e_max_model(model)

@@ -30,13 +30,14 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from typing import TYPE_CHECKING, Any, Iterator
+from typing import Any, Iterator
 
 import casadi as ca
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core.route import Route
+from ..core.vehicle import Vehicle, require_vehicle
 from ..core.symbolic import is_symbolic
 from ..errors import InputError
 from ..physics.forces import (
@@ -56,8 +57,6 @@ from ..terrain.roughness import (
     worst_case_elevation,
 )
 
-if TYPE_CHECKING:
-    from ..core.vehicle import Vehicle
 
 __all__ = [
     "ConstraintTriple",
@@ -150,12 +149,15 @@ MAX_ENVELOPE_INTERVALS = 200_000
 #: Relative margin added to the envelope: it covers the rounding of the spline's evaluation
 #: (a few 1e-16 of the largest e_max), so that "never below" holds in floating point too.
 _ROUNDING_MARGIN = 1e-12
+#: The least median spacing (m) of a route's samples the envelopes take: closer samples are
+#: positions given in km (a route sampled every 5 cm, in km, is 5e-5 apart).
+_LEAST_SPACING_M = 1e-3
 
 
 def terrain_envelope(
     positions_m: ArrayLike,
     elevations_m: ArrayLike,
-    vehicle: "Vehicle",
+    vehicle: "Vehicle | None" = None,
     *,
     window_m: float = 5.0,
     reach_m: float = 0.0,
@@ -198,7 +200,9 @@ def terrain_envelope(
     elevations_m : array_like, shape (M,)
         Elevation of each sample (m).
     vehicle : Vehicle
-        Supplies the ground clearance h and the confidence of Eq. (8).
+        Supplies the ground clearance h and the confidence of Eq. (8). Required: the default
+        None is there only so that a mistaken ``terrain_envelope(route, vehicle)`` gets a
+        message, and is refused.
     window_m : float, default 5.0
         Roughness window length W (m), as ``roughness_window_m`` of the planner.
     reach_m : float, default 0.0
@@ -225,6 +229,8 @@ def terrain_envelope(
         non-finite ``reach_m``, a ``knot_spacing_m`` that is not > 0, or more than
         :data:`MAX_ENVELOPE_INTERVALS` knot intervals.
     """
+    _refuse_route("terrain_envelope", positions_m)
+    vehicle = require_vehicle(vehicle, "terrain_envelope")
     window = _finite_number(window_m, "window_m", "m")
     if not window > 0:
         raise InputError(f"terrain_envelope: window_m = {window_m!r} m must be > 0 (the roughness window length)")
@@ -250,7 +256,7 @@ def terrain_envelope(
 def step_speed_envelope(
     positions_m: ArrayLike,
     elevations_m: ArrayLike,
-    vehicle: "Vehicle",
+    vehicle: "Vehicle | None" = None,
     *,
     reach_m: float = 0.0,
     knot_spacing_m: float = 0.25,
@@ -280,7 +286,8 @@ def step_speed_envelope(
         Elevation of each sample (m).
     vehicle : Vehicle
         Supplies the quarter car, the wheel radius, the top speed and
-        ``max_transmitted_force_n``.
+        ``max_transmitted_force_n``. Required (None is refused with a message, as by
+        :func:`terrain_envelope`).
     reach_m : float, default 0.0
         How far beyond s a stage can take the vehicle (m), >= 0.
     knot_spacing_m : float, default 0.25
@@ -299,6 +306,8 @@ def step_speed_envelope(
         ``knot_spacing_m`` that is not > 0, or more than :data:`MAX_ENVELOPE_INTERVALS` knot
         intervals.
     """
+    _refuse_route("step_speed_envelope", positions_m)
+    vehicle = require_vehicle(vehicle, "step_speed_envelope")
     grid = _SplineGrid.of("step_speed_envelope", positions_m, elevations_m, reach_m, knot_spacing_m)
     reach, h = grid.reach_m, grid.h_m
     top = float(vehicle.max_speed_mps)
@@ -339,6 +348,10 @@ class _SplineGrid:
         if not h > 0:
             raise InputError(f"{name}: knot_spacing_m = {knot_spacing_m!r} m must be > 0")
         s0, s1 = float(route.s_m[0]), float(route.s_m[-1])
+        spacing = float(np.median(np.diff(route.s_m)))
+        if spacing < _LEAST_SPACING_M:
+            raise InputError(f"{name}: the samples are {spacing:.3g} m apart along the route: positions in km? give "
+                             "them in m")
         n_intervals = math.ceil((s1 - s0) / h) + 8  # 4 flat intervals beyond each end
         if n_intervals > MAX_ENVELOPE_INTERVALS:
             raise InputError(
@@ -417,6 +430,12 @@ def spline_value(s_m: Any, coef: Any, *, start_m: Any, h_m: float, n_intervals: 
     b0, b1, b2, b3 = selected
     value = b0 + u * (b1 + u * (b2 + u * b3))
     return ca.if_else(ca.fabs(s_m) < math.inf, value, math.nan)
+
+
+def _refuse_route(name: str, positions_m: Any) -> None:
+    """One line for a Route given where its arrays go (``terrain_envelope(route, vehicle)``)."""
+    if isinstance(positions_m, Route):
+        raise InputError(f"{name}: positions_m is a Route; give its arrays: {name}(route.s_m, route.z_m, vehicle)")
 
 
 def _finite_number(value: Any, name: str, unit: str) -> float:
@@ -567,6 +586,14 @@ def interval_force_constraints(
         elevation, ``e_min_m`` above ``e_max_m``, or a negative speed given as a number.
         A symbolic negative or NaN elevation gives NaN rows, never g <= 0.
     """
+    if isinstance(e_max_m, Vehicle) and not isinstance(vehicle, Vehicle):
+        raise InputError("interval_force_constraints: e_max_m is a Vehicle and vehicle is not: the arguments are "
+                         "swapped; give (v_start, v_end, e_max_m, vehicle)")
+    vehicle = require_vehicle(vehicle, "interval_force_constraints")
+    kinds = {type(x).__name__ for x in (v_start, v_end, e_max_m, e_min_m) if isinstance(x, (ca.SX, ca.MX))}
+    if kinds == {"SX", "MX"}:
+        raise InputError("interval_force_constraints: the speeds and e_max_m mix SX and MX symbols; give all of one "
+                         "kind (call an SX Function on MX symbols, or expand an MX Function to SX)")
     spec = get_model(model)
     check_e_max_model(model)
     for name, value in (("e_max_m", e_max_m), ("e_min_m", e_min_m)):

@@ -128,11 +128,9 @@ class TerrainPreview:
     def __init__(self, vehicle: "Vehicle", *, horizon_m: float, reach_m: float = 0.0,
                  knot_spacing_m: float = DEFAULT_PREVIEW_KNOT_SPACING_M, window_m: float = 5.0,
                  unseen: str | float = "worst") -> None:
-        from ..core.vehicle import Vehicle
+        from ..core.vehicle import require_vehicle
 
-        if not isinstance(vehicle, Vehicle):
-            raise InputError(f"TerrainPreview: vehicle = {vehicle!r} is a {type(vehicle).__name__}; give a Vehicle "
-                             "(profileopt.load_vehicle('atv'))")
+        vehicle = require_vehicle(vehicle, "TerrainPreview")
         for name, value, least in (("horizon_m", horizon_m, "> 0"), ("knot_spacing_m", knot_spacing_m, "> 0"),
                                    ("window_m", window_m, "> 0"), ("reach_m", reach_m, ">= 0")):
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or (

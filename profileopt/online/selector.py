@@ -295,11 +295,9 @@ class SpeedSelector:
                  path_tolerance_m: float | None = DEFAULT_PATH_TOLERANCE_M, start_m: float = 0.0,
                  end_m: float | None = None, vend_mps: float = 0.0, cycle_s: float = DEFAULT_CYCLE_S,
                  max_jerk_mps3: float | None = None, unseen_descent: float = DEFAULT_UNSEEN_DESCENT) -> None:
-        from ..core.vehicle import Vehicle
+        from ..core.vehicle import require_vehicle
 
-        if not isinstance(vehicle, Vehicle):
-            raise InputError(f"vehicle = {vehicle!r}: give a Vehicle (profileopt.load_vehicle('atv')), not a "
-                             f"{type(vehicle).__name__}")
+        vehicle = require_vehicle(vehicle, "SpeedSelector")
         if model not in MODEL_KEYS:
             raise InputError(f"model = {model!r}: the online selector takes one of {', '.join(MODEL_KEYS)} (the "
                              "dynamic model simulates the whole route, which is not known online)")

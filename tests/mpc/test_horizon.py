@@ -26,9 +26,11 @@ from profileopt import InputError, load_vehicle
 from profileopt.mpc.constraints import (
     ForceConstraints,
     add_force_constraints,
+    force_constraints,
     force_n,
     force_peak_ratio,
     interval_force_constraints,
+    step_speed_envelope,
     terrain_envelope,
 )
 from profileopt.io import read_route
@@ -401,3 +403,46 @@ def test_interval_rows_have_finite_derivatives_at_rest_and_on_smooth_ground(e_mi
     a = np.asarray(interval_force_constraints(0.5, 2.0, 0.05, RESONANT).g)
     b = np.asarray(interval_force_constraints(0.5, 2.0, 0.05, RESONANT, e_min_m=1e-12).g)
     np.testing.assert_array_equal(a, b)
+
+
+# --- the mistakes made on the way (issue 31): one line each, saying what to give -----------
+
+
+def _errors_of(call) -> str:
+    from profileopt.errors import InputError
+
+    with pytest.raises(InputError) as info:
+        call()
+    return str(info.value)
+
+
+def test_a_vehicle_name_where_a_vehicle_goes_says_how_to_load_it():
+    s, z = _kerb_route()
+    assert "profileopt.load_vehicle('atv')" in _errors_of(lambda: terrain_envelope(s, z, "atv"))
+    assert "profileopt.load_vehicle('atv')" in _errors_of(lambda: step_speed_envelope(s, z, "atv"))
+
+
+def test_swapped_arguments_are_named():
+    assert "swapped" in _errors_of(lambda: interval_force_constraints(1.0, 2.0, ATV, 0.05))
+    assert "is a Vehicle" in _errors_of(lambda: force_constraints(1.0, 0.05, e_max_m=ATV))
+    s, z = _kerb_route()
+    assert "swapped" in _errors_of(lambda: step_speed_envelope(s, z, 3.0))
+
+
+def test_a_route_where_its_arrays_go_says_which_arrays():
+    from profileopt.core.route import Route
+
+    s, z = _kerb_route()
+    route = Route(s_m=s, z_m=z, source="kerb")
+    assert "route.s_m, route.z_m" in _errors_of(lambda: terrain_envelope(route, ATV))
+    assert "route.s_m, route.z_m" in _errors_of(lambda: step_speed_envelope(route, ATV))
+
+
+def test_sx_speeds_with_an_mx_elevation_are_one_line():
+    message = _errors_of(lambda: interval_force_constraints(ca.SX.sym("v0"), ca.SX.sym("v1"), ca.MX.sym("e"), ATV))
+    assert "mix SX and MX" in message
+
+
+def test_positions_in_km_are_caught():
+    s, z = _kerb_route()
+    assert "positions in km?" in _errors_of(lambda: terrain_envelope(s / 1000.0, z, ATV))
