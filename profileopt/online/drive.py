@@ -253,8 +253,8 @@ def drive(route: "Route", vehicle: "Vehicle", *, sensor_range_m: float = DEFAULT
             if stuck > max(100, int(10.0 / cycle_s)):
                 raise InfeasibleError(
                     f"{route.source}: the vehicle stopped at {pos:.6g} m and no command moved it on for 10 s: a climb "
-                    "steeper than its drive can hold, or a cap of 0 m/s there; 'profileopt plan' on the route "
-                    "names the reason")
+                    "steeper than its drive can hold, a descent too steep to brake on, or a cap of 0 m/s ahead; "
+                    "'profileopt plan' on the route names the reason")
         else:
             stuck = 0
             knots_s.append(cmd.position_next_m)

@@ -72,7 +72,7 @@ from ..planning.limits import PlanContext, default_limits
 from ..terrain.assumed import unseen_roughness
 from ..terrain.geometry import route_geometry
 from .sensed import SensedTerrain
-from .tracking import braking_margin_m, jerk_limited_step
+from .tracking import MIN_BRAKING_MPS2, braking_margin_m, jerk_limited_step
 
 if TYPE_CHECKING:
     from ..core.vehicle import Vehicle
@@ -603,6 +603,7 @@ class SpeedSelector:
             # in sight (else the ground it turns out to be could lower the envelope already
             # driven under, through the bounds of a cycle that crosses into it)
             d = min(self._tail_decel, float(np.min(decel))) if decel.size else self._tail_decel
+            d = max(d, MIN_BRAKING_MPS2)  # a descent too steep to brake on in sight: the least braking
             # long enough that its end does not hold the speed at the edge below v_unseen, even
             # braking with the jerk bound; two pieces, so that a vehicle at rest may start into it
             tail = vu * vu / (2.0 * d) + braking_margin_m(vu, d, self.max_jerk_mps3) + self.segment_length_m
@@ -630,8 +631,9 @@ class SpeedSelector:
         upper = np.concatenate([[top_b[0]], np.minimum(top_b[:-1], top_b[1:]), [min(top_b[-1], end_b)]])
         braking = braking_profile(upper, length, decel)
         if v0 * v0 > braking[0] * (1 + 1e-9) + 1e-12:  # faster than any limit-keeping profile allows
-            return self._braking(pos, v0, edge, t0, f"{v0:.4g} m/s, where at most {math.sqrt(braking[0]):.4g} m/s "
-                                                    "keeps the limits of the terrain ahead")
+            allowed = math.sqrt(max(braking[0], 0.0))  # < 0: a descent ahead too steep to brake on
+            return self._braking(pos, v0, edge, t0, f"{v0:.4g} m/s, where at most {allowed:.4g} m/s keeps the "
+                                                    "limits of the terrain ahead")
         knots, envelope = _envelope(where, top_b, braking, decel)
         power = None
         if self._power is not None and power_binds:

@@ -30,7 +30,7 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["TrackingStep", "jerk_limited_step", "braking_margin_m", "RAMP_SAMPLES", "CANDIDATES"]
+__all__ = ["TrackingStep", "jerk_limited_step", "braking_margin_m", "RAMP_SAMPLES", "CANDIDATES", "MIN_BRAKING_MPS2"]
 
 #: Pieces of the ramp of the braking manoeuvre checked against the envelope.
 RAMP_SAMPLES = 12

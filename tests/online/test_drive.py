@@ -103,8 +103,9 @@ def test_a_route_of_assumed_roughness_has_nothing_to_sense(atv):
         drive(route, atv)
 
 
-def test_a_climb_the_drive_cannot_hold_is_refused_not_reported_as_a_bug(atv):
+@pytest.mark.parametrize("grade", [0.30, -0.50])  # a climb the drive cannot hold, a descent too steep to brake on
+def test_a_grade_the_vehicle_cannot_drive_is_refused_not_reported_as_a_bug(atv, grade):
     s = np.arange(0.0, 80.0001, 0.05)
-    z = np.where(s > 40.0, 0.30 * (s - 40.0), 0.0)  # a 30 % climb from 40 m
-    with pytest.raises(InputError, match="a climb steeper than its drive can hold"):
-        drive(Route(s_m=s, z_m=z, source="climb"), atv, sensor_range_m=30.0)
+    z = np.where(s > 40.0, grade * (s - 40.0), 0.0)
+    with pytest.raises(InputError, match="a climb steeper than its drive can hold, a descent too steep"):
+        drive(Route(s_m=s, z_m=z, source="grade"), atv, sensor_range_m=30.0)
