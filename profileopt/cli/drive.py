@@ -18,7 +18,7 @@ from .paths import vehicle_input
 from .track import number_argument
 
 #: Defaults of the online selector, repeated here so that ``--help`` needs no numerical
-#: package; tests/cli/test_drive.py checks they equal :mod:`profileopt.online.selector`'s.
+#: package; tests/cli/test_drive_command.py checks they equal :mod:`profileopt.online.selector`'s.
 SENSOR_RANGE_M, CYCLE_S, SEGMENT_LENGTH_M, UNSEEN, UNSEEN_DESCENT = 50.0, 0.1, 1.0, "worst", 0.05
 
 
