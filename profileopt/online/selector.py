@@ -72,7 +72,7 @@ from ..planning.limits import PlanContext, default_limits
 from ..terrain.assumed import unseen_roughness
 from ..terrain.geometry import route_geometry
 from .sensed import SensedTerrain
-from .tracking import MIN_BRAKING_MPS2, braking_margin_m, jerk_limited_step
+from .tracking import MIN_BRAKING_MPS2, braking_margin_m, cycle_end, jerk_limited_step
 
 if TYPE_CHECKING:
     from ..core.vehicle import Vehicle
@@ -663,12 +663,8 @@ class SpeedSelector:
     def _finish(self, pos: float, v0: float, accel: float, where: np.ndarray, speed: np.ndarray, edge: float,
                 t0: float, *, emergency: bool, note: str) -> Command:
         """A command that holds ``accel`` for one cycle (stopping at rest), with the given horizon."""
-        v1 = max(v0 + accel * self.cycle_s, 0.0)
-        if accel < 0 and v1 == 0.0:
-            s1 = pos + v0 * v0 / (2.0 * -accel)
-        else:
-            s1 = pos + (v0 + v1) / 2.0 * self.cycle_s
-        self._last_accel = accel if v1 > 0 else 0.0
+        ends = cycle_end(pos, v0, np.array([accel]), self.cycle_s)
+        s1, v1, self._last_accel = (float(x[0]) for x in ends)
         return Command(speed_mps=v1, accel_mps2=accel, position_next_m=s1, horizon_s_m=where.copy(),
                        horizon_speed_mps=speed.copy(), edge_m=edge, edge_speed_mps=float(speed[-1]),
                        unseen_speed_mps=self.unseen_speed_mps, emergency=emergency, note=note,

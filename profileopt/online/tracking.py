@@ -30,7 +30,7 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["TrackingStep", "jerk_limited_step", "braking_margin_m", "RAMP_SAMPLES", "CANDIDATES", "MIN_BRAKING_MPS2"]
+__all__ = ["TrackingStep", "jerk_limited_step", "cycle_end", "braking_margin_m", "RAMP_SAMPLES", "CANDIDATES", "MIN_BRAKING_MPS2"]
 
 #: Pieces of the ramp of the braking manoeuvre checked against the envelope.
 RAMP_SAMPLES = 12
@@ -86,8 +86,24 @@ def braking_margin_m(speed_mps: float, decel_mps2: float, jerk_mps3: float) -> f
     return 0.0 if not np.isfinite(jerk_mps3) else speed_mps * decel_mps2 / jerk_mps3
 
 
-def _cycle(s: float, v: float, a: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """End of a cycle at constant acceleration a (K,), stopping at rest: s1, v1, a held."""
+def cycle_end(s: float, v: float, a: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where a cycle held at constant acceleration ends, stopping at rest if it comes to rest.
+
+    Parameters
+    ----------
+    s, v : float
+        Position (m) and speed (m/s, >= 0) at the cycle's start.
+    a : numpy.ndarray, shape (K,)
+        Accelerations held (m/s^2), one per candidate.
+    dt : float
+        The cycle (s), > 0.
+
+    Returns
+    -------
+    s1, v1, a_after : numpy.ndarray, shape (K,)
+        Position (m) and speed (m/s) at the cycle's end, and the acceleration then (m/s^2):
+        ``a``, or 0 at rest.
+    """
     v_end = v + a * dt
     stops = v_end < 0
     s1 = np.where(stops, s + v * v / (2.0 * np.maximum(-a, 1e-300)), s + v * dt + 0.5 * a * dt * dt)
@@ -220,7 +236,7 @@ def jerk_limited_step(position_m: float, speed_mps: float, accel_mps2: float, *,
         lo, hi = -d_now, max_accel_mps2
     if hi >= lo:
         cand = np.linspace(hi, lo, CANDIDATES)
-        s1, v1, a1 = _cycle(s, v, cand, cycle_s)
+        s1, v1, a1 = cycle_end(s, v, cand, cycle_s)
         ok = _under(where_m, envelope_b, np.full(cand.size, s), s1, np.full(cand.size, v * v), v1 * v1)
         ok &= _safe(where_m, envelope_b, s1, v1, a1, decel, jerk_mps3)
         if np.any(ok):
@@ -228,7 +244,7 @@ def jerk_limited_step(position_m: float, speed_mps: float, accel_mps2: float, *,
             return TrackingStep(float(cand[k]), float(a1[k]), float(s1[k]), float(v1[k]), True)
     # nothing within the jerk bound: brake harder, as little as the envelope needs
     cand = np.linspace(min(lo, hi), -d_now, CANDIDATES)
-    s1, v1, a1 = _cycle(s, v, cand, cycle_s)
+    s1, v1, a1 = cycle_end(s, v, cand, cycle_s)
     ok = _under(where_m, envelope_b, np.full(cand.size, s), s1, np.full(cand.size, v * v), v1 * v1)
     ok &= _safe(where_m, envelope_b, s1, v1, a1, decel, np.inf)
     k = int(np.argmax(ok)) if np.any(ok) else cand.size - 1
