@@ -90,6 +90,16 @@ class Segments:
         """Number of segments N."""
         return int(self.length_m.size)
 
+    def window_ranges(self) -> tuple[np.ndarray, np.ndarray]:
+        """The roughness windows each segment meets: segment i meets ``windows`` entries
+        ``first[i] <= k < stop[i]``.
+
+        Returns
+        -------
+        first, stop : numpy.ndarray of int, shape (N,)
+        """
+        return self.windows.overlapping(self.boundaries_m[:-1], self.boundaries_m[1:])
+
 
 def segment_route(route: "Route", vehicle: "Vehicle", segment_length_m: float = DEFAULT_SEGMENT_LENGTH_M,
                   *, roughness_window_m: float = DEFAULT_ROUGHNESS_WINDOW_M) -> Segments:
@@ -251,7 +261,7 @@ def segments_at(boundaries_m: np.ndarray, windows: RoughnessWindows, vehicle: "V
     Segments
     """
     bounds = np.asarray(boundaries_m, dtype=float)
-    window_first, window_stop = windows.overlapping(bounds[:-1], bounds[1:])
+    window_first, window_stop = windows.overlapping(bounds[:-1], bounds[1:])  # as Segments.window_ranges
     ri_min, ri = range_extremes(windows.ri, window_first, window_stop)
     return Segments(
         boundaries_m=bounds,

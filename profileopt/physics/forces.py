@@ -305,6 +305,7 @@ def _of_e_max(force_of_e: Callable) -> Callable:
     return builder
 
 
+@elementwise
 def sbem_tf_crawl_bound_n(e_max_m: Any, vehicle: "Vehicle") -> Any:
     """An upper bound (N) on the SBEM:TF force at every speed up to 2 wn r_w r_p / pi and
     every elevation in [0, e_max]: k (r_p r_w)^2 e_max / X_w(e_max)^2 T(r_p).

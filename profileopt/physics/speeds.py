@@ -31,14 +31,14 @@ from numpy.typing import ArrayLike
 
 from ..core.symbolic import numpy_evaluator
 from ..errors import InputError
-from ..terrain.roughness import check_ri, worst_case_elevation
+from ..terrain.roughness import check_ri, range_extremes, worst_case_elevation
 from .forces import DEFAULT_MODEL, get_model, sbem_tf_crawl_bound_n
 
 if TYPE_CHECKING:
     from ..core.vehicle import Vehicle
 
 __all__ = ["BAND_CHOICES", "SpeedBands", "BandMemo", "speed_bands", "speed_bands_reusing", "allowable_speed",
-           "safeguarded_newton", "max_force_over_segments"]
+           "safeguarded_newton", "max_force_over_segments", "speed_bands_of_sets", "max_force_of_sets"]
 
 #: Which admissible band(s) of speeds: ``"first"`` the band from rest (every speed from 0 up
 #: to its upper edge is admissible), ``"largest"`` the highest band, ``"all"`` every band
@@ -249,8 +249,9 @@ def speed_bands(ri: ArrayLike, vehicle: "Vehicle", *, model: str = DEFAULT_MODEL
     ri_min : array_like, shape (N,) or scalar, optional
         The least RI of each patch, 0 <= ri_min <= ri: the bands are then the speeds
         admissible for every RI of the range (those of the largest force over the range,
-        :func:`profileopt.physics.forces.envelope_force_n`), as a stretch of route seen through
-        sliding roughness windows needs.
+        :func:`profileopt.physics.forces.envelope_force_n`, an upper bound for SBEM:TF), for
+        terrain known only to lie within the range (the online selector's unseen terrain). A
+        segment's known windows are a set, not a range: :func:`speed_bands_of_sets`.
 
     Returns
     -------
@@ -359,6 +360,217 @@ def speed_bands_reusing(ri: ArrayLike, vehicle: "Vehicle", *, model: str = DEFAU
 
 
 _BAND_FIELDS = ("lower_mps", "upper_mps", "count", "peaks_mps")
+
+
+def speed_bands_of_sets(values: ArrayLike, first: ArrayLike, stop: ArrayLike, vehicle: "Vehicle", *,
+                        model: str = DEFAULT_MODEL, memo: BandMemo | None = None) -> tuple[SpeedBands, BandMemo]:
+    """Every band of speeds admissible for each RI of a set, for many sets: exact.
+
+    Set i holds the RIs ``values[first[i]:stop[i]]`` (the roughness windows a segment of
+    route meets: every speed driven on it must be admissible for each of them). Its bands are
+    the intersection of its members' bands. For a model whose force grows with the RI that
+    is the bands of the set's largest RI. SBEM:TF does not grow with the RI below the speed
+    V_c = 2 wn r_w r_p / pi (:func:`profileopt.physics.forces.sbem_tf_envelope_force_n`),
+    and above V_c it does; so a member can forbid a speed the largest RI allows only below
+    V_c, and only if its crawl bound (:func:`profileopt.physics.forces.sbem_tf_crawl_bound_n`,
+    growing with the RI) exceeds the limit. The bands of a set are those of its largest RI
+    intersected with the bands of every such member: exactly the speeds admissible for every
+    member, where the bound of :func:`speed_bands` with ``ri_min`` (the largest force over the
+    whole RI range between the set's least and largest) forbids speeds that no member's force
+    reaches the limit at.
+
+    Parameters
+    ----------
+    values : array_like, shape (K,)
+        RIs (dimensionless), >= 0.
+    first, stop : array_like of int, shape (N,)
+        Set i is ``values[first[i]:stop[i]]``, non-empty.
+    vehicle : Vehicle
+        Quarter car, force limits and top speed v_max.
+    model : str, default ``"sbem_tf"``
+        Force model key.
+    memo : BandMemo, optional
+        From an earlier call with the same vehicle and model (its RIs are not found again).
+
+    Returns
+    -------
+    bands : SpeedBands
+        Shape (N, ...): band edges (m/s) within [0, v_max]; ``peaks_mps`` of a set holds the
+        peaks of each member it intersects (the largest force over the set has its local
+        maxima among them).
+    memo : BandMemo
+        For the next call.
+
+    Raises
+    ------
+    InputError
+        Unknown ``model``, or a NaN or negative RI.
+    """
+    values = np.atleast_1d(np.asarray(values, dtype=float))
+    check_ri(values)
+    first = np.asarray(first, dtype=np.intp)
+    stop = np.asarray(stop, dtype=np.intp)
+    n = first.size
+    _, top = range_extremes(values, first, stop) if n else (np.empty(0), np.empty(0))
+    members = _crawl_members(values, first, stop, top, vehicle, model)
+    wanted = np.concatenate([top, values[members.window]])
+    found, memo = speed_bands_reusing(wanted, vehicle, model=model, memo=memo)
+    if not members.window.size:
+        return found, memo
+    mine = SpeedBands(*(getattr(found, name)[n:] for name in _BAND_FIELDS))
+    rows = np.flatnonzero(members.counts)
+    lower, upper, count = _intersected(mine, members.row_of_pair(), members.pair_member(), rows.size)
+    bands = SpeedBands(*(getattr(found, name)[:n] for name in _BAND_FIELDS))
+    width = max(bands.lower_mps.shape[1], lower.shape[1])
+    lower_all = _widened(bands.lower_mps, width)
+    upper_all = _widened(bands.upper_mps, width)
+    lower_all[rows], upper_all[rows] = _widened(lower, width), _widened(upper, width)
+    counts = bands.count.copy()
+    counts[rows] = count
+    peaks = _peaks_of_pairs(mine.peaks_mps[members.pair_member()], members.row_of_pair(), rows, bands.peaks_mps)
+    return SpeedBands(lower_mps=_trimmed(lower_all), upper_mps=_trimmed(upper_all), count=counts,
+                      peaks_mps=_trimmed(peaks)), memo
+
+
+def max_force_of_sets(values: ArrayLike, first: ArrayLike, stop: ArrayLike, speed_mps: np.ndarray,
+                      vehicle: "Vehicle", *, model: str = DEFAULT_MODEL, memo: BandMemo | None = None) -> np.ndarray:
+    """Largest predicted force over the speeds between each segment's two boundary speeds and
+    over every RI of its set (as :func:`speed_bands_of_sets`), in N.
+
+    For each member the force over a speed interval is largest at an end or at one of the
+    member's own interior maxima (:func:`max_force_over_segments`); the set's force is the
+    largest of its members'. Only the members that :func:`speed_bands_of_sets` intersects
+    can exceed the force of the set's largest RI, so only they are evaluated beside it.
+
+    Parameters
+    ----------
+    values, first, stop
+        The sets, as for :func:`speed_bands_of_sets`.
+    speed_mps : numpy.ndarray, shape (N+1,)
+        Speeds at the segment boundaries (m/s).
+    vehicle : Vehicle
+    model : str, default ``"sbem_tf"``
+    memo : BandMemo, optional
+        From :func:`speed_bands_of_sets` on the same sets (the members' peaks are not found
+        again).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+        Force (N).
+    """
+    values = np.atleast_1d(np.asarray(values, dtype=float))
+    first = np.asarray(first, dtype=np.intp)
+    stop = np.asarray(stop, dtype=np.intp)
+    speed = np.asarray(speed_mps, dtype=float)
+    _, top = range_extremes(values, first, stop)
+    members = _crawl_members(values, first, stop, top, vehicle, model)
+    wanted = np.concatenate([top, values[members.window]])
+    found, _ = speed_bands_reusing(wanted, vehicle, model=model, memo=memo)
+    n = first.size
+    force = max_force_over_segments(model, vehicle, top, speed, found.peaks_mps[:n])
+    if not members.window.size:
+        return force
+    rows = np.flatnonzero(members.counts)
+    pair_row = members.row_of_pair()  # index into rows
+    member = members.pair_member()
+    segment = rows[pair_row]
+    pair_force = _max_force_between(model, vehicle, values[members.window][member], speed[:-1][segment],
+                                    speed[1:][segment], found.peaks_mps[n:][member])
+    best = np.full(rows.size, -np.inf)
+    np.maximum.at(best, pair_row, pair_force)
+    force[rows] = np.maximum(force[rows], best)
+    return force
+
+
+@dataclasses.dataclass(frozen=True)
+class _Members:
+    """The members of each set that can forbid a speed its largest RI allows.
+
+    ``window`` lists them (indices into the values, in order); set i holds
+    ``window[offset[i]:offset[i] + counts[i]]``."""
+
+    window: np.ndarray
+    counts: np.ndarray
+    offset: np.ndarray
+
+    def row_of_pair(self) -> np.ndarray:
+        """For each (set, member) pair of the sets that have members, its set's rank among them."""
+        have = self.counts[self.counts > 0]
+        return np.repeat(np.arange(have.size), have)
+
+    def pair_member(self) -> np.ndarray:
+        """For each such pair, its member's index into ``window``."""
+        have = self.counts > 0
+        starts = np.repeat(self.offset[have], self.counts[have])
+        within = np.arange(starts.size) - np.repeat(np.cumsum(self.counts[have]) - self.counts[have], self.counts[have])
+        return starts + within
+
+
+def _crawl_members(values: np.ndarray, first: np.ndarray, stop: np.ndarray, top: np.ndarray, vehicle: "Vehicle",
+                   model: str) -> _Members:
+    """The members whose crawl bound exceeds the limit, of the sets whose largest RI's does
+    (none for a model that grows with the RI)."""
+    spec = get_model(model)
+    none = _Members(np.empty(0, dtype=np.intp), np.zeros(first.size, dtype=np.intp), np.zeros(first.size, dtype=np.intp))
+    if spec.monotone or not values.size or not first.size:
+        return none
+    limit = spec.limit_n(vehicle)
+    over = np.asarray(sbem_tf_crawl_bound_n(worst_case_elevation(values, vehicle), vehicle), dtype=float) > limit
+    ranked = np.concatenate([[0], np.cumsum(over)])
+    begin, end = ranked[first], ranked[stop]
+    counts = np.where(np.asarray(sbem_tf_crawl_bound_n(worst_case_elevation(top, vehicle), vehicle)) > limit,
+                      end - begin, 0).astype(np.intp)
+    if not counts.any():
+        return none
+    return _Members(np.flatnonzero(over), counts, begin.astype(np.intp))
+
+
+def _intersected(member_bands: SpeedBands, pair_row: np.ndarray, pair_member: np.ndarray, rows: int
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The intersection of the bands of each row's members: a sweep over their band edges.
+
+    A speed lies in the intersection when every member of its row has a band holding it, so
+    the count of bands open there (each member's bands are disjoint: it adds at most one)
+    equals the row's number of members. Edges are sorted by row, speed and then closings
+    before openings: two bands that only touch give no band of zero width.
+    """
+    lower = member_bands.lower_mps[pair_member]
+    upper = member_bands.upper_mps[pair_member]
+    has = ~np.isnan(lower)
+    row = np.broadcast_to(pair_row[:, None], lower.shape)[has]
+    events_row = np.concatenate([row, row])
+    events_v = np.concatenate([lower[has], upper[has]])
+    delta = np.concatenate([np.ones(row.size, dtype=np.intp), -np.ones(row.size, dtype=np.intp)])
+    order = np.lexsort((delta, events_v, events_row))
+    events_row, events_v, delta = events_row[order], events_v[order], delta[order]
+    open_now = np.cumsum(delta)  # each row's events sum to 0: the count restarts at every row
+    need = np.bincount(pair_row, minlength=rows)
+    starts = np.flatnonzero((delta > 0) & (open_now == need[events_row]))
+    # the next event closes it (no row has more than `need` open)
+    band_row = events_row[starts]
+    band_lo, band_hi = events_v[starts], events_v[starts + 1]
+    count = np.bincount(band_row, minlength=rows)
+    return _ragged_to_padded(band_row, band_lo, rows), _ragged_to_padded(band_row, band_hi, rows), count
+
+
+def _widened(values: np.ndarray, width: int) -> np.ndarray:
+    """A NaN-padded (n, w) array padded to ``width`` columns (a copy)."""
+    return np.pad(values, ((0, 0), (0, width - values.shape[1])), constant_values=np.nan)
+
+
+def _peaks_of_pairs(pair_peaks: np.ndarray, pair_row: np.ndarray, rows: np.ndarray, peaks: np.ndarray
+                    ) -> np.ndarray:
+    """``peaks`` (n, P) with each row in ``rows`` replaced by the distinct peaks of its pairs."""
+    has = ~np.isnan(pair_peaks)
+    row = np.broadcast_to(pair_row[:, None], pair_peaks.shape)[has]
+    speed = pair_peaks[has]
+    pairs = np.unique(np.stack([row.astype(float), speed], axis=1), axis=0)
+    mine = _ragged_to_padded(pairs[:, 0].astype(np.intp), pairs[:, 1], rows.size)
+    width = max(peaks.shape[1], mine.shape[1])
+    out = _widened(peaks, width)
+    out[rows] = _widened(mine, width)
+    return out
 
 
 def _blocked_bands(terrain: tuple[np.ndarray, ...], vehicle: "Vehicle", model: str) -> SpeedBands:
@@ -562,8 +774,15 @@ def max_force_over_segments(model: str, vehicle: "Vehicle", ri: np.ndarray, spee
     numpy.ndarray, shape (N,)
         Force (N).
     """
-    lo = np.minimum(speed_mps[:-1], speed_mps[1:])[:, None]
-    hi = np.maximum(speed_mps[:-1], speed_mps[1:])[:, None]
+    return _max_force_between(model, vehicle, ri, speed_mps[:-1], speed_mps[1:], peaks_mps, ri_min=ri_min)
+
+
+def _max_force_between(model: str, vehicle: "Vehicle", ri: np.ndarray, speed_a: np.ndarray, speed_b: np.ndarray,
+                       peaks_mps: np.ndarray, *, ri_min: np.ndarray | None = None) -> np.ndarray:
+    """:func:`max_force_over_segments` for the speed intervals between ``speed_a[i]`` and
+    ``speed_b[i]``, shape (N,) each."""
+    lo = np.minimum(speed_a, speed_b)[:, None]
+    hi = np.maximum(speed_a, speed_b)[:, None]
     inside = (peaks_mps >= lo) & (peaks_mps <= hi)
     candidates = np.concatenate([lo, hi, np.where(inside, peaks_mps, lo)], axis=1)
     spec = get_model(model)

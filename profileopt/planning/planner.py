@@ -48,7 +48,7 @@ from ..defaults import (
 )
 from ..errors import InfeasibleError, InputError, PlanningError
 from ..physics.forces import DEFAULT_MODEL, get_model
-from ..physics.speeds import SpeedBands, max_force_over_segments
+from ..physics.speeds import SpeedBands
 from ..progress import NO_PROGRESS, Progress
 from .bands import BandChoice, DrivePower, choose_bands, snap_to_band
 from .fallback import fallback_choice
@@ -426,7 +426,8 @@ def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *,
     roughness = roughness_source(route, seg.windows)
     if roughness["source"] == "assumed":  # only then: a measured route's file keeps its bytes
         settings["roughness"] = roughness["label"]
-    profile = _assemble(seg, b, vehicle, model, speed_sets, all_bands, usable, chosen, cap)
+    profile = _assemble(seg, b, vehicle, model, all_bands, usable, chosen, cap,
+                        force_of=lambda speed: _predicted_force(limits, context, speed))
     row_values = {family: family_rows(family, b, seg.length_m, data) for family, data in rows.items()}
     cap_label = _cap_labels(limits, context, cap, cap_source)
     band_top = usable.upper_mps[np.arange(seg.count), chosen.band]
@@ -671,17 +672,27 @@ def _solve_nlp(seg: Segments, chosen: BandChoice, decel: np.ndarray, accel: np.n
     return _NlpResult(result.y * b_ref, result.status, iterations + result.iterations, 1, timings, result.solver)
 
 
-def _assemble(seg: Segments, b: np.ndarray, vehicle: "Vehicle", model: str, bands: SpeedBands,
-              all_bands: SpeedBands, usable: SpeedBands, chosen: BandChoice, cap: np.ndarray) -> Profile:
-    """The Profile of squared speeds b: per-row arrays, the largest force per segment, and
-    the allowable speeds under both semantics from ``all_bands`` (every band, capped)."""
+def _predicted_force(limits: Sequence[Limit], context: PlanContext, speed_mps: np.ndarray) -> np.ndarray:
+    """The largest force predicted over each segment (N): the limit's that predicts one, else 0
+    (the dynamic model's force is simulated once the plan is made, planning.dynamic)."""
+    for limit in limits:
+        force = limit.predicted_force_n(context, speed_mps)
+        if force is not None:
+            return force
+    return np.zeros(context.segments.count)
+
+
+def _assemble(seg: Segments, b: np.ndarray, vehicle: "Vehicle", model: str, all_bands: SpeedBands,
+              usable: SpeedBands, chosen: BandChoice, cap: np.ndarray, *,
+              force_of: Callable[[np.ndarray], np.ndarray]) -> Profile:
+    """The Profile of squared speeds b: per-row arrays, the largest force per segment
+    (``force_of(speed)``), and the allowable speeds under both semantics from ``all_bands``
+    (every band, capped)."""
     speed = np.sqrt(np.maximum(b, 0.0))
     accel = segment_accel_mps2(b[:-1], b[1:], seg.length_m)
     dt = segment_time_s(speed[:-1], speed[1:], seg.length_m)
     time_s = np.concatenate([[0.0], np.cumsum(dt)])
-    # the dynamic model's force is simulated once the plan is made (planning.dynamic)
-    force = (np.zeros(seg.count) if model == "dynamic" else
-             max_force_over_segments(model, vehicle, seg.ri, speed, bands.peaks_mps, ri_min=seg.ri_min))
+    force = force_of(speed)
     rows = np.arange(seg.count)
 
     def per_row(x: np.ndarray) -> np.ndarray:

@@ -42,7 +42,7 @@ from ..physics.rows import (
     power_data,
     power_rows_needed,
 )
-from ..physics.speeds import max_force_over_segments, speed_bands
+from ..physics.speeds import max_force_of_sets
 from ..physics.steps import step_speed_cap_mps
 from ..terrain.roughness import RoughnessWindows
 
@@ -306,8 +306,8 @@ def check_limits(
     What the profile's settings line records (its jerk bound, path tolerance, roughness
     window) is never used: where it differs from what is checked, a note says so, so that an
     edited settings line cannot loosen a limit. The predicted force of each segment is recomputed from the speeds:
-    the largest force over every speed between its two boundary speeds, resonance peaks
-    included (:func:`profileopt.physics.speeds.max_force_over_segments`). The file's
+    the largest force over every speed between its two boundary speeds and every roughness
+    window it meets, resonance peaks included (:func:`profileopt.physics.speeds.max_force_of_sets`). The file's
     ``force_n`` column is not used (a note says so when it differs). A limit counts as kept
     within :data:`profileopt.defaults.LIMIT_RTOL` of it, the planner's own tolerance.
 
@@ -395,7 +395,6 @@ def check_limits(
     caps = _speed_caps(route, vehicle, segments, path, force_model.key)
     decel_bound, accel_bound = _accel_bounds(vehicle, path)
     dynamic = force_model.key == "dynamic"  # its force is judged by the simulation alone (verify)
-    bands = None if dynamic else speed_bands(ri_here, vehicle, model=force_model.key, ri_min=segments.ri_min)
     row_data = _row_data(vehicle, path, decel_bound, accel_bound)
     n = s.size - 1
     index = np.arange(n)
@@ -434,8 +433,9 @@ def check_limits(
             predicted = np.zeros(n)
             stale = np.empty(0, dtype=int)
         else:
-            predicted = max_force_over_segments(force_model.key, vehicle, ri_here, v, bands.peaks_mps,
-                                                ri_min=segments.ri_min)
+            window_first, window_stop = segments.window_ranges()
+            predicted = max_force_of_sets(segments.windows.ri, window_first, window_stop, v, vehicle,
+                                          model=force_model.key)
             breaches.append(_first_breach("force", f"the {force_model.label} force limit", predicted,
                                           np.array(limit), s[:-1], index, "N"))
             recorded = np.asarray(profile.force_n, dtype=float)[:-1]

@@ -13,7 +13,7 @@ entry to the simulation (:mod:`profileopt.physics.simulate`) over its extent:
 
 *predicted*
     The model's largest force over the speeds driven inside the window, at the window's
-    own RI: exact, not the envelope over an RI range the planner uses for a segment. v^2 is
+    own RI (the planner holds a segment to each window it meets the same way). v^2 is
     linear in s inside each segment, so the speeds driven inside [start, stop] are the
     interval between the least and the largest of the speeds at start, at stop and at the
     segment boundaries between; the force over it is largest at one of its ends or at an interior

@@ -10,7 +10,8 @@ import pytest
 import scipy.special
 
 from profileopt import MODELS, InputError, allowable_speed, force_n, get_model, load_vehicle, speed_bands
-from profileopt.physics.speeds import BAND_CHOICES, speed_bands_reusing
+from profileopt.physics.speeds import (BAND_CHOICES, max_force_of_sets, max_force_over_segments, speed_bands_of_sets,
+                                     speed_bands_reusing)
 from profileopt.viz.figures import PAPER_AMPLITUDES_M, TERRAIN_FREQUENCY_CPM, sinusoid_terrain
 
 ATV = load_vehicle("atv")
@@ -322,3 +323,75 @@ def test_speed_bands_of_no_terrain_is_empty_and_its_memo_harmless():
     after, _ = speed_bands_reusing([0.2, 0.3], RES, memo=memo)
     reference = speed_bands([0.2, 0.3], RES)
     np.testing.assert_array_equal(after.upper_mps, reference.upper_mps)
+
+
+# ------------------------------------------------------------ sets of RIs (the windows of a segment)
+
+def _set_force(speed, members, vehicle):
+    """The largest SBEM:TF force over the members' RIs at each speed (brute force), N."""
+    speed = np.atleast_1d(speed)
+    return np.max([force_n(speed, vehicle, ri=np.full(speed.size, r)) for r in members], axis=0)
+
+
+def _random_sets(seed):
+    # windows of smooth and rough ground mixed, zero RIs (flat windows) included
+    rng = np.random.default_rng(seed)
+    values = np.abs(rng.normal(0.1, 0.12, 240))
+    values[rng.uniform(size=values.size) < 0.2] = 0.0
+    first = rng.integers(0, values.size - 1, 40)
+    return values, first, np.minimum(first + rng.integers(1, 25, first.size), values.size)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_bands_of_sets_are_the_speeds_admissible_for_every_member(seed) -> None:
+    # Reference: a dense grid of speeds, admissible where every member's force is within the
+    # limit; band edges may differ from it only within a grid step of an edge
+    values, first, stop = _random_sets(seed)
+    bands, _ = speed_bands_of_sets(values, first, stop, RES)
+    limit = RES.max_transmitted_force_n
+    grid = np.concatenate([np.linspace(0.0, 3.0, 6001), np.linspace(3.0, RES.max_speed_mps, 341)[1:]])
+    looser = speed_bands([values[a:b].max() for a, b in zip(first, stop)], RES,
+                         ri_min=[values[a:b].min() for a, b in zip(first, stop)])
+    gained = 0
+    for i in range(first.size):
+        admissible = _set_force(grid, values[first[i]:stop[i]], RES) <= limit
+        inside = np.zeros(grid.size, dtype=bool)
+        for j in range(int(bands.count[i])):
+            inside |= (grid >= bands.lower_mps[i, j]) & (grid <= bands.upper_mps[i, j])
+        edges = np.concatenate([bands.lower_mps[i, :bands.count[i]], bands.upper_mps[i, :bands.count[i]]])
+        wrong = grid[admissible != inside]
+        assert all(np.min(np.abs(edges - v), initial=np.inf) < 1e-3 for v in wrong), (i, wrong[:4])
+        # never looser than every member's own bands; often faster than the bound over the RI range
+        assert bands.first()[i] >= looser.first()[i] - 1e-12
+        gained += bands.first()[i] > looser.first()[i] * 1.01
+    assert gained >= 5  # the reason for sets: the range's bound forbids speeds no member reaches the limit at
+
+
+def test_max_force_of_sets_is_the_largest_over_members_and_speeds() -> None:
+    values, first, stop = _random_sets(2)
+    rng = np.random.default_rng(5)
+    bands, memo = speed_bands_of_sets(values, first, stop, RES)
+    edge = bands.first()
+    for i in range(first.size):
+        # a random interval, and one ending at the set's first band edge (where the member that
+        # sets the edge, often not the largest RI, is at the limit)
+        speed = rng.uniform(0.0, 2.0, 2) if i % 2 or edge[i] == RES.max_speed_mps else np.array([0.8, 1.0]) * edge[i]
+        dense = np.linspace(speed.min(), speed.max(), 4001)
+        reference = _set_force(dense, values[first[i]:stop[i]], RES).max()
+        for given in (memo, None):
+            got = max_force_of_sets(values, first[i:i + 1], stop[i:i + 1], speed, RES, memo=given)[0]
+            # never below the brute force (which only samples the interval), and at most its grid step above
+            assert reference * (1 - 1e-12) <= got <= reference * (1 + 1e-3)
+
+
+def test_sets_of_a_force_growing_with_the_ri_are_their_largest_ri() -> None:
+    values, first, stop = _random_sets(3)
+    top = np.array([values[a:b].max() for a, b in zip(first, stop)])
+    for vehicle, model in ((RES, "iecm"), (ATV, "sbem_tf")):  # the atv's crawl bound is within its limit
+        sets, _ = speed_bands_of_sets(values, first, stop, vehicle, model=model)
+        plain = speed_bands(top, vehicle, model=model)
+        np.testing.assert_array_equal(sets.count, plain.count)
+        np.testing.assert_array_equal(sets.upper_mps, plain.upper_mps)
+        speed = np.linspace(0.1, 9.0, first.size + 1)
+        np.testing.assert_array_equal(max_force_of_sets(values, first, stop, speed, vehicle, model=model),
+                                      max_force_over_segments(model, vehicle, top, speed, plain.peaks_mps))

@@ -270,3 +270,81 @@ def test_text_in_an_ignored_column_is_ignored(check_profile, tmp_path, atv):
     assert route.notes and "comment" in route.notes[0]
     np.testing.assert_allclose(route.s_m, np.round(s, 2))
     check_profile(plan(route, atv), route, atv)
+
+
+def _pothole_field_route():
+    # flat ends, then potholes 0.6 m long every 3.1 m and rough ground between them: windows from
+    # smooth to rough within one segment, where SBEM:TF's force is not monotone in the RI
+    s = np.arange(0.0, 50.0 + 1e-9, 0.05)
+    z = 0.004 * np.sin(2 * np.pi * s / 0.9) * ((s > 12) & (s < 38))
+    for c in np.arange(15.0, 35.0, 3.1):
+        inside = (s > c) & (s < c + 0.6)
+        z[inside] -= 0.05 * np.sin(np.pi * (s[inside] - c) / 0.6)
+    return Route(s, z, source="pothole field")
+
+
+def _outside_segment_band(members, vehicle, band):
+    """The band (lo, hi) of speeds admissible for every RI in ``members`` (brute force: a dense
+    grid of the largest member force, the edges bisected), 'first' or 'largest'."""
+    from profileopt import force_n
+
+    limit = vehicle.max_transmitted_force_n
+
+    def over(v):
+        return bool(np.max(force_n(np.full(members.size, v), vehicle, ri=members)) > limit)
+
+    grid = np.concatenate([np.linspace(0.0, 2.0, 801), np.linspace(2.0, vehicle.max_speed_mps, 181)[1:]])
+    ok = np.max(force_n(grid[:, None], vehicle, ri=members[None, :]), axis=1) <= limit
+
+    def edge(a, b):  # ok changes between grid speeds a < b: bisect to 1e-12 m/s
+        want = over(a)
+        while b - a > 1e-12:
+            m = 0.5 * (a + b)
+            a, b = (m, b) if over(m) == want else (a, m)
+        return a if not want else b
+
+    change = np.flatnonzero(ok[1:] != ok[:-1])
+    edges = [edge(grid[j], grid[j + 1]) for j in change]
+    points = ([0.0] if ok[0] else []) + edges + ([vehicle.max_speed_mps] if ok[-1] else [])
+    runs = list(zip(points[0::2], points[1::2]))
+    if band == "first":
+        return runs[0] if runs and runs[0][0] == 0.0 else (0.0, 0.0)
+    return runs[-1]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("vehicle_name", ["atv", "atv-resonant"])
+@pytest.mark.parametrize("band", ["first", "largest"])
+def test_sbem_tf_plans_are_exact_under_their_window_definition(vehicle_name, band):
+    # Issue 33: each segment is held to every roughness window it meets, and to nothing more.
+    # Reference, written here: each segment's band from a brute-force search over its windows'
+    # RIs (every one of them: no range, no bound), and the exact minimum time over those bands
+    # by the forward-backward passes (smoothing 0, no jerk bound), on the planner's own segments.
+    from profileopt.terrain.roughness import roughness_windows
+
+    route = _pothole_field_route()
+    # without the optional keys (grades, turns, friction, power): the force and the bounds on a and d alone
+    vehicle = load_vehicle(vehicle_name).replace(max_lateral_accel_mps2=None, track_width_m=None, cg_height_m=None,
+                                                 friction_coefficient=None, mass_kg=None, max_power_w=None)
+    profile = plan(route, vehicle, band=band, smoothing=0.0, max_jerk_mps3=math.inf, simulation_gate=False)
+    assert profile.status == "exact"
+    s = profile.s_m
+    windows = roughness_windows(route.s_m, route.z_m, vehicle.ground_clearance_m, window_m=5.0)
+    first, stop = windows.overlapping(s[:-1], s[1:])
+    lower, upper = np.zeros(s.size - 1), np.zeros(s.size - 1)
+    for i in range(s.size - 1):
+        lower[i], upper[i] = _outside_segment_band(np.unique(windows.ri[first[i]:stop[i]]), vehicle, band)
+    # v^2 at the boundaries: each boundary within both neighbours' bands, rest at both ends
+    ub = np.minimum(np.append(upper, np.inf), np.insert(upper, 0, np.inf)) ** 2
+    lb = np.maximum(np.append(lower, 0.0), np.insert(lower, 0, 0.0)) ** 2
+    ub[0] = ub[-1] = 0.0
+    length = np.diff(s)
+    b = ub.copy()
+    for i in range(length.size):
+        b[i + 1] = min(b[i + 1], b[i] + 2 * vehicle.max_accel_mps2 * length[i])
+    for i in range(length.size - 1, -1, -1):
+        b[i] = min(b[i], b[i + 1] + 2 * vehicle.max_decel_mps2 * length[i])
+    assert np.all(b >= lb * (1 - 1e-9))
+    v = np.sqrt(b)
+    exact = float(np.sum(2 * length / (v[:-1] + v[1:])))
+    assert profile.travel_time_s == pytest.approx(exact, rel=1e-9)

@@ -102,6 +102,22 @@ class Limit:
         """
         return None
 
+    def predicted_force_n(self, context: PlanContext, speed_mps: np.ndarray) -> np.ndarray | None:
+        """The largest force the limit's model predicts over each segment's speeds (N), or None.
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+        speed_mps : numpy.ndarray, shape (N+1,)
+            Speeds at the segment boundaries (m/s).
+
+        Returns
+        -------
+        numpy.ndarray, shape (N,), or None
+        """
+        return None
+
     def speed_cap_mps(self, context: PlanContext) -> np.ndarray | None:
         """A cap on every speed driven inside each segment (m/s), shape (N,), or None.
 

@@ -1,9 +1,8 @@
 """The terrain force limit: the chosen model's admissible speed bands of each segment.
 
-Each segment's range of window RI values (the least and the largest RI of the roughness
-windows it meets) gives, through the force model, the bands of speeds whose predicted
-force is within the vehicle's limit for every RI of the range (:func:`profileopt.speed_bands`
-with ``ri_min``).
+Each segment meets several roughness windows; its bands are the speeds whose predicted
+force is within the vehicle's limit for the RI of every one of them
+(:func:`profileopt.physics.speeds.speed_bands_of_sets`), exactly.
 A resonant vehicle may have several bands; the planner keeps both boundary speeds of a
 segment in one of them, so the limit holds for every speed driven in between.
 """
@@ -16,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ...physics.forces import DEFAULT_MODEL, get_model
-from ...physics.speeds import SpeedBands, speed_bands_reusing
+from ...physics.speeds import SpeedBands, max_force_of_sets, speed_bands_of_sets
 from .base import Limit, PlanContext
 
 if TYPE_CHECKING:
@@ -38,7 +37,7 @@ class ForceLimit(Limit):
     model: str = DEFAULT_MODEL
     name = "force"
     binding = "force"
-    #: The last call's distinct RI ranges and their bands (:class:`~profileopt.physics.speeds.BandMemo`):
+    #: The last call's distinct RIs and their bands (:class:`~profileopt.physics.speeds.BandMemo`):
     #: a refined plan asks again for every segment it kept whole.
     _memo: list = dataclasses.field(default_factory=list, init=False, repr=False, compare=False)
 
@@ -58,10 +57,30 @@ class ForceLimit(Limit):
         SpeedBands
         """
         segments = context.segments
-        bands, memo = speed_bands_reusing(segments.ri, context.vehicle, model=self.model, ri_min=segments.ri_min,
+        first, stop = segments.window_ranges()
+        bands, memo = speed_bands_of_sets(segments.windows.ri, first, stop, context.vehicle, model=self.model,
                                           memo=self._memo[0] if self._memo else None)
         self._memo[:] = [memo]
         return bands
+
+    def predicted_force_n(self, context: PlanContext, speed_mps: np.ndarray) -> np.ndarray:
+        """The largest predicted force over each segment's speeds and the windows it meets (N).
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+        speed_mps : numpy.ndarray, shape (N+1,)
+            Speeds at the segment boundaries (m/s).
+
+        Returns
+        -------
+        numpy.ndarray, shape (N,)
+        """
+        segments = context.segments
+        first, stop = segments.window_ranges()
+        return max_force_of_sets(segments.windows.ri, first, stop, speed_mps, context.vehicle, model=self.model,
+                                 memo=self._memo[0] if self._memo else None)
 
     def check(self, profile: "Profile") -> float:
         """How far the largest predicted force inside any segment exceeds the limit (relative).
