@@ -196,9 +196,18 @@ def read_manifest(path: str | os.PathLike) -> list[BatchRow]:
 
 
 def plan_many(rows: Sequence[BatchRow], out_dir: str | os.PathLike, *, workers: int | None = None,
-              scheduler: str | None = None, client: Any = None, progress: Progress = NO_PROGRESS
-              ) -> list[dict[str, Any]]:
+              scheduler: str | None = None, client: Any = None, progress: Progress = NO_PROGRESS,
+              inputs: Iterable[str | os.PathLike] = ()) -> list[dict[str, Any]]:
     """Plan every row, each as ``profileopt plan`` would, into ``out_dir``.
+
+    No output may replace a file the batch reads: before any work, a ``summary.csv`` or
+    ``summary.parquet`` that is one of them (the same file however it is spelt, a symlink or
+    hard link included), or a row's ``ID.csv`` that is the manifest or another row's route,
+    vehicle or terrain file, is refused (a row's ``ID.csv`` that is its own route fails that
+    row, as ``profileopt plan`` refuses it). Every row's profile and the summary are checked
+    again when they are put in place (device and inode), and the summary is written in the
+    folder checked at the start (held open), so an output folder swapped for a link while the
+    batch runs replaces nothing.
 
     Parameters
     ----------
@@ -215,6 +224,9 @@ def plan_many(rows: Sequence[BatchRow], out_dir: str | os.PathLike, *, workers: 
         A client of a running cluster to plan on (instead of ``scheduler``).
     progress : Progress, optional
         Told of each route done (:mod:`profileopt.progress`).
+    inputs : iterable of path, optional
+        More files the batch reads that no output may replace, besides each row's route,
+        vehicle and terrain files: its manifest (``profileopt batch --manifest``).
 
     Returns
     -------
@@ -226,14 +238,37 @@ def plan_many(rows: Sequence[BatchRow], out_dir: str | os.PathLike, *, workers: 
     ------
     InputError
         The output folder cannot be made, Dask is missing for several workers
-        (:data:`MISSING_DASK`), or ``workers`` is not a whole number >= 1.
+        (:data:`MISSING_DASK`), ``workers`` is not a whole number >= 1, an output would
+        replace an input (naming both), or the output folder was replaced while the batch ran.
     """
+    from .io.atomic import OutputSet
+
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise InputError(f"{out}: exists and is not a folder; give the batch's output folder")
-    out.mkdir(parents=True, exist_ok=True)
     if workers is not None and not (isinstance(workers, int) and workers >= 1):
         raise InputError(f"workers = {workers!r} must be a whole number >= 1")
+    read = [(os.fspath(path), "the manifest", None) for path in inputs]
+    for row in rows:
+        read += [(path, what, row.id) for path, what in _row_inputs(row)]
+    _check_outputs(rows, out, read)  # before any work: nothing the batch reads is one of its outputs
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"{out}: cannot create the output folder ({exc.strerror}); choose another path") from None
+    protected = list(dict.fromkeys(path for path, _, _ in read))  # no output may be one of them, at its rename too
+    summary_files = [out / SUMMARY_FILE, *([out / SUMMARY_PARQUET] if _has_pyarrow() else [])]
+    # the summary's folder held open from now to the last rewrite (renamed there, by descriptor)
+    summary_set = OutputSet([("summary", path) for path in summary_files], inputs=protected, reusable=True)
+    try:
+        return _plan_rows(rows, out, workers, scheduler, client, progress, protected, summary_set)
+    finally:
+        summary_set.close()
+
+
+def _plan_rows(rows: Sequence[BatchRow], out: Path, workers: int | None, scheduler: str | None, client: Any,
+               progress: Progress, protected: list[str], summary_set: Any) -> list[dict[str, Any]]:
+    """:func:`plan_many`'s work, once its outputs are checked."""
     earlier = _read_summary(out / SUMMARY_FILE)
     done: dict[str, dict[str, Any]] = {}
     todo: list[tuple[BatchRow, str]] = []
@@ -251,11 +286,11 @@ def plan_many(rows: Sequence[BatchRow], out_dir: str | os.PathLike, *, workers: 
         done[row.id] = {"id": row.id, **result, "route": row.route,
                         "profile": f"{row.id}.csv" if result["status"] == "ok" else "", "input_sha256": digest}
         progress.step(f"{row.id}: {done[row.id]['status']}")
-        _write_summary(out / SUMMARY_FILE, [done[r.id] for r in rows if r.id in done])
+        _write_summary(out / SUMMARY_FILE, [done[r.id] for r in rows if r.id in done], summary_set)
 
     if todo and workers == 1 and scheduler is None and client is None:
         for row, digest in todo:
-            finished(row, digest, plan_row(row.argv(out / f"{row.id}.csv")))
+            finished(row, digest, plan_row(row.argv(out / f"{row.id}.csv"), protected))
     elif todo:
         try:
             from dask.distributed import Client, LocalCluster, as_completed
@@ -273,8 +308,9 @@ def plan_many(rows: Sequence[BatchRow], out_dir: str | os.PathLike, *, workers: 
                     owned.append(cluster)
                     client = Client(cluster)
                 owned.insert(0, client)
-            futures = {client.submit(plan_row, row.argv(out / f"{row.id}.csv"), key=f"profileopt-plan-{row.id}-"
-                                     f"{digest[:12]}", pure=False): (row, digest) for row, digest in todo}
+            futures = {client.submit(plan_row, row.argv(out / f"{row.id}.csv"), protected,
+                                     key=f"profileopt-plan-{row.id}-{digest[:12]}", pure=False): (row, digest)
+                       for row, digest in todo}
             for future in as_completed(futures):
                 row, digest = futures[future]
                 try:
@@ -291,13 +327,16 @@ def plan_many(rows: Sequence[BatchRow], out_dir: str | os.PathLike, *, workers: 
     return [done[row.id] for row in rows]
 
 
-def plan_row(argv: Sequence[str]) -> dict[str, Any]:
+def plan_row(argv: Sequence[str], inputs: Iterable[str | os.PathLike] = ()) -> dict[str, Any]:
     """Plan one route as ``profileopt plan ARGV`` does; the summary row of its outcome.
 
     Parameters
     ----------
     argv : sequence of str
         ``profileopt plan``'s arguments (:meth:`BatchRow.argv`).
+    inputs : iterable of path, optional
+        More files the profile may not replace (the batch's manifest and every row's inputs),
+        checked before the plan and again when the profile is put in place.
 
     Returns
     -------
@@ -315,7 +354,7 @@ def plan_row(argv: Sequence[str]) -> dict[str, Any]:
     except _ArgumentError as exc:
         return _failed(str(exc))
     try:
-        summary, _ = command.execute(args)
+        summary, _ = command.execute(args, inputs=list(inputs))
     except InputError as exc:  # bad input, or infeasible: the one line `plan` says
         return _failed(flags_for_parameters(str(exc)))
     except PlanningError as exc:
@@ -424,16 +463,74 @@ def _typed(row: dict[str, str]) -> dict[str, Any]:
     return out
 
 
-def _write_summary(path: Path, rows: Iterable[dict[str, Any]]) -> None:
+def _write_summary(path: Path, rows: Iterable[dict[str, Any]], outputs: Any) -> None:
+    """``summary.csv`` (and ``summary.parquet``), written together by ``outputs``, the batch's
+    :class:`~profileopt.io.atomic.OutputSet` of them: renamed into the folder checked at the
+    start, and only if neither is now one of the batch's inputs."""
     from .io.atomic import atomic_write
 
     rows = list(rows)
-    with atomic_write(path) as handle:
-        writer = csv.DictWriter(handle, fieldnames=SUMMARY_COLUMNS, lineterminator="\n")
-        writer.writeheader()
-        for row in rows:
-            writer.writerow({key: "" if row.get(key) is None else row.get(key) for key in SUMMARY_COLUMNS})
-    _write_parquet(path.with_name(SUMMARY_PARQUET), rows)
+    with outputs:
+        with atomic_write(path) as handle:
+            writer = csv.DictWriter(handle, fieldnames=SUMMARY_COLUMNS, lineterminator="\n")
+            writer.writeheader()
+            for row in rows:
+                writer.writerow({key: "" if row.get(key) is None else row.get(key) for key in SUMMARY_COLUMNS})
+        _write_parquet(path.with_name(SUMMARY_PARQUET), rows)
+
+
+def _has_pyarrow() -> bool:
+    """Whether pyarrow (the ``parquet`` extra) can be imported, without importing it."""
+    import importlib.util
+
+    return importlib.util.find_spec("pyarrow") is not None
+
+
+def _row_inputs(row: BatchRow) -> list[tuple[str, str]]:
+    """The files a row reads, each with what it is: its route, its vehicle file, its terrain
+    files (a folder of tiles as its files)."""
+    from .io.tiles import terrain_files
+
+    found = [(row.route, f"the route of row '{row.id}'")]
+    for key, value in row.options:
+        if key == "vehicle" and names_vehicle_file(value):
+            found.append((value, f"the vehicle file of row '{row.id}'"))
+        elif key == "terrain":
+            parts = [part for part in value.split(";") if part]
+            try:
+                files = [str(file) for file in terrain_files(parts)]
+            except InputError:
+                files = parts  # the plan will say what is wrong
+            found += [(file, f"a terrain file of row '{row.id}'") for file in files]
+    return found
+
+
+def _check_outputs(rows: Sequence[BatchRow], out: Path, read: list[tuple[str, str, str | None]]) -> None:
+    """Refuse, before any work, an output of the batch that is a file it reads (one line
+    naming both): the summary that is any of them, a row's profile that is the manifest or
+    another row's input (its own route is that row's failure, as ``profileopt plan``'s)."""
+    from .io.atomic import file_identity
+
+    if not out.is_dir():
+        return  # a new folder: nothing in it is read
+    owners: dict[tuple, list[tuple[str, str, str | None]]] = {}
+    for path, what, row_id in read:
+        owners.setdefault(file_identity(path), []).append((path, what, row_id))
+    if not owners:
+        return
+    for name in (SUMMARY_FILE, SUMMARY_PARQUET):
+        found = owners.get(file_identity(out / name))
+        if found:
+            path, what = found[0][:2]
+            raise InputError(f"{out / name}: the batch's summary would replace {what} ({path}); choose another "
+                             "output folder")
+    for row in rows:
+        target = out / f"{row.id}.csv"
+        others = [found for found in owners.get(file_identity(target), []) if found[2] != row.id]
+        if others:
+            path, what = others[0][:2]
+            raise InputError(f"{target}: the profile of row '{row.id}' would replace {what} ({path}); give the row "
+                             "another id or choose another output folder")
 
 
 #: The summary's numeric columns and their Parquet types (the others are strings).

@@ -299,3 +299,89 @@ def test_tracks_over_a_folder_of_tiles_plan_as_plan_does(tmp_path: Path) -> None
     for name in ("arc", "back"):
         assert (tmp_path / "out" / f"{name}.csv").read_bytes() == alone(
             tmp_path, f"{name}.gpx", "--terrain", "tiles", "--vehicle", "atv")
+
+
+# --------------------------------------------------------------------------------------
+# Issue 30, items 1 and 7: no output of a batch replaces a file it reads
+
+
+def _snapshot(folder: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir()) if p.is_file()}
+
+
+@pytest.mark.parametrize("case", ["manifest named ID.csv", "manifest named summary.csv",
+                                  "summary.csv a link to the manifest", "ID.csv another row's route"])
+def test_no_output_of_a_batch_replaces_its_manifest_or_a_route(tmp_path: Path, case: str,
+                                                               capsys: pytest.CaptureFixture) -> None:
+    # Before: the manifest (or a route) was replaced by a profile or the summary, exit 0
+    out = tmp_path / "b"
+    out.mkdir()
+    short_route(out, "r.csv", 30.0)
+    manifest, text = out / "man.csv", "id,route,vehicle\nrr,r.csv,atv\n"
+    if case == "manifest named ID.csv":
+        manifest = out / "rr.csv"
+    elif case == "manifest named summary.csv":
+        manifest = out / "summary.csv"
+    elif case == "summary.csv a link to the manifest":
+        (out / "summary.csv").symlink_to("man.csv")
+    else:
+        text = "id,route,vehicle\nr,r.csv,atv\nq,r.csv,atv\n"  # row r's profile r.csv is row q's route
+    manifest.write_text(text)
+    before = _snapshot(out)
+    assert cli.main(["batch", "--manifest", str(manifest), "-o", str(out), "--workers", "1", "-q"]) == 2
+    captured = capsys.readouterr()
+    err = captured.err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    named = {"manifest named ID.csv": ("b/rr.csv: the profile of row 'rr' would replace the manifest", "rr.csv"),
+             "manifest named summary.csv": ("b/summary.csv: the batch's summary would replace the manifest",
+                                            "summary.csv"),
+             "summary.csv a link to the manifest": ("b/summary.csv: the batch's summary would replace the manifest",
+                                                    "man.csv"),
+             "ID.csv another row's route": ("b/r.csv: the profile of row 'r' would replace the route of row 'q'",
+                                            "r.csv")}[case]
+    assert named[0] in err and f"b/{named[1]})" in err, err
+    assert captured.out == "" and _snapshot(out) == before
+    assert not list(out.glob(".po-*.tmp"))
+
+
+def test_a_row_whose_profile_is_its_own_route_fails_alone(tmp_path: Path) -> None:
+    # as profileopt plan refuses `-o` naming its route: that row fails, the others are planned
+    short_route(tmp_path, "r.csv", 30.0)
+    short_route(tmp_path, "k.csv", 30.0)
+    (tmp_path / "m.csv").write_text("id,route\nr,r.csv\nk2,k.csv\n")
+    before = (tmp_path / "r.csv").read_bytes()
+    result = plan_many(read_manifest(tmp_path / "m.csv"), tmp_path, workers=1, inputs=[tmp_path / "m.csv"])
+    assert [row["status"] for row in result] == ["failed", "ok"]
+    assert "is the input" in result[0]["error"]
+    assert (tmp_path / "r.csv").read_bytes() == before
+
+
+def test_an_output_folder_swapped_during_a_batch_replaces_no_input(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                                   capsys: pytest.CaptureFixture) -> None:
+    # Before: with the output folder swapped for a link to the inputs' folder after the first
+    # route, the summary was written through the link over the manifest (named summary.csv)
+    from profileopt import batch
+
+    inputs, out = tmp_path / "in", tmp_path / "out"
+    inputs.mkdir()
+    out.mkdir()
+    short_route(inputs, "r.csv", 30.0)
+    short_route(inputs, "s.csv", 30.0)
+    manifest = inputs / "summary.csv"
+    manifest.write_text("id,route\nr2,r.csv\ns2,s.csv\n")
+    before = _snapshot(inputs)
+    planned = batch.plan_row
+
+    def plan_then_swap(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202
+        result = planned(*args, **kwargs)
+        if not (tmp_path / "out.old").exists():  # after the first route: out/ becomes a link to in/
+            out.rename(tmp_path / "out.old")
+            out.symlink_to(inputs)
+        return result
+
+    monkeypatch.setattr(batch, "plan_row", plan_then_swap)
+    assert cli.main(["batch", "--manifest", str(manifest), "-o", str(out), "--workers", "1", "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "is now the input" in err and str(manifest) in err, err
+    assert _snapshot(inputs) == before
+    assert not list(tmp_path.rglob(".po-*.tmp"))

@@ -139,6 +139,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except InputError as exc:
         if args.debug:
             traceback.print_exc()
+        _drop_unwritable_stdout()  # a full standard output: its buffer is not written again at exit
         print(f"profileopt {args.command}: error: {flags_for_parameters(str(exc))}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # output piped into a reader that stopped early (e.g. head)
@@ -201,6 +202,18 @@ def _flush_stdout() -> None:
 
 class _StdoutFailed(OSError):
     """Standard output could not take what the command printed."""
+
+
+def _drop_unwritable_stdout() -> None:
+    """Write what is left in standard output's buffer, or, if it cannot take it (a full
+    standard output, refused as bad input), point it at the null device, so that the
+    interpreter's last flush does not add a second message at exit."""
+    if sys.stdout is None:
+        return
+    try:
+        sys.stdout.flush()
+    except (OSError, ValueError):
+        _silence_stdout()
 
 
 def _silence_stdout() -> None:

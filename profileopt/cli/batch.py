@@ -65,7 +65,8 @@ def run(args: argparse.Namespace) -> int:
             raise InputError("two route files have the same name; give a manifest with an id for each")
         rows = [BatchRow(stem, route, common) for stem, route in zip(stems, args.routes)]
     with terminal_progress("profileopt batch", enabled=not args.quiet) as progress:
-        summary = plan_many(rows, args.out, workers=args.workers, scheduler=args.scheduler, progress=progress)
+        summary = plan_many(rows, args.out, workers=args.workers, scheduler=args.scheduler, progress=progress,
+                            inputs=[args.manifest] if args.manifest is not None else [])
     failed = [row for row in summary if row["status"] != "ok"]
     for row in failed:
         print(f"profileopt batch: {row['id']}: {row['error']}", file=sys.stderr)

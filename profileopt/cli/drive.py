@@ -103,17 +103,6 @@ def run(args: argparse.Namespace) -> int:
                     "sensor_noise_m": args.sensor_noise, "sensor_spacing_m": args.sensor_spacing,
                     "seed": args.seed, "segment_length_m": args.segment_length, "unseen_descent": args.unseen_descent,
                     "roughness_window_m": args.roughness_window}
-        with outputs:
-            if args.output is not None:
-                from ..online.drive import write_drive
-
-                write_drive(driven, args.output, settings=settings)
-            if args.plot is not None:
-                from ..viz.drives import plot_drive
-
-                plot_drive(driven, offline, args.plot, sensor_range_m=args.sensor_range, unseen=unseen_label,
-                           route=printable(Path(args.route).name),
-                           vehicle=printable(Path(vehicle.name).stem) if vehicle.name else None)
     summary = {
         "route": args.route, "vehicle": args.vehicle, "model": args.model, "sensor_range_m": args.sensor_range,
         "unseen": unseen_label, "unseen_speed_mps": driven.unseen_speed_mps, "cycle_s": args.cycle,
@@ -126,10 +115,20 @@ def run(args: argparse.Namespace) -> int:
         "cycle_compute_ms": driven.compute_ms(), "notes": list(driven.notes),
     }
     out = sys.stderr if outputs.uses_stdout else sys.stdout
-    if args.json:
-        print(json.dumps(summary, indent=2), file=out)
-    else:
-        print(printable(_human(summary, args)), file=out)
+    text = json.dumps(summary, indent=2) if args.json else printable(_human(summary, args))
+    with outputs:
+        if args.output is not None:
+            from ..online.drive import write_drive
+
+            write_drive(driven, args.output, settings=settings)
+        if args.plot is not None:
+            from ..viz.drives import plot_drive
+
+            plot_drive(driven, offline, args.plot, sensor_range_m=args.sensor_range, unseen=unseen_label,
+                       route=printable(Path(args.route).name),
+                       vehicle=printable(Path(vehicle.name).stem) if vehicle.name else None)
+        # printed before the files are renamed into place: a full standard output replaces none
+        outputs.print(text, out)
     return 0
 
 

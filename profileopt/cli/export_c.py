@@ -42,9 +42,12 @@ def run(args: argparse.Namespace) -> int:
     outputs = folder_outputs("-o", export_c_paths(vehicle, out), [vehicle_input(args.vehicle)])
     with outputs or contextlib.nullcontext():
         result = export_c(vehicle, out, models=args.model, n_stages=args.stages)
-    for path in (result.source, result.header, result.example, result.readme):
-        print(path)
-    print(f"{len(result.functions)} functions, each with its Jacobian (*_jac); see README.md there")
+        text = "\n".join([*(str(path) for path in (result.source, result.header, result.example, result.readme)),
+                          f"{len(result.functions)} functions, each with its Jacobian (*_jac); see README.md there"])
+        if outputs is not None:  # printed before the files are renamed into place: a full standard output
+            outputs.print(text)  # replaces none of them
+    if outputs is None:  # a new folder: no file there to replace
+        print(text)
     return 0
 
 

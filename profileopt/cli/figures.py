@@ -31,10 +31,11 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(f"--out {out}: cannot create the folder ({exc.strerror}); choose another path") from None
     if outputs is None:
         outputs = folder_outputs("--out", paper_figure_paths(out), inputs)
-    with outputs, terminal_progress("profileopt figures", enabled=not args.quiet) as progress:
-        written = write_paper_figures(out, vehicle, resonant, progress=progress)
-    for path in written:
-        print(f"wrote {path}")
+    with outputs:
+        with terminal_progress("profileopt figures", enabled=not args.quiet) as progress:
+            written = write_paper_figures(out, vehicle, resonant, progress=progress)
+        # printed before the files are renamed into place: a full standard output replaces none
+        outputs.print("\n".join(f"wrote {path}" for path in written))
     return 0
 
 

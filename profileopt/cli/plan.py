@@ -94,18 +94,21 @@ def arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    summary, uses_stdout = execute(args)
-    out = sys.stderr if uses_stdout else sys.stdout  # standard output holds the profile
-    if args.json:
-        print(json.dumps(summary, indent=2), file=out)
-    else:
-        from .messages import printable
+    def report(summary: dict, outputs) -> None:  # noqa: ANN001  (OutputSet)
+        # printed before the files are renamed into place: a full standard output replaces none
+        out = sys.stderr if outputs.uses_stdout else sys.stdout  # standard output holds the profile
+        if args.json:
+            outputs.print(json.dumps(summary, indent=2), out)
+        else:
+            from .messages import printable
 
-        print(printable(_human(summary, args)), file=out)  # a file name not in UTF-8: U+FFFD
+            outputs.print(printable(_human(summary, args)), out)  # a file name not in UTF-8: U+FFFD
+
+    execute(args, report=report)
     return 0
 
 
-def execute(args: argparse.Namespace) -> tuple[dict, bool]:
+def execute(args: argparse.Namespace, report=None, inputs=()) -> tuple[dict, bool]:  # noqa: ANN001
     """Plan as ``profileopt plan`` does and write its outputs, printing only notes (none with
     ``--quiet``): the work of :func:`run` without the summary (``profileopt batch`` runs it
     for each route).
@@ -114,6 +117,14 @@ def execute(args: argparse.Namespace) -> tuple[dict, bool]:
     ----------
     args : argparse.Namespace
         ``profileopt plan``'s arguments.
+    report : callable, optional
+        ``report(summary, outputs)``, called once the outputs are written and before they are
+        put in place, to print the summary with ``outputs.print``
+        (:meth:`profileopt.io.atomic.OutputSet.print`): a stream that fails then leaves
+        every file as it was.
+    inputs : iterable of path, optional
+        More files no output may replace, besides the route, the vehicle and the terrain
+        (``profileopt batch``: its manifest and every route's inputs).
 
     Returns
     -------
@@ -134,7 +145,7 @@ def execute(args: argparse.Namespace) -> tuple[dict, bool]:
     # first, before any work: every output checked (none may be an input, nor both the same
     # file); then written together, all or none
     outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot), ("--map", args.map)],
-                        inputs=[args.route, vehicle_input(args.vehicle), *track_inputs(args)])
+                        inputs=[args.route, vehicle_input(args.vehicle), *track_inputs(args), *inputs])
     vehicle = load_vehicle(args.vehicle)
     from ..planning import SolverOptions, plan  # the numerical packages: imported only when planning
 
@@ -155,17 +166,19 @@ def execute(args: argparse.Namespace) -> tuple[dict, bool]:
     say(route.notes)
     route_name = printable(Path(args.route).name)  # for the pictures' titles
     vehicle_name = printable(Path(vehicle.name).stem) if vehicle.name else None
-    with terminal_progress("profileopt plan", enabled=not args.quiet) as progress:
-        profile = plan(
-            route, vehicle, segment_length_m=args.segment_length, roughness_window_m=args.roughness_window,
-            path_tolerance_m=tolerance, model=args.model, force_margin=args.force_margin,
-            keep_contact=args.keep_contact, smoothing=args.smoothing,
-            max_jerk_mps3=args.max_jerk, v0_mps=args.v0, vend_mps=args.vend, method=args.method,
-            band=args.band, refine=args.refine, progress=progress,
-            solver_options=SolverOptions(nlp_solver=args.solver),
-        )
-        progress.expect(sum(name is not None for name in (args.plot, args.map)))
-        with outputs:
+    # the outputs are put in place when this block ends: after the progress display has
+    # ended and the summary is printed (report), so a full standard output replaces no file
+    with outputs:
+        with terminal_progress("profileopt plan", enabled=not args.quiet) as progress:
+            profile = plan(
+                route, vehicle, segment_length_m=args.segment_length, roughness_window_m=args.roughness_window,
+                path_tolerance_m=tolerance, model=args.model, force_margin=args.force_margin,
+                keep_contact=args.keep_contact, smoothing=args.smoothing,
+                max_jerk_mps3=args.max_jerk, v0_mps=args.v0, vend_mps=args.vend, method=args.method,
+                band=args.band, refine=args.refine, progress=progress,
+                solver_options=SolverOptions(nlp_solver=args.solver),
+            )
+            progress.expect(sum(name is not None for name in (args.plot, args.map)))
             if args.output is not None:
                 write_profile(profile, args.output, route=route)
             if args.plot is not None:
@@ -179,14 +192,16 @@ def execute(args: argparse.Namespace) -> tuple[dict, bool]:
                 progress.step(f"drawing {args.map}")
                 plot_plan_map(profile, made if made is not None else _plain_map(route), args.map,
                               route=route_name, vehicle=vehicle_name)
-    # the route and the vehicle first, as compare's JSON names them
-    summary = {"route": args.route, "vehicle": args.vehicle, **profile.summary()}
-    say(summary["notes"])  # the plan's, then each turn sharper than the turning circle
-    smoothing = track.smoothing if track is not None else None
-    if smoothing is not None:
-        summary["track"] = {"smoothed": smoothing.smoothed, "tolerance_m": smoothing.tolerance_m,
-                            "source": smoothing.tolerance_source, "noise_m": smoothing.noise.noise_m,
-                            "points": smoothing.noise.points, "moved_max_m": smoothing.moved_max_m}
+        # the route and the vehicle first, as compare's JSON names them
+        summary = {"route": args.route, "vehicle": args.vehicle, **profile.summary()}
+        say(summary["notes"])  # the plan's, then each turn sharper than the turning circle
+        smoothing = track.smoothing if track is not None else None
+        if smoothing is not None:
+            summary["track"] = {"smoothed": smoothing.smoothed, "tolerance_m": smoothing.tolerance_m,
+                                "source": smoothing.tolerance_source, "noise_m": smoothing.noise.noise_m,
+                                "points": smoothing.noise.points, "moved_max_m": smoothing.moved_max_m}
+        if report is not None:
+            report(summary, outputs)
     return summary, outputs.uses_stdout
 
 

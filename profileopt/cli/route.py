@@ -61,8 +61,9 @@ def run(args: argparse.Namespace) -> int:
             plot_route_map(result, args.plot, title=printable(f"{Path(args.track).name}"
                                                               + (f" over {_terrain_name(args)}" if args.terrain
                                                                  else "")))
-    out = sys.stderr if outputs.uses_stdout else sys.stdout
-    print(printable(_human(result, args)), file=out)  # a file name not in UTF-8: U+FFFD
+        # printed before the files are renamed into place: a full standard output replaces none
+        out = sys.stderr if outputs.uses_stdout else sys.stdout
+        outputs.print(printable(_human(result, args)), out)  # a file name not in UTF-8: U+FFFD
     return 0
 
 

@@ -104,20 +104,36 @@ def assumed_roughness(args: argparse.Namespace):  # noqa: ANN201  (AssumedRoughn
 
 
 def refuse_terrain_options(args: argparse.Namespace) -> None:
-    """Refuse ``--terrain-crs`` without ``--terrain``: it has no terrain file to apply to.
+    """Refuse the options of a terrain without ``--terrain``: ``--terrain-crs`` has no
+    terrain file to apply to, ``--corridor`` and ``--max-gap`` no terrain to take points
+    from (a track's own elevations are used, every one of them).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The options of :func:`add_track_arguments`.
 
     Raises
     ------
     InputError
-        ``--terrain-crs`` given and ``--terrain`` not.
+        ``--terrain-crs``, ``--corridor`` or ``--max-gap`` given (not at its default) and
+        ``--terrain`` not.
     """
-    if args.terrain is None and args.terrain_crs is not None:
-        from ..errors import InputError
+    if args.terrain is not None:
+        return
+    from ..errors import InputError
 
+    if args.terrain_crs is not None:
         from ..io.table import quoted
 
         raise InputError(f"--terrain-crs {quoted(args.terrain_crs)[1:-1]} sets the CRS of a terrain file, and no --terrain "
                          "is given; drop it, or give the terrain (--terrain FILE); the track's CRS is --track-crs")
+    given = [flag for flag, value, default in (("--corridor", args.corridor, DEFAULT_CORRIDOR_M),
+                                               ("--max-gap", args.max_gap, DEFAULT_MAX_GAP_M)) if value != default]
+    if given:
+        verb, them = ("applies", "it") if len(given) == 1 else ("apply", "them")
+        raise InputError(f"{' and '.join(given)} {verb} to the ground points of a terrain (--terrain TERRAIN), and no "
+                         f"--terrain is given: the track's own elevations are used; drop {them}, or give the terrain")
 
 
 def refuse_track_options(route_path: str, args: argparse.Namespace) -> None:
@@ -136,5 +152,6 @@ def refuse_track_options(route_path: str, args: argparse.Namespace) -> None:
     given = [name for name, default in defaults.items() if getattr(args, name) != default]
     if given:
         flags = ", ".join("--" + name.replace("_", "-") for name in given)
-        raise InputError(f"{route_path}: {flags} apply to a track sampled over a terrain (--terrain TERRAIN); this is a route "
-                         "file, already sampled: drop them, or give the track and --terrain")
+        verb, them = ("applies", "it") if len(given) == 1 else ("apply", "them")
+        raise InputError(f"{route_path}: {flags} {verb} to a track sampled over a terrain (--terrain TERRAIN); this is a "
+                         f"route file, already sampled: drop {them}, or give the track and --terrain")

@@ -26,6 +26,7 @@ import argparse
 import dataclasses
 import json
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -58,9 +59,11 @@ def _vehicle_files(args: argparse.Namespace, profile) -> list[str]:
 def _vehicle_of(args: argparse.Namespace, profile) -> tuple[str, str | None, list[str]]:
     """The vehicle to verify with, the file it reads, and notes.
 
-    The one the profile records (an absolute path or a bundled name, with the SHA-256 of the
-    file planned with: another file there is refused), unless --vehicle names it (a file of
-    another name is refused; one of other content is used, with a note).
+    Without --vehicle: the one the profile records (an absolute path or a bundled name, with
+    the SHA-256 of the file planned with: a file there whose bytes differ is refused). With
+    --vehicle: that one, as asked; the same bytes under any name are the vehicle planned
+    with, other bytes are used with a note saying so (compared by path for an older profile
+    that records no SHA-256).
     """
     from ..io.profiles import vehicle_file_sha256
 
@@ -72,27 +75,43 @@ def _vehicle_of(args: argparse.Namespace, profile) -> tuple[str, str | None, lis
             raise InputError(f"{args.profile}: the profile does not record its vehicle; pass --vehicle")
         return args.vehicle, vehicle_input(args.vehicle), notes
     if args.vehicle is not None:
-        if Path(args.vehicle).stem != Path(recorded).stem:
-            raise InputError(f"{args.profile}: the profile was planned for vehicle '{recorded}' but --vehicle is "
-                             f"'{args.vehicle}'; pass --vehicle {recorded} (or leave it out), or plan again")
         found, sha = vehicle_file_sha256(args.vehicle)
-        if digest is not None and sha != digest:
-            notes.append(f"--vehicle {args.vehicle} is not the file the profile was planned with (its content "
-                         f"differs from that of {recorded}): verified with --vehicle {args.vehicle}")
+        if digest is not None:
+            same, how = sha == digest, "its SHA-256 differs from the vehicle_sha256 the profile records"
+        else:
+            same, how = _same_vehicle(args.vehicle, recorded), ("another file; the profile records no SHA-256 of "
+                                                                "its vehicle")
+        if not same:
+            notes.append(f"--vehicle {args.vehicle} is not the vehicle the profile was planned with ({recorded}; "
+                         f"{how}): verified against --vehicle {args.vehicle}, as asked")
         return args.vehicle, found, notes
     if vehicle_input(recorded) is not None and not Path(recorded).exists():
         raise InputError(f"{args.profile}: the profile was planned with the vehicle file {recorded}, which is not "
                          "there; pass --vehicle FILE with that vehicle, or plan again")
     found, sha = vehicle_file_sha256(recorded)
     if digest is None:
+        where = "" if Path(found).is_absolute() or vehicle_input(recorded) is None else \
+            " (a relative path, from the current folder)"
         notes.append(f"the profile records no SHA-256 of its vehicle (written by an older profileopt): {found} is "
-                     "used as found (a relative path from the current folder); pass --vehicle to choose another")
+                     f"used as found{where}; pass --vehicle to choose another")
     elif sha != digest:
         raise InputError(f"{args.profile}: the vehicle file {found} is not the one the profile was planned with "
                          "(its SHA-256 differs from the vehicle_sha256 its settings line records: it was changed "
-                         "or replaced since); plan again, or pass --vehicle FILE to verify against it anyway")
+                         "or replaced since); plan again, or pass --vehicle FILE to verify against that file as it "
+                         "is now")
     args.vehicle = recorded
     return recorded, found, notes
+
+
+def _same_vehicle(given: str, recorded: str) -> bool:
+    """Whether --vehicle names the vehicle an older profile (no SHA-256) records: the same
+    bundled name, or the same file (a relative recorded path taken from the current folder)."""
+    if vehicle_input(given) is None or vehicle_input(recorded) is None:
+        return given == recorded
+    try:
+        return os.path.samefile(given, recorded)
+    except OSError:  # one of them is not there
+        return os.path.abspath(given) == os.path.abspath(recorded)
 
 
 #: The default of ``--max-memory`` (GB): :data:`profileopt.verification.verify.MAX_VERIFY_PEAK_BYTES`,
@@ -144,10 +163,7 @@ def run(args: argparse.Namespace) -> int:
     """Run ``profileopt verify``; returns the verdict's status (:data:`VERIFY_EXIT_STATUSES`)."""
     from ..core.vehicle import load_vehicle
     from ..io import read_profile, read_route
-    from ..io.atomic import (  # imported when the command runs, not for --help (issue 14)
-        STDOUT,
-        OutputSet,
-    )
+    from ..io.atomic import OutputSet  # imported when the command runs, not for --help (issue 14)
     from ..physics.forces import get_model
     from ..verification.limit_check import check_limits
     from ..verification.verify import check_memory, estimated_peak_bytes, verify
@@ -185,16 +201,27 @@ def run(args: argparse.Namespace) -> int:
             raise
         # a profile so far beyond the vehicle's limits that it cannot be simulated (1e155 m/s)
         return _report_unsimulated(args, check, header, str(exc))
+    out = sys.stderr if outputs.uses_stdout else sys.stdout  # standard output holds the table
+    status, verdict = _verdict(check, result)
+    # the summary is printed before the files are renamed into place (OutputSet.print): a
+    # full standard output replaces none of them
+    if args.json:
+        text = json.dumps(result.summary(timings=False) | {"exit_status": status}, indent=2)
+    else:
+        text = printable(_summary_text(args, check, result, header, verdict))  # a file name not in UTF-8: U+FFFD
     with outputs:
         if args.output is not None:
             result.to_csv(args.output)
         if args.plot is not None:
             plot_verification(result, args.plot)
-    out = sys.stderr if outputs.uses_stdout else sys.stdout  # standard output holds the table
-    status, verdict = _verdict(check, result)
-    if args.json:
-        print(json.dumps(result.summary(timings=False) | {"exit_status": status}, indent=2), file=out)
-        return status
+        outputs.print(text, out)
+    return status
+
+
+def _summary_text(args: argparse.Namespace, check, result, header: str, verdict: str) -> str:  # noqa: ANN001
+    """The lines verify prints after a simulation."""
+    from ..io.atomic import STDOUT
+
     i = result.worst_segment
     win = result.windows
     worst = win.describe(win.worst)
@@ -226,8 +253,7 @@ def run(args: argparse.Namespace) -> int:
         lines.append("wrote the table to standard output" if args.output == STDOUT else f"wrote {args.output}")
     if args.plot is not None:
         lines.append(f"wrote {args.plot}")
-    print(printable("\n".join(lines)), file=out)  # a file name not in UTF-8: U+FFFD
-    return status
+    return "\n".join(lines)
 
 
 def _check_bounds(args: argparse.Namespace) -> None:
@@ -268,7 +294,8 @@ def arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("profile", help="profile CSV written by 'profileopt plan -o'")
     parser.add_argument("--vehicle", default=None, metavar="NAME_OR_TOML",
                         help="bundled vehicle name or .toml file (default: the vehicle the profile "
-                             "records; a different one is refused)")
+                             "records; another one is used as asked, with a note that it is not the one planned "
+                             "with)")
     parser.add_argument("--model", default=None, choices=list(PLAN_MODEL_KEYS),
                         help="force model to check against (default: the model the profile records)")
     # the bounds are verify's own, never read from the profile's settings line (a note says

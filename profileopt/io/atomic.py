@@ -18,7 +18,10 @@ One design for every output of the package:
 - An output that is a symlink to a file (or a dangling symlink) is written through to its
   target, as shell redirection does; the link stays.
 - A set writes its streams first and renames its files last, so that a stream that fails
-  (``/dev/full``, a closed standard output) leaves every file as it was. Each rename is made
+  (``/dev/full``, a closed standard output) leaves every file as it was. What a command
+  prints for its user (its summary, :meth:`OutputSet.print`) is such a stream too: written
+  and flushed after the streams and before any rename, so a full standard output
+  (``> /dev/full``) replaces no file either. Each rename is made
   in the folder the set checked (by its file descriptor, where the system allows it) and
   only if the file there is still none of the command's inputs (device and inode), so that
   a folder swapped for a link to the inputs' folder during the run replaces nothing.
@@ -43,7 +46,7 @@ from typing import IO, Iterable, Iterator
 from ..errors import InputError
 
 __all__ = ["atomic_write", "atomic_path", "check_output_path", "check_output_paths", "OutputSet", "STDOUT",
-           "PICTURE_OPTIONS", "WRITE_FAILURES", "picture_format"]
+           "PICTURE_OPTIONS", "WRITE_FAILURES", "picture_format", "file_identity"]
 
 #: The output path that means standard output (for the outputs that allow it).
 STDOUT = "-"
@@ -227,6 +230,24 @@ def _identity(path: str | os.PathLike) -> tuple:
     return ("inode", st.st_dev, st.st_ino)
 
 
+def file_identity(path: str | os.PathLike) -> tuple:
+    """What makes two paths the same file, however they are spelt (the key :class:`OutputSet`
+    compares outputs with inputs by).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A file; a symlink stands for its target.
+
+    Returns
+    -------
+    tuple
+        ``("inode", device, inode)`` of an existing file (a hard link or a symlink to it gives
+        the same), else ``("path", resolved path)``.
+    """
+    return _identity(path)
+
+
 _ACTIVE: contextvars.ContextVar["OutputSet | None"] = contextvars.ContextVar("profileopt_output_set", default=None)
 
 
@@ -248,6 +269,11 @@ class OutputSet:
     inputs : iterable of path or None, optional
         The files the command reads: an output that is one of them (the same file however
         it is spelt, a hard link or symlink included) is refused.
+    reusable : bool, optional
+        Keep the output folders open after a ``with`` block ends, so that the set can be
+        entered again and write its outputs anew in the same folders (a batch's summary,
+        rewritten after every route); :meth:`close` releases them. Default False: the
+        folders are closed when the block ends.
 
     Raises
     ------
@@ -262,9 +288,12 @@ class OutputSet:
     ...     write_profile(profile, "out.csv")
     """
 
-    def __init__(self, outputs: Iterable[tuple], inputs: Iterable[str | os.PathLike | None] = ()) -> None:
+    def __init__(self, outputs: Iterable[tuple], inputs: Iterable[str | os.PathLike | None] = (), *,
+                 reusable: bool = False) -> None:
         self._targets: dict[str, _Target] = {}
         self._pending: list[tuple[_Target, Path]] = []
+        self._texts: list[tuple[str, IO[str] | None]] = []
+        self._reusable = reusable
         self._token: contextvars.Token | None = None
         seen: dict[tuple, _Target] = {}
         input_ids = {}
@@ -317,6 +346,28 @@ class OutputSet:
     def _target(self, path: str | os.PathLike) -> _Target | None:
         return self._targets.get(_key(path))
 
+    def print(self, text: str, file: IO[str] | None = None) -> None:
+        """Print ``text`` (and a line end) to ``file`` when the block ends without an error:
+        after the streams, before any file is renamed into place, flushed, so that a stream
+        that fails (a full standard output) leaves every file output as it was.
+
+        Parameters
+        ----------
+        text : str
+            What the command says to its user (its summary).
+        file : text stream, optional
+            Where (default: standard output, as :func:`print`); nothing is printed when it
+            is None at the end (standard output closed when the command started).
+
+        Raises
+        ------
+        InputError
+            When the block ends: the stream cannot take the text (a full disk, ``/dev/full``);
+            no file output is then written. A closed pipe (``| head``) raises
+            :class:`BrokenPipeError`, as :func:`print` does.
+        """
+        self._texts.append((text, file))
+
     def __enter__(self) -> "OutputSet":
         if _ACTIVE.get() is None:  # an inner set inside an active one defers to it
             self._token = _ACTIVE.set(self)
@@ -329,24 +380,63 @@ class OutputSet:
         writing = self._pending[-1][0] if self._pending else None  # the output being written when it failed
         try:
             if exc_type is None:
-                # the copies into streams first (standard output, a FIFO, /dev/full): a stream
-                # that fails leaves every file as it was; then the renames, each atomic
-                for target, tmp in sorted(self._pending, key=lambda item: not item[0].stream):
-                    _deliver(target, tmp, folder=self._folders.get(target.file.parent), inputs=self._inputs)
+                # the copies into streams first (standard output, a FIFO, /dev/full), then
+                # what the command prints: a stream that fails leaves every file as it was;
+                # then the renames, each atomic
+                ordered = sorted(self._pending, key=lambda item: not item[0].stream)
+                for target, tmp in ordered:
+                    if target.stream:
+                        _deliver(target, tmp)
+                files = any(not target.stream for target, _ in ordered)
+                for text, file in self._texts:
+                    _say(text, file, files=files)
+                for target, tmp in ordered:
+                    if not target.stream:
+                        _deliver(target, tmp, folder=self._folders.get(target.file.parent), inputs=self._inputs)
         finally:
             for _, tmp in self._pending:
                 _remove(tmp)
             self._pending = []
-            self._close_folders()
+            self._texts = []
+            if not self._reusable:
+                self._close_folders()
         if (isinstance(exc, OSError) and not isinstance(exc, BrokenPipeError) and exc.errno in WRITE_FAILURES
                 and writing is not None):  # the disk filled up while an output was written
             raise InputError(f"{writing.describe()}: cannot write it ({exc.strerror or exc}); nothing was written, "
                              "free some space or choose another output") from None
 
+    def close(self) -> None:
+        """Release the output folders a ``reusable`` set holds open (nothing for another set,
+        whose block closes them)."""
+        self._close_folders()
+
     def _close_folders(self) -> None:
         for fd in self._folders.values():
             os.close(fd)
         self._folders = {}
+
+
+def _say(text: str, file: IO[str] | None, *, files: bool) -> None:
+    """Print ``text`` to ``file`` (standard output if None) and flush it; a full one is one
+    line naming it (:meth:`OutputSet.print`), and saying that no file was written if
+    ``files`` (the set has file outputs)."""
+    stream = sys.stdout if file is None else file
+    if stream is None:  # started with standard output closed: what is printed goes nowhere, as print does
+        return
+    try:
+        print(text, file=stream)
+        stream.flush()
+    except BrokenPipeError:  # the reader stopped early (| head): the command line's status 141
+        raise
+    except OSError as exc:
+        if exc.errno not in WRITE_FAILURES:
+            raise
+        name = ("standard output" if stream is sys.stdout or stream is sys.__stdout__ else
+                "standard error" if stream is sys.stderr or stream is sys.__stderr__ else
+                str(getattr(stream, "name", "the output stream")))
+        unwritten = "no file output was written, " if files else ""
+        raise InputError(f"{name}: cannot write ({exc.strerror or exc}); {unwritten}free some space or send {name} "
+                         "elsewhere") from None
 
 
 def _key(path: str | os.PathLike) -> str:

@@ -271,11 +271,12 @@ def read_las(path: str | os.PathLike, units_m: float | tuple[float, float] | Non
         raise InputError(f"{path}: {exc}") from None
 
 
-def _check_layout(head: bytes, size: int) -> tuple[int, int | None]:
+def _check_layout(head: bytes, size: int, laz_chunks: int | None = None) -> tuple[int, int | None]:
     """The point count of a LAS public header block and the number of point records the file
     stores (None when compressed: only decoding tells), after checking that the header fits
     the file: its variable length records between the header and the point data, its
-    extended ones after them (LAS 1.4 R15, Table 4; fields named as there)."""
+    extended ones after them (LAS 1.4 R15, Table 4; fields named as there). ``laz_chunks``:
+    the chunks a LAZ file's chunk table counts (None: not compressed, or no table)."""
     if len(head) < 227:
         raise _Bad(f"is {size} bytes long, shorter than the 227-byte LAS public header block; the file is cut short")
     minor = head[25]
@@ -304,14 +305,26 @@ def _check_layout(head: bytes, size: int) -> tuple[int, int | None]:
         raise _Bad(f"its header states point data format {point_format}{least} and records of {record_bytes} bytes: "
                    "the header ('point data format', 'point data record length', bytes 104-106) is damaged or the "
                    "format is not LAS 1.0-1.4's")
-    if count == 0:
-        raise _Bad("holds no points (its header counts 0 point records): a terrain needs measured points")
     if compressed or record_bytes == 0:
+        if count == 0 and laz_chunks:
+            raise _Bad(f"its header counts 0 point records, but its compressed point data hold {laz_chunks:,} "
+                       "chunk(s) of points: the header's point count ('number of point records') is wrong; set it to "
+                       "the number of points the file holds (e.g. 'lasinfo -repair', LAStools)")
+        if count == 0:
+            raise _Bad("holds no points (its header counts 0 point records): no compressed point data follow its "
+                       "header; a terrain needs measured points")
         return count, None
     end = evlr_start if evlr_count and evlr_start else size
     if minor >= 3 and head[6] & 0x02:  # waveform data packets inside the file, after the points
         end = min(end, struct.unpack_from("<Q", head, 227)[0] or end)
     stored = max(end - offset, 0) // record_bytes
+    if count == 0 and stored:
+        raise _Bad(f"its header counts 0 point records, but the file holds {stored:,} records of {record_bytes} bytes "
+                   f"after byte {offset}: the header's point count ('number of point records') is wrong; set it to "
+                   f"{stored} (e.g. 'lasinfo -repair', LAStools)")
+    if count == 0:
+        raise _Bad("holds no points (its header counts 0 point records): no records follow its header; a terrain "
+                   "needs measured points")
     if stored < count:
         raise _Bad(f"is cut short: its header counts {count} point records of {record_bytes} bytes from byte "
                    f"{offset}, {count * record_bytes} bytes, but only {end - offset} follow ({stored} records)")
@@ -329,14 +342,34 @@ def _preflight(path: Path) -> tuple[Any, int, int | None]:
         with open(path, "rb") as handle:
             head = handle.read(375)
             size = os.fstat(handle.fileno()).st_size
+            chunks = _laz_chunk_count(handle, head, size)
     except OSError as exc:
         raise _Bad(f"cannot read the LAS file ({exc.strerror}); check the path") from None
     if head[:4] != b"LASF":
         raise _Bad("does not start with 'LASF'; is this an ASPRS LAS or LAZ file?")
     if len(head) >= 26 and (head[24] != 1 or head[25] > 4):
         raise _Bad(f"LAS version {head[24]}.{head[25]} is not supported; this reader handles 1.0-1.4")
-    count, stored = _check_layout(head, size)
+    count, stored = _check_layout(head, size, chunks)
     return laspy, count, stored
+
+
+def _laz_chunk_count(handle: Any, head: bytes, size: int) -> int | None:
+    """The number of chunks a LAZ file's chunk table counts (LASzip: the point data start
+    with the 8-byte offset of the table, which starts with a version 0 and the count); None
+    for a LAS file, or a table that is not there (a streamed file) or not readable."""
+    if len(head) < 227 or head[:4] != b"LASF" or not head[104] & 0xC0:
+        return None
+    offset = struct.unpack_from("<I", head, 96)[0]
+    handle.seek(offset)
+    raw = handle.read(8)
+    if len(raw) < 8:
+        return None
+    table = struct.unpack("<q", raw)[0]
+    if not offset + 8 <= table <= size - 8:
+        return None
+    handle.seek(table)
+    version, chunks = struct.unpack("<II", handle.read(8))
+    return chunks if version == 0 else None
 
 
 def _read_las(path: Path, units_m: float | tuple[float, float] | None, crs_given: Any,
@@ -452,6 +485,7 @@ def _decode(laspy: Any, path: Path, count: int, stored: int | None, units_m: flo
         raise _Bad(_laspy_failure(exc)) from None
     with reader:
         header, crs = _stated(reader, path, count, stored, units_m, crs_given)
+        laszip = _laszip_record(reader) if stored is None else None  # before laspy decodes (and drops it)
         count, horizontal_m, vertical_m = header.point_count, header.horizontal_unit_m, header.vertical_unit_m
         area_m2 = float(np.prod((np.asarray(header.max_xyz) - np.asarray(header.min_xyz))[:2])) * horizontal_m**2
         density = count / area_m2 if math.isfinite(area_m2) and area_m2 > 0 else None
@@ -492,16 +526,137 @@ def _decode(laspy: Any, path: Path, count: int, stored: int | None, units_m: flo
     if decoded < count:
         raise _Bad(f"holds {decoded:,} point records, its header counts {count:,}: the file is cut short")
     notes = []
-    if stored is not None and stored > count:
+    exact = True
+    if stored is None:  # compressed: the records beyond the header's count, if any, found in its chunks
+        stored, exact = _laz_stored(path, laszip, count)
+    if stored is not None and stored > count and exact:
         notes.append(f"{path.name}: holds {stored:,} point records, but its header counts {count:,}: the first "
                      f"{count:,} were read, the other {stored - count:,} ignored (the header's count is wrong or records "
                      "were appended); set the count in its header to read them all")
+    elif stored is not None and stored > count:
+        notes.append(f"{path.name}: its compressed point data hold more point records than its header counts "
+                     f"({count:,}; at least {stored:,} are stored): the first {count:,} were read, the others ignored "
+                     "(the header's count is wrong or records were appended); set the count in its header to read "
+                     "them all")
     x, y, z, classes = (_join(column) for column in columns)
     extent = (float(low[0]), float(high[0]), float(low[1]), float(high[1]))
     ground_area_m2 = float(np.prod(ground_high - ground_low)) if ground_count else 0.0
     return PointCloud(x_m=x, y_m=y, z_m=z, classification=classes, header=header, crs=crs,
                       notes=tuple(notes), file_extent_m=extent, ground_count=ground_count,
                       ground_density_per_m2=ground_count / ground_area_m2 if ground_area_m2 > 0 else None)
+
+
+#: The most bytes the search for records beyond a LAZ file's count decodes at once (a chunk
+#: of 50,000 points of 34 bytes is 1.7 MB; a larger chunk is not searched).
+_MAX_CHUNK_SEARCH_BYTES = 256 * 2**20
+#: Points a LASzip decoder may produce past the end of a chunk's data before it runs out of
+#: bytes (from the arithmetic coder's last bytes); fewer than this beyond the header's count
+#: is not taken for records.
+_DECODE_SLACK = 16
+
+
+def _laszip_record(reader: Any) -> tuple[int, bytes] | None:
+    """The offset to the point data and the LASzip record of an open LAZ file, taken before
+    its points are read (laspy drops the record from the header once it decodes); None for
+    a LAS file."""
+    head = reader.header
+    for vlr in head.vlrs:
+        if getattr(vlr, "record_id", None) == 22204 and str(getattr(vlr, "user_id", "")).startswith("laszip"):
+            try:
+                return int(head.offset_to_point_data), bytes(vlr.record_data_bytes())
+            except Exception:  # a record laspy cannot give back: nothing to search with
+                return None
+    return None
+
+
+def _laz_stored(path: Path, laszip: tuple[int, bytes] | None, count: int) -> tuple[int | None, bool]:
+    """How many point records a LAZ file stores, when more than its header counts: (the
+    number, True), or (a lower bound, False) when only that much is known; (None, True) when
+    there are no more records, or this cannot tell (no lazrs, a chunk table not there).
+
+    A LASzip file is a sequence of chunks; its chunk table gives each chunk's bytes (and, for
+    variable-size chunks, its points). Chunks beyond those the header's count needs hold more
+    records. Within the last chunk, the records beyond the count are found by decoding: if
+    more points decode from the chunk's bytes than the header accounts for and compressing
+    the points the header counts does not give those bytes back (LASzip's coding is
+    deterministic), the chunk holds more; the largest count that decodes and compresses back
+    to the chunk's bytes exactly is the number stored.
+    """
+    if laszip is None:
+        return None, True
+    try:
+        import lazrs
+    except ImportError:
+        return None, True
+    offset, vlr_bytes = laszip
+    try:
+        laz = lazrs.LazVlr(vlr_bytes)
+        with open(path, "rb") as handle:
+            handle.seek(offset)
+            table = lazrs.read_chunk_table(handle, laz)
+    except Exception:  # no LASzip record, no chunk table (a streamed file), a damaged one: cannot tell
+        return None, True
+    if not table:
+        return None, True
+    if laz.uses_variable_size_chunks():  # the table counts each chunk's points
+        stored = sum(int(points) for points, _ in table)
+        return (stored, True) if stored > count else (None, True)
+    size, record = int(laz.chunk_size()), int(laz.item_size())
+    needed = -(-count // size)
+    last = len(table) - 1
+    if last < needed - 1 or size * record > _MAX_CHUNK_SEARCH_BYTES or table[last][1] > _MAX_CHUNK_SEARCH_BYTES:
+        return None, True
+    start = offset + 8 + sum(int(nbytes) for _, nbytes in table[:last])
+    with open(path, "rb") as handle:
+        handle.seek(start)
+        data = handle.read(int(table[last][1]))
+    before = last * size  # points in the chunks before the last
+    known = count - before if last == needed - 1 else 0  # the last chunk's points the header counts
+    selection = lazrs.DecompressionSelection(lazrs.SELECTIVE_DECOMPRESS_ALL)
+
+    def decoded(n: int) -> bytearray | None:
+        out = bytearray(n * record)
+        try:
+            lazrs.decompress_points_with_chunk_table(data, vlr_bytes, out, [(n, len(data))], selection)
+        except Exception:  # the chunk's bytes end before n points
+            return None
+        return out
+
+    def compresses_back(points: bytearray) -> bool:
+        import io
+
+        sink = io.BytesIO()
+        try:
+            compressor = lazrs.LasZipCompressor(sink, laz)
+            compressor.compress_many(points)
+            compressor.done()
+        except Exception:
+            return False
+        return sink.getvalue()[8:8 + len(data)] == data  # after the 8-byte offset of the chunk table
+
+    if last == needed - 1:  # the header's count ends in the last chunk: does it hold more?
+        if decoded(known + 1) is None:
+            return None, True
+        points = decoded(known)
+        if points is None or compresses_back(points):
+            return None, True
+    low, high = known + 1, size  # the most points that decode from the chunk's bytes
+    while low < high:
+        middle = (low + high + 1) // 2
+        if decoded(middle) is not None:
+            low = middle
+        else:
+            high = middle - 1
+    most = low if decoded(low) is not None else known
+    for n in range(most, max(known, most - _DECODE_SLACK), -1):
+        points = decoded(n)
+        if points is not None and compresses_back(points):
+            return before + n, True
+    if last > needed - 1:  # whole chunks beyond the count: more records for certain
+        return before + 1, False
+    if most - known >= _DECODE_SLACK:
+        return count + 1, False
+    return None, True  # a few points past the end: the coder's last bytes, not records
 
 
 def _join(chunks: list[np.ndarray]) -> np.ndarray:

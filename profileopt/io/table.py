@@ -120,15 +120,23 @@ def normalise_line_ends(text: str, source: str, what: str) -> str:
         return text
     if "\n" not in text:  # classic Mac OS: every \r ends a line
         return text.replace("\r", "\n")
+    feeds = text.count("\n")
+    windows = len(_CR_BEFORE_LF.findall(text))  # lines ending at \r\n
     text = text.replace("\r\n", "\n")
     if "\r" in text:
         text = _CR_BEFORE_LF.sub("\n", text)
     lone = text.find("\r")
     if lone >= 0:
         line = text.count("\n", 0, lone) + 1
+        lones = text.count("\r")
+        if lones > feeds:  # mostly classic Mac OS line ends, with a few \n among them
+            raise InputError(f"{source}: the {what} ends {lones} lines at a lone carriage return (\\r, classic Mac "
+                             f"OS) and {feeds} at \\n, so where its lines end is ambiguous; convert every line end "
+                             "to \\n (e.g. mac2unix) or to \\r")
+        ends = "\\r\\n" if windows == feeds else "\\n" if not windows else "\\n and \\r\\n"
         raise InputError(f"{source}: line {line}: a carriage return (\\r) inside the line, in a {what} whose lines "
-                         "end at \\n: some programs show it as a line break and others do not, so what follows it is "
-                         "ambiguous; replace it with a line break or remove it")
+                         f"end at {ends}: some programs show it as a line break and others do not, so what follows it "
+                         "is ambiguous; replace it with a line break or remove it")
     return text
 
 

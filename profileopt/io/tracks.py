@@ -323,6 +323,7 @@ def _read_gpx(path: Path, track_index: int | None, notes: list[str]) -> _Points:
     items = [(trk.name, [seg.points for seg in trk.segments]) for trk in gpx.tracks]
     if not any(points for _, segments in items for points in segments):
         kind, items = "route", [(rte.name, [rte.points]) for rte in gpx.routes]
+    _check_gpx_numbers(path, data, kind)
     filled = [i for i, (_, segments) in enumerate(items) if any(segments)]
     if not filled:
         raise InputError(f"{path}: the GPX file has no track or route points; export the track with its "
@@ -381,6 +382,80 @@ def _read_gpx(path: Path, track_index: int | None, notes: list[str]) -> _Points:
 
 def _gpx_label(kind: str, i: int, j: int, k: int) -> str:
     return f"{kind} {i} segment {j} point {k}"
+
+
+#: White space XML allows around an attribute's or an element's text.
+_XML_SPACE = " \t\r\n"
+
+
+def _check_gpx_numbers(path: Path, data: bytes, kind: str) -> None:
+    """Refuse a ``lat``, ``lon`` or ``<ele>`` of the points read (``kind``: track or route
+    points) that is not a number in ASCII decimal notation, as every number the project reads
+    (:func:`profileopt.io.table.is_decimal`): gpxpy reads them with ``float()``, which also
+    takes ``1_00``, Arabic-Indic and full-width digits. One line naming the file, the line,
+    the point and the value."""
+    from xml.parsers import expat
+
+    from .table import is_decimal, quoted
+
+    point_tag = "trkpt" if kind == "track" else "rtept"
+    counters = {"trk": -1, "trkseg": -1, "rte": -1, "point": -1}
+    state: dict[str, Any] = {"point": None, "ele": None, "depth": 0, "point_depth": None}
+    parser = expat.ParserCreate()
+
+    def refuse(line: int, what: str, value: str) -> None:
+        raise InputError(f"{path}: line {line} ({state['point']}): {what} = {quoted(value)} is not a number; write it "
+                         "with the ASCII digits 0-9, '.' and an optional exponent (e.g. 45.00005)")
+
+    def number(text: str) -> bool:
+        text = text.strip(_XML_SPACE)
+        return not text or is_decimal(text)
+
+    def start(name: str, attributes: dict[str, str]) -> None:
+        local = name.rsplit(":", 1)[-1]
+        state["depth"] += 1
+        if local in ("trk", "rte"):
+            counters[local] += 1
+            counters["trkseg"] = -1 if local == "trk" else 0
+            counters["point"] = -1
+        elif local == "trkseg":
+            counters["trkseg"] += 1
+            counters["point"] = -1
+        elif local == point_tag:
+            counters["point"] += 1
+            i = counters["trk" if kind == "track" else "rte"]
+            state["point"] = _gpx_label(kind, max(i, 0), max(counters["trkseg"], 0), counters["point"])
+            state["point_depth"] = state["depth"]
+            for key in ("lat", "lon"):
+                value = attributes.get(key)
+                if value is not None and not number(value):
+                    refuse(parser.CurrentLineNumber, key, value)
+        elif local == "ele" and state["point_depth"] is not None and state["depth"] == state["point_depth"] + 1:
+            state["ele"] = (parser.CurrentLineNumber, [])
+
+    def end(name: str) -> None:
+        local = name.rsplit(":", 1)[-1]
+        if local == "ele" and state["ele"] is not None:
+            line, parts = state["ele"]
+            state["ele"] = None
+            text = "".join(parts)
+            if not number(text):
+                refuse(line, "<ele>", text.strip(_XML_SPACE))
+        elif local == point_tag and state["depth"] == state["point_depth"]:
+            state["point"] = state["point_depth"] = None
+        state["depth"] -= 1
+
+    def characters(text: str) -> None:
+        if state["ele"] is not None:
+            state["ele"][1].append(text)
+
+    parser.StartElementHandler = start
+    parser.EndElementHandler = end
+    parser.CharacterDataHandler = characters
+    try:
+        parser.Parse(data, True)
+    except expat.ExpatError:  # gpxpy read it, expat does not: its numbers were checked as far as expat got
+        pass
 
 
 def _check_lonlat(path: Path, point: Any, label: str) -> None:

@@ -9,6 +9,8 @@ regular file, or a file above the size cap, is refused with one line.
 
 from __future__ import annotations
 
+import errno
+import io
 import os
 import resource
 import signal
@@ -160,6 +162,58 @@ def test_a_failing_second_output_leaves_the_first_untouched(folder: Path, monkey
                        "--plot", str(folder / "out.png")])
     assert status == 2  # the user's to fix (issue 30): one line naming the output
     assert "--plot" in (err := capsys.readouterr().err) and "No space left on device" in err
+    assert snapshot(folder) == before
+
+
+class _FullStdout(io.StringIO):
+    """Standard output on a full disk (``> /dev/full``): what is printed cannot be flushed."""
+
+    def flush(self) -> None:
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+
+FULL_STDOUT = {
+    "plan --json": ("plan", "route.csv", "-q", "-o", "old.csv", "--plot", "old.png", "--json"),
+    "plan": ("plan", "route.csv", "-q", "-o", "old.csv", "--plot", "old.png"),
+    "verify": ("verify", "route.csv", "profile.csv", "-o", "old.csv", "--plot", "old.png"),
+    "verify --json": ("verify", "route.csv", "profile.csv", "-o", "old.csv", "--json"),
+}
+
+
+@pytest.mark.parametrize("argv", FULL_STDOUT.values(), ids=FULL_STDOUT.keys())
+def test_a_full_standard_output_replaces_no_file(argv: tuple[str, ...], folder: Path, profile_text: bytes,
+                                                 monkeypatch: pytest.MonkeyPatch,
+                                                 capsys: pytest.CaptureFixture) -> None:
+    # Before (issue 30, item 2): `plan ... -o old.csv --plot old.png > /dev/full` said exit 2
+    # but had replaced both files: the summary was printed after they were renamed into place
+    from profileopt import cli
+
+    (folder / "profile.csv").write_bytes(profile_text)
+    (folder / "old.csv").write_text("OLDCSV\n")
+    (folder / "old.png").write_text("OLDPNG\n")
+    before = snapshot(folder)
+    monkeypatch.chdir(folder)
+    monkeypatch.setattr(sys, "stdout", _FullStdout())
+    assert cli.main(list(argv)) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    assert ("standard output: cannot write (No space left on device); no file output was written" in err), err
+    assert snapshot(folder) == before
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full (Linux)")
+def test_a_summary_to_dev_full_replaces_no_file(folder: Path) -> None:
+    # the tester's case, as typed: `profileopt plan ... --json > /dev/full`
+    (folder / "old.csv").write_text("OLDCSV\n")
+    (folder / "old.png").write_text("OLDPNG\n")
+    before = snapshot(folder)
+    with open("/dev/full", "w") as full:
+        done = subprocess.run([*PROFILEOPT, "plan", "route.csv", "-q", "-o", "old.csv", "--plot", "old.png", "--json"],
+                              cwd=folder, stdout=full, stderr=subprocess.PIPE, text=True, timeout=120,
+                              env=dict(os.environ, MPLBACKEND="Agg"))
+    assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+    assert "standard output: cannot write" in done.stderr
     assert snapshot(folder) == before
 
 

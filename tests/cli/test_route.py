@@ -272,7 +272,37 @@ def test_the_review_cases_through_the_command(tmp_path: Path, synthetic: dict, c
     assert "units_m" not in err
     # the options of a track are refused with a route file, which is already sampled
     status, _, err = _run(["plan", str(ROOT / "examples" / "routes" / "curb.csv"), "--spacing", "7"], capsys)
-    _one_line_error(status, err, "curb.csv", "--spacing apply to a track")
+    _one_line_error(status, err, "curb.csv", "--spacing applies to a track")  # before: "apply"
+
+
+@pytest.mark.parametrize(("argv", "words"), [
+    (["--track-crs", "EPSG:32633"], "--track-crs applies to a track sampled over a terrain"),
+    (["--spacing", "1", "--track-crs", "EPSG:32633"], "--spacing, --track-crs apply to a track"),
+])
+def test_track_options_with_a_route_file_are_refused_in_plain_words(argv: list[str], words: str,
+                                                                    capsys: pytest.CaptureFixture) -> None:
+    status, _, err = _run(["plan", str(ROOT / "examples" / "routes" / "curb.csv"), *argv], capsys)
+    _one_line_error(status, err, "curb.csv", words)
+
+
+@pytest.mark.parametrize(("argv", "words"), [
+    (["--corridor", "0.5"], "--corridor applies to the ground points of a terrain (--terrain TERRAIN), and no "
+                            "--terrain is given"),
+    (["--max-gap", "3"], "--max-gap applies to the ground points"),
+    (["--corridor", "0.5", "--max-gap", "3"], "--corridor and --max-gap apply to the ground points"),
+])
+@pytest.mark.parametrize("command", ["route", "plan"])
+def test_terrain_options_without_a_terrain_are_refused(tmp_path: Path, command: str, argv: list[str], words: str,
+                                                       capsys: pytest.CaptureFixture) -> None:
+    # before: ignored without a word (the track's own elevations were used)
+    track = tmp_path / "t.gpx"
+    points = "".join(f'<trkpt lat="{45 + 1e-4 * k:.6f}" lon="15.0"><ele>100</ele></trkpt>' for k in range(20))
+    track.write_text('<?xml version="1.0"?><gpx version="1.1" creator="t" xmlns="http://www.topografix.com/GPX/1/1">'
+                     f"<trk><trkseg>{points}</trkseg></trk></gpx>")
+    out = ["-o", str(tmp_path / "o.csv")]
+    status, _, err = _run([command, str(track), "--roughness-class", "C", *out, *argv], capsys)
+    _one_line_error(status, err, "", words)
+    assert not (tmp_path / "o.csv").exists()
 
 
 @pytest.mark.slow

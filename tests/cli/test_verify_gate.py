@@ -317,17 +317,57 @@ def test_the_vehicle_is_found_from_any_folder_and_a_changed_one_is_refused(own_v
     assert vehicle in err and "not the one the profile was planned with" in err and "plan again" in err
     # ... unless the user names it: then it is used, with a note
     assert main(["verify", route, profile, "--vehicle", vehicle]) == 0
-    assert "is not the file the profile was planned with" in capsys.readouterr().out
+    assert "is not the vehicle the profile was planned with" in capsys.readouterr().out
     # an old profile (no hash) is verified with the file it names, with a note
     lines = Path(profile).read_text().splitlines()
     old = elsewhere / "old.csv"
     old.write_text("\n".join([re.sub(r" vehicle_sha256=\w+", "", lines[0]), *lines[1:]]) + "\n")
     assert main(["verify", route, str(old)]) == 0
-    assert "records no SHA-256 of its vehicle" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "records no SHA-256 of its vehicle" in out
+    assert "relative path" not in out  # before: said of the absolute path recorded
     # a vehicle file that is gone: one line, what to do
     os.remove(vehicle)
     assert main(["verify", route, profile]) == 2
     assert "which is not there; pass --vehicle" in one_line_error(capsys.readouterr().err)
+
+
+def test_verify_vehicle_is_matched_by_content_not_by_name(own_vehicle, capsys) -> None:
+    # Before: --vehicle was matched by its file name: a byte-identical copy under another name
+    # was refused, another file of the same name accepted; the refusal offered --vehicle FILE
+    from profileopt.cli import main
+
+    route, profile, vehicle = (str(own_vehicle[k]) for k in ("route", "profile", "vehicle"))
+    folder = own_vehicle["folder"]
+    copy = folder / "copy.toml"
+    copy.write_bytes(Path(vehicle).read_bytes())
+    other = folder / "other"
+    other.mkdir()
+    tuned = other / "my veh.toml"  # the same name, other content
+    tuned.write_text(Path(vehicle).read_text().replace("mass_kg = 450.0", "mass_kg = 400.0"))
+    assert tuned.read_bytes() != Path(vehicle).read_bytes()
+    capsys.readouterr()
+    # the same bytes under another name (or the bundled atv, whose bytes these are): that vehicle, no note
+    for same in (str(copy), "atv"):
+        assert main(["verify", route, profile, "--vehicle", same]) == 0
+        out, err = capsys.readouterr()
+        assert f"with vehicle {same}," in out and "note: --vehicle" not in out and err == ""
+    # other bytes, under the same name or another: used as asked, with a note saying it is not that vehicle
+    for different in (str(tuned), "atv-resonant"):
+        status = main(["verify", route, profile, "--vehicle", different])
+        out, err = capsys.readouterr()
+        assert status in (0, 3, 4) and err == "", err
+        assert f"with vehicle {different}," in out
+        assert (f"note: --vehicle {different} is not the vehicle the profile was planned with ({vehicle}; its "
+                "SHA-256 differs") in out
+    # without --vehicle, the recorded file changed since the plan is refused, and the way the
+    # refusal offers works
+    Path(vehicle).write_bytes(tuned.read_bytes())
+    assert main(["verify", route, profile]) == 2
+    err = one_line_error(capsys.readouterr().err)
+    assert "pass --vehicle FILE to verify against that file as it is now" in err
+    assert main(["verify", route, profile, "--vehicle", vehicle]) == 0
+    assert "is not the vehicle the profile was planned with" in capsys.readouterr().out
 
 
 def test_verify_judges_the_jerk_by_the_vehicle_not_the_settings_line(tmp_path, capsys) -> None:

@@ -8,6 +8,8 @@ line's use of it is covered by tests/cli/test_outputs.py and tests/cli/test_app.
 
 from __future__ import annotations
 
+import errno
+import io
 import os
 from pathlib import Path
 
@@ -55,6 +57,65 @@ def test_without_a_set_a_full_device_is_one_error(tmp_path: Path) -> None:
     with pytest.raises(InputError, match="cannot write it"):
         with atomic_write(DEV_FULL) as handle:
             handle.write("x" * 100_000)
+
+
+class FullStream(io.StringIO):
+    """A text stream on a full disk: what is written cannot be flushed (``> /dev/full``)."""
+
+    def flush(self) -> None:
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+
+def test_what_a_command_prints_goes_before_the_renames(tmp_path: Path) -> None:
+    # Before: the summary was printed after the files were renamed into place, so
+    # `plan ... -o old.csv --plot old.png > /dev/full` replaced both files, then said exit 2
+    old = tmp_path / "old.csv"
+    old.write_text("a good earlier profile\n")
+    outputs = OutputSet([("-o", str(old), True)])
+    with pytest.raises(InputError) as raised:
+        with outputs:
+            with atomic_write(old) as handle:
+                handle.write("a new profile\n")
+            outputs.print("travel time 12 s", FullStream())
+    message = str(raised.value)
+    assert "\n" not in message and "cannot write (No space left on device); no file output was written" in message
+    assert old.read_text() == "a good earlier profile\n"
+    assert no_temporary_files(tmp_path)
+
+
+def test_printed_text_is_written_once_the_outputs_are_ready(tmp_path: Path) -> None:
+    stream, seen = io.StringIO(), []
+    out = tmp_path / "out.csv"
+    with OutputSet([("-o", str(out), True)]) as outputs:
+        with atomic_write(out) as handle:
+            handle.write("new\n")
+        outputs.print("summary", stream)
+        seen.append((stream.getvalue(), out.exists()))  # nothing printed, nothing renamed yet
+    assert seen == [("", False)]
+    assert stream.getvalue() == "summary\n" and out.read_text() == "new\n"
+
+
+def test_a_reusable_set_writes_again_in_the_folder_it_checked(tmp_path: Path) -> None:
+    # a batch rewrites its summary after every route: the folder checked at the start is held
+    # open, so a folder swapped for a link to the inputs' folder between two writes replaces nothing
+    inputs, out = tmp_path / "inputs", tmp_path / "out"
+    inputs.mkdir()
+    out.mkdir()
+    manifest = inputs / "summary.csv"
+    manifest.write_text("the manifest\n")
+    outputs = OutputSet([("summary", str(out / "summary.csv"))], inputs=[str(manifest)], reusable=True)
+    try:
+        for text in ("first\n", "second\n"):
+            write_all(outputs, {str(out / "summary.csv"): text})
+        assert (out / "summary.csv").read_text() == "second\n"
+        _swap(tmp_path, out, inputs)
+        with pytest.raises(InputError, match="is now the input"):
+            write_all(outputs, {str(out / "summary.csv"): "third\n"})
+    finally:
+        outputs.close()
+    assert manifest.read_text() == "the manifest\n"
+    assert (tmp_path / "out.old" / "summary.csv").read_text() == "second\n"
+    assert no_temporary_files(tmp_path)
 
 
 # --------------------------------------------------------------------------------------

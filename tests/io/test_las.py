@@ -348,7 +348,8 @@ _PROJCS = 'PROJCS["p",GEOGCS["g",DATUM["d",SPHEROID["s",6378137,298.257]]],PROJE
         # brackets nested 2,000 deep: Python's recursion limit (1,000) would end a recursive parser
         ({"vlrs": _wkt("PROJCS[" * 2000 + "]" * 2000), "minor": 4, "point_format": 6, "global_encoding": 0x10},
          "nests brackets more than 64 deep"),
-        ({"point_count": 0}, "holds no points (its header counts 0 point records)"),
+        # before: "holds no points", which was false: 4 records follow the header
+        ({"point_count": 0}, "its header counts 0 point records, but the file holds 4 records of 20 bytes after byte"),
     ],
 )
 def test_hostile_headers_are_one_line(tmp_path: Path, options: dict, words: str) -> None:
@@ -400,6 +401,70 @@ def test_records_beyond_the_header_count_get_a_note(tmp_path: Path) -> None:
     # a whole file has none
     _write_las(path, COUNTS, [2, 2, 2, 2], vlrs=FEET)
     assert read_las(path).notes == ()
+
+
+def _laz_with_count(path: Path, stored: int, count: int, *, point_format: int = 3, version: str = "1.2",
+                    seed: int = 0) -> Path:
+    """A LAZ file of ``stored`` points (laspy, lazrs) whose header then says ``count``."""
+    laspy = pytest.importorskip("laspy")
+    pytest.importorskip("lazrs")
+    rng = np.random.default_rng(seed)
+    header = laspy.LasHeader(point_format=point_format, version=version)
+    header.scales, header.offsets = np.array([0.001] * 3), np.array([1000.0, 2000.0, 100.0])
+    las = laspy.LasData(header)
+    las.X, las.Y = rng.integers(0, 70_000, stored), rng.integers(0, 2_000, stored)
+    las.Z = 5_000 + np.cumsum(rng.integers(-3, 4, stored))  # a rough surface, as a real cloud's
+    las.classification = np.full(stored, 2, dtype=np.uint8)
+    las.write(str(path))
+    raw = bytearray(path.read_bytes())
+    if raw[25] >= 4:
+        struct.pack_into("<Q", raw, 247, count)
+        if struct.unpack_from("<I", raw, 107)[0]:
+            struct.pack_into("<I", raw, 107, count)
+    else:
+        struct.pack_into("<I", raw, 107, count)
+    path.write_bytes(bytes(raw))
+    return path
+
+
+@pytest.mark.geo
+@pytest.mark.parametrize("stored, count, fmt", [
+    (4_000, 2_500, (3, "1.2")),  # within the last (only) chunk of 50,000
+    (4_000, 3_999, (3, "1.2")),
+    (60_000, 30_000, (6, "1.4")),  # a whole chunk beyond the count, and more in the last
+    (120_000, 50_000, (3, "1.2")),  # the count ends at a chunk's end
+])
+def test_laz_records_beyond_the_header_count_get_the_las_note(tmp_path: Path, stored: int, count: int,
+                                                              fmt: tuple[int, str]) -> None:
+    # Before: a LAZ whose header counts fewer points than it stores dropped the rest silently
+    # (the same edit on a .las file had a note)
+    path = _laz_with_count(tmp_path / "more.laz", stored, count, point_format=fmt[0], version=fmt[1])
+    cloud = read_las(path, units_m=1.0)
+    assert len(cloud) == count
+    assert cloud.notes == (f"more.laz: holds {stored:,} point records, but its header counts {count:,}: the first "
+                           f"{count:,} were read, the other {stored - count:,} ignored (the header's count is wrong "
+                           "or records were appended); set the count in its header to read them all",)
+
+
+@pytest.mark.geo
+@pytest.mark.parametrize("stored, fmt", [(7, (3, "1.2")), (4_000, (3, "1.2")), (50_000, (6, "1.4")),
+                                         (50_001, (3, "1.2")), (123_457, (7, "1.4"))])
+def test_a_whole_laz_file_has_no_note(tmp_path: Path, stored: int, fmt: tuple[int, str]) -> None:
+    path = _laz_with_count(tmp_path / "whole.laz", stored, stored, point_format=fmt[0], version=fmt[1])
+    cloud = read_las(path, units_m=1.0)
+    assert len(cloud) == stored and cloud.notes == ()
+
+
+@pytest.mark.geo
+def test_a_header_count_of_0_over_stored_records_says_the_count_is_wrong(tmp_path: Path) -> None:
+    # Before: "holds no points", which was false
+    path = _laz_with_count(tmp_path / "zero.laz", 4_000, 0)
+    with pytest.raises(InputError) as raised:
+        read_las(path, units_m=1.0)
+    message = str(raised.value)
+    assert "\n" not in message and "holds no points" not in message
+    assert message.startswith(f"{path}: its header counts 0 point records, but its compressed point data hold 1 "
+                              "chunk(s) of points: the header's point count ('number of point records') is wrong")
 
 
 @pytest.mark.geo

@@ -162,3 +162,22 @@ def test_a_lone_carriage_return_in_a_file_of_lf_lines_is_refused(tmp_path: Path,
     path.write_bytes(text.encode())
     with pytest.raises(InputError, match=rf"r\.csv: line {line}: a carriage return \(\\r\) inside the line"):
         read_route(path)
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    ("s,z\n0,0\n1,0\r2,0\n", r"line 3: a carriage return \(\\r\) inside the line, in a route file whose lines end "
+                              r"at \\n:"),
+    # before: a CRLF file was said to end its lines at \n
+    ("s,z\r\n0,0\r\n1,0\r2,0\r\n", r"line 3: .* in a route file whose lines end at \\r\\n:"),
+    ("s,z\n0,0\r\n1,0\r2,0\n", r"line 3: .* in a route file whose lines end at \\n and \\r\\n:"),
+    # a classic Mac OS file (lines end at \r) with a \n in it: not a lone \r in a file of \n lines
+    ("s,z\r0,0\r1,0\n2,0\r3,0\r", r"r\.csv: the route file ends 4 lines at a lone carriage return \(\\r, classic "
+                                   r"Mac OS\) and 1 at \\n"),
+])
+def test_the_refusal_of_a_lone_carriage_return_says_what_the_lines_end_with(tmp_path: Path, text: str,
+                                                                            words: str) -> None:
+    path = tmp_path / "r.csv"
+    path.write_bytes(text.encode())
+    with pytest.raises(InputError, match=words) as raised:
+        read_route(path)
+    assert "\n" not in str(raised.value)

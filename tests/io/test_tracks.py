@@ -118,6 +118,49 @@ def test_a_gpx_with_tracks_and_routes_notes_the_routes_it_ignores(tmp_path: Path
     assert not any("route" in note for note in read_track(alone).notes)
 
 
+# ------------------------------------------ item 8: GPX numbers in ASCII decimal notation only
+
+GPX_POINTS = [(15.0, 45.0 + 1e-5 * k) for k in range(6)]
+
+
+def _gpx_text(values: dict[int, tuple[str, str, str]], *, routes: bool = False) -> str:
+    """A GPX file of six points, one per line (the first on line 3), point k's lat, lon and
+    ele as text from ``values`` (else the numbers of GPX_POINTS)."""
+    point, outer = ("rtept", ("<rte>", "</rte>")) if routes else ("trkpt", ("<trk><trkseg>", "</trkseg></trk>"))
+    lines = []
+    for k, (lon, lat) in enumerate(GPX_POINTS):
+        lat_text, lon_text, ele = values.get(k, (f"{lat:.6f}", f"{lon:.6f}", "100"))
+        lines.append(f'<{point} lat="{lat_text}" lon="{lon_text}"><ele>{ele}</ele></{point}>')
+    return f"{GPX_HEAD}\n{outer[0]}\n" + "\n".join(lines) + f"\n{outer[1]}</gpx>\n"
+
+
+@pytest.mark.parametrize(("values", "words"), [
+    ({4: ("45.000040", "15.000000", "1_00")}, "line 7 (track 0 segment 0 point 4): <ele> = '1_00' is not a number"),
+    ({4: ("45.000040", "15.000000", "\u0661\u0660\u0660")}, "<ele> = '\\u0661\\u0660\\u0660' is not a number"),
+    ({2: ("\uff145.000020", "15.000000", "100")}, "line 5 (track 0 segment 0 point 2): lat = '\\uff145.000020' is"),
+    ({2: ("45.000_020", "15.000000", "100")}, "lat = '45.000_020' is not a number"),
+    ({5: ("45.000050", "1_5.0", "100")}, "line 8 (track 0 segment 0 point 5): lon = '1_5.0' is not a number"),
+], ids=["ele 1_00", "ele Arabic-Indic", "lat full-width", "lat 45.000_020", "lon 1_5.0"])
+def test_gpx_numbers_are_ascii_decimals_as_every_number_read(tmp_path: Path, values: dict, words: str) -> None:
+    # before: gpxpy's float() read every one of these as a number (exit 0)
+    for routes in (False, True):
+        path = tmp_path / "t.gpx"
+        path.write_text(_gpx_text(values, routes=routes), encoding="utf-8")
+        with pytest.raises(InputError) as raised:
+            read_track(path)
+        message = str(raised.value)
+        expected = words.replace("track 0 segment", "route 0 segment") if routes else words
+        assert message.startswith(f"{path}: line ") and expected in message and "\n" not in message, message
+        assert "ASCII digits 0-9" in message
+
+
+def test_gpx_numbers_in_ascii_notation_are_read(tmp_path: Path) -> None:
+    path = tmp_path / "t.gpx"
+    path.write_text(_gpx_text({1: (" 45.000010 ", "+15.0", "\n 1.0e2 \n"), 3: ("45.00003", "15", "-12.5")}))
+    track = read_track(path, smooth=False)
+    assert track.x.tolist() == [15.0] * 6 and track.z_m.tolist() == [100.0, 100.0, 100.0, -12.5, 100.0, 100.0]
+
+
 # ------------------------------------------------------------ item 11: GeoJSON that crashed
 
 @pytest.mark.parametrize(("text", "words"), [
