@@ -309,17 +309,22 @@ def _outside_segment_band(members, vehicle, band):
     runs = list(zip(points[0::2], points[1::2]))
     if band == "first":
         return runs[0] if runs and runs[0][0] == 0.0 else (0.0, 0.0)
+    if band == "all":  # a relaxation: any speed up to the top of the highest band
+        return 0.0, runs[-1][1]
     return runs[-1]
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("vehicle_name", ["atv", "atv-resonant"])
-@pytest.mark.parametrize("band", ["first", "largest"])
+@pytest.mark.parametrize("band", ["first", "largest", "all"])
 def test_sbem_tf_plans_are_exact_under_their_window_definition(vehicle_name, band):
     # Issue 33: each segment is held to every roughness window it meets, and to nothing more.
     # Reference, written here: each segment's band from a brute-force search over its windows'
     # RIs (every one of them: no range, no bound), and the exact minimum time over those bands
     # by the forward-backward passes (smoothing 0, no jerk bound), on the planner's own segments.
+    # For band "all" the reference drops the lower edges (any speed up to the top of the highest
+    # band): a lower bound on every band assignment's time, so a plan that reaches it is optimal
+    # (here the resonant ATV crosses the potholes above resonance).
     from profileopt.terrain.roughness import roughness_windows
 
     route = _pothole_field_route()
