@@ -9,6 +9,13 @@
 * ``README.md``: how to call the functions (argument and result pointer arrays, work
   arrays, ``casadi_int``, the ``*_work`` functions), written for the files exported.
 
+With ``intervals=True`` it adds, for each model defined on e_max, the interval rows of
+:func:`profileopt.mpc.horizon.interval_force_constraints` (``<slug>_<model>_interval_constraint_of_e_max``:
+the limit over every speed between two stages' speeds); with a ``preview``
+(:class:`profileopt.mpc.preview.TerrainPreview`), its two envelopes (``<slug>_preview_e_max``,
+``<slug>_preview_speed_cap``: of the position, the horizon's origin and the coefficient
+vector that :meth:`~profileopt.mpc.preview.TerrainPreview.coefficients` computes each step).
+
 Function names are ``<slug>_<model>_<kind>_of_<terrain>`` with ``kind`` ``force`` (output
 ``force_n``, N) or ``constraint`` (output ``g`` = F / F_limit - 1, dimensionless, <= 0 when
 admissible), ``terrain`` ``ri`` (roughness index) or ``e_max`` (worst-case elevation, m),
@@ -37,17 +44,25 @@ from ..errors import InputError
 from ..io.atomic import OutputSet, atomic_write
 from ..physics.forces import DEFAULT_MODEL, FORCE_OF_E_MAX, MODELS, get_model
 from .constraints import force_limit_n
-from .functions import constraint_function, force_function, jacobian_function
+from .functions import constraint_function, force_function, interval_constraint_function, jacobian_function
 
 if TYPE_CHECKING:
     from ..core.vehicle import Vehicle
+    from .preview import TerrainPreview
 
 __all__ = ["ExportedFunction", "CExport", "vehicle_slug", "jacobian_function", "c_functions", "export_c",
-           "export_c_paths", "C_BYTES_PER_STAGE", "MAX_C_BYTES"]
+           "export_c_paths", "C_BYTES_PER_STAGE", "C_BYTES_PER_INTERVAL", "C_BYTES_PER_PREVIEW_KNOT", "MAX_C_BYTES"]
 
 #: Bytes of C per stage that each model's two Functions and their Jacobians add (measured
 #: with CasADi 3.6 at 1 and 1000 stages: the code is unrolled, one block per stage).
 C_BYTES_PER_STAGE = {"prev_bem": 1275, "iecm": 4815, "sbem_ef": 6674, "sbem_tf": 10913}
+#: Bytes of C per stage of each model's interval rows and their Jacobian (measured with
+#: CasADi 3.8 at 1 and 21 stages: 2.5, 3.0 and 18.4 kB; rounded up).
+C_BYTES_PER_INTERVAL = {"iecm": 3000, "sbem_ef": 3500, "sbem_tf": 20000}
+#: Bytes of C per stage and per knot interval of a preview's two envelopes and their
+#: Jacobians (measured with CasADi 3.8 at 1 and 10 stages, 26 knot intervals: 2.7 kB;
+#: rounded up).
+C_BYTES_PER_PREVIEW_KNOT = 3000
 
 
 @dataclasses.dataclass(frozen=True)
@@ -66,6 +81,10 @@ class ExportedFunction:
         ``"force"`` (output ``force_n``, N) or ``"constraint"`` (output ``g``).
     terrain : str
         ``"ri"`` (input ``ri``) or ``"e_max"`` (input ``e_max_m``, m).
+    inputs : str
+        The inputs, with their units, for the README.
+    output : str
+        The output, with its unit, for the README.
     """
 
     name: str
@@ -73,6 +92,8 @@ class ExportedFunction:
     model: str
     kind: str
     terrain: str
+    inputs: str = ""
+    output: str = ""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -131,6 +152,8 @@ def c_functions(
     *,
     models: Sequence[str] | None = None,
     n_stages: int = 1,
+    intervals: bool = False,
+    preview: "TerrainPreview | None" = None,
 ) -> list[tuple[ExportedFunction, ca.Function, ca.Function]]:
     """The Functions :func:`export_c` generates, with their C names.
 
@@ -141,12 +164,16 @@ def c_functions(
         Model keys; default all four.
     n_stages : int, default 1
         Length of the input and output vectors.
+    intervals : bool, default False
+        Also each model's interval rows (models defined on e_max only).
+    preview : TerrainPreview, optional
+        Also its two envelopes (built for ``vehicle``).
 
     Returns
     -------
     list of (ExportedFunction, value Function, Jacobian Function)
         For each model: force and constraint against the RI, then (except Prev:BEM) against
-        e_max.
+        e_max, then its interval rows; then the preview's envelopes.
     """
     slug = vehicle_slug(vehicle)
     out = []
@@ -157,7 +184,28 @@ def c_functions(
                 name = f"{slug}_{model}_{kind}_of_{terrain}"
                 fn = builder(vehicle, model=model, terrain=terrain, n_stages=n_stages, name=name)
                 jac = jacobian_function(fn)
-                out.append((ExportedFunction(name, jac.name(), model, kind, terrain), fn, jac))
+                terrain_in = "`ri` (RI, -)" if terrain == "ri" else "`e_max_m` (e_max, m)"
+                output = "`force_n` (N)" if kind == "force" else "`g` = F / F_limit - 1 (-, <= 0 admissible)"
+                out.append((ExportedFunction(name, jac.name(), model, kind, terrain, f"`speed_mps` (m/s), {terrain_in}",
+                                             output), fn, jac))
+        if intervals and model in FORCE_OF_E_MAX:
+            name = f"{slug}_{model}_interval_constraint_of_e_max"
+            fn = interval_constraint_function(vehicle, model=model, n_stages=n_stages, name=name)
+            rows = fn.size1_out(0) // n_stages
+            out.append((ExportedFunction(name, f"{name}_jac", model, "interval_constraint", "e_max",
+                                         "`v_start`, `v_end` (m/s), `e_max_m`, `e_min_m` (m)",
+                                         f"`g`: {rows} rows per interval, F / F_limit - 1 (-, <= 0 admissible)"),
+                        fn, jacobian_function(fn)))
+    if preview is not None:
+        if preview.vehicle != vehicle:
+            raise InputError("c_functions: the preview was built for another vehicle; build it with this one")
+        e_fn, cap_fn = preview.stage_functions(n_stages=n_stages, prefix=f"{slug}_preview")
+        k = preview.n_coefficients
+        for fn, kind, coef, output in ((e_fn, "e_max", "e_coef", "`e_max_m` (m)"),
+                                       (cap_fn, "speed_cap", "cap_coef", "`speed_cap_mps` (m/s)")):
+            out.append((ExportedFunction(fn.name(), f"{fn.name()}_jac", "preview", kind, "position",
+                                         f"`s_m` (m), `origin_m` (m, 1 value), `{coef}` ({k} values)", output),
+                        fn, jacobian_function(fn)))
     return out
 
 
@@ -168,6 +216,8 @@ def export_c(
     models: Sequence[str] | None = None,
     n_stages: int = 1,
     basename: str | None = None,
+    intervals: bool = False,
+    preview: "TerrainPreview | None" = None,
 ) -> CExport:
     """Write C source, header, example program and README for the force limits.
 
@@ -183,6 +233,10 @@ def export_c(
         Length of every input and output vector (one horizon at once).
     basename : str, optional
         Base of the file names (a C identifier); default ``profileopt_<slug>``.
+    intervals : bool, default False
+        Also the interval rows of each model defined on e_max (:func:`c_functions`).
+    preview : TerrainPreview, optional
+        Also the preview's two envelopes, for stage positions (:func:`c_functions`).
 
     Returns
     -------
@@ -196,11 +250,11 @@ def export_c(
     """
     if not (isinstance(n_stages, int) and not isinstance(n_stages, bool) and n_stages >= 1):
         raise InputError(f"n_stages = {n_stages!r}: must be an integer >= 1")
-    _check_size(models, n_stages)
+    _check_size(models, n_stages, intervals, preview)
     paths = export_c_paths(vehicle, directory, basename=basename)
     base = paths[0].stem
     directory = Path(directory)
-    triples = c_functions(vehicle, models=models, n_stages=n_stages)
+    triples = c_functions(vehicle, models=models, n_stages=n_stages, intervals=intervals, preview=preview)
 
     cg = ca.CodeGenerator(f"{base}.c", {"with_header": True})
     for _, fn, jac in triples:
@@ -212,7 +266,8 @@ def export_c(
         header_text = (Path(tmp) / f"{base}.h").read_text(encoding="utf-8")
 
     exported = tuple(t[0] for t in triples)
-    example_fn = next(e for e in exported if e.kind == "constraint" and e.model == _example_model(exported))
+    example_fn = next(e for e in exported if e.kind == "constraint" and e.model == _example_model(exported)
+                      and e.terrain == "ri")
     files = {
         f"{base}.c": source_text,
         f"{base}.h": header_text,
@@ -313,10 +368,15 @@ def export_c_paths(vehicle: "Vehicle", directory: str | Path, *, basename: str |
     return [directory / f"{base}.c", directory / f"{base}.h", directory / "example.c", directory / "README.md"]
 
 
-def _check_size(models: Sequence[str] | None, n_stages: int) -> None:
+def _check_size(models: Sequence[str] | None, n_stages: int, intervals: bool = False,
+                preview: "TerrainPreview | None" = None) -> None:
     """Refuse, before any work, an export estimated above :data:`MAX_C_BYTES`."""
     keys = [m for m in (list(models) if models else list(MODELS)) if m in C_BYTES_PER_STAGE]
     per_stage = sum(C_BYTES_PER_STAGE[m] for m in dict.fromkeys(keys))
+    if intervals:
+        per_stage += sum(C_BYTES_PER_INTERVAL.get(m, 0) for m in dict.fromkeys(keys))
+    if preview is not None:
+        per_stage += C_BYTES_PER_PREVIEW_KNOT * preview.n_intervals
     if per_stage and per_stage * n_stages > MAX_C_BYTES:
         raise InputError(
             f"n_stages = {n_stages}: the C files would be about {per_stage * n_stages / 1e6:,.0f} MB "
@@ -366,15 +426,39 @@ int main(void) {{
 """
 
 
+def _extras(exported: Sequence[ExportedFunction]) -> str:
+    """The README's paragraphs on the interval rows and the preview, when exported."""
+    text = ""
+    if any(e.kind == "interval_constraint" for e in exported):
+        text += """
+The `*_interval_constraint_of_e_max` functions hold the force limit at every speed between
+two consecutive stages' speeds `v_start`, `v_end` (constant acceleration between them), for
+every elevation in [`e_min_m`, `e_max_m`] (give `e_min_m` 0 for "any terrain up to e_max"):
+2 rows per interval (3 for SBEM:TF with a resonance peak), interval by interval, each
+<= 0 when admissible. Use them in place of the point constraints between grid points
+(Python: `profileopt.mpc.horizon.interval_force_constraints`, the MPC guide).
+"""
+    if any(e.model == "preview" for e in exported):
+        text += """
+The `*_preview_e_max` and `*_preview_speed_cap` functions are a `TerrainPreview`'s envelopes
+(Python: `profileopt.mpc.preview.TerrainPreview`, built with the same horizon, reach, knot
+spacing and unseen assumption): at each stage position `s_m`, given the horizon's origin
+`origin_m` and the coefficient vector that `TerrainPreview.coefficients` computes from the
+terrain measured so far (its `origin_m`, `e_max` and `speed_cap`). The coefficients are
+parameters: compute them each step (in Python, or port that function) and pass them in;
+the code does not change with the terrain.
+"""
+    return text
+
+
 def _readme(vehicle: "Vehicle", base: str, exported: Sequence[ExportedFunction], example_fn: ExportedFunction, n_stages: int) -> str:
     rows = []
     for e in exported:
-        label = get_model(e.model).label
-        terrain_in = "`ri` (RI, -)" if e.terrain == "ri" else "`e_max_m` (e_max, m)"
-        out = "`force_n` (N)" if e.kind == "force" else "`g` = F / F_limit - 1 (-, <= 0 admissible)"
-        rows.append(f"| `{e.name}` / `{e.jacobian_name}` | {label} | `speed_mps` (m/s), {terrain_in} | {out} |")
+        label = "the preview" if e.model == "preview" else get_model(e.model).label
+        rows.append(f"| `{e.name}` / `{e.jacobian_name}` | {label} | {e.inputs} | {e.output} |")
     limits = ", ".join(
-        f"{get_model(m).label} {force_limit_n(vehicle, model=m):g} N" for m in dict.fromkeys(e.model for e in exported)
+        f"{get_model(m).label} {force_limit_n(vehicle, model=m):g} N"
+        for m in dict.fromkeys(e.model for e in exported if e.model != "preview")
     )
     stages = (
         "one stage: every input and output is a single number"
@@ -401,11 +485,12 @@ Files: `{base}.c` (source), `{base}.h` (header), `example.c` (a small program).
 |---|---|---|---|
 {chr(10).join(rows)}
 
-Each `_jac` function takes the same inputs and returns `jac_<output>_speed_mps` (per m/s)
-then `jac_<output>_ri` or `jac_<output>_e_max_m` (per m): the derivatives of the output
-with respect to speed and terrain. On smooth ground (terrain value 0) the force is 0.
-Speeds are in m/s, e_max in m, forces in N; RI and g are dimensionless.
-
+Each `_jac` function takes the same inputs and returns one block per input, in the order of
+the inputs (`jac_<output>_<input>`): for the forces and constraints `jac_<output>_speed_mps`
+(per m/s) then `jac_<output>_ri` or `jac_<output>_e_max_m` (per m). On smooth ground
+(terrain value 0) the force is 0. Speeds are in m/s, e_max in m, forces in N; RI and g are
+dimensionless.
+{_extras(exported)}
 A negative or NaN terrain value (RI or e_max) is not terrain: every function returns NaN
 there (a force of NaN, g = NaN), never a g <= 0, so a check `g <= 0` (false for NaN)
 rejects it. Keep it so: do not compile with `-ffast-math` or `-ffinite-math-only`, which

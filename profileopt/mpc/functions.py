@@ -21,8 +21,9 @@ import casadi as ca
 from ..core.vehicle import Vehicle
 from ..errors import InputError
 from ..physics.forces import DEFAULT_MODEL, FORCE_OF_E_MAX, force_n, get_model
+from .horizon import interval_force_constraints
 
-__all__ = ["force_function", "constraint_function", "jacobian_function"]
+__all__ = ["force_function", "constraint_function", "interval_constraint_function", "jacobian_function"]
 
 Terrain = Literal["ri", "e_max"]
 
@@ -166,6 +167,53 @@ def constraint_function(
         f"{spec.label} force constraint g <= 0 of vehicle {_vehicle_label(vehicle)}; inputs "
         f"speed_mps: speed (m/s), {_TERRAIN_DOC[terrain]}; output g ({unit}); "
         f"F_limit = {limit:g} N."
+    )
+    return fn
+
+
+def interval_constraint_function(
+    vehicle: Vehicle,
+    *,
+    model: str = DEFAULT_MODEL,
+    n_stages: int = 1,
+    name: str | None = None,
+) -> ca.Function:
+    """The interval rows of :func:`profileopt.mpc.horizon.interval_force_constraints` as a named
+    ``casadi.Function``: the force limit at every speed between each interval's entry and
+    exit speeds, for every elevation in [e_min, e_max].
+
+    Parameters
+    ----------
+    vehicle : Vehicle
+        Its constants become numbers inside the Function.
+    model : str, default ``"sbem_tf"``
+        ``"iecm"``, ``"sbem_ef"`` or ``"sbem_tf"`` (Prev:BEM is defined on the RI only).
+    n_stages : int, default 1
+        Number of intervals (the length of each input vector).
+    name : str, optional
+        Function name (a C identifier); default ``"<model>_interval_constraint_of_e_max"``.
+
+    Returns
+    -------
+    casadi.Function
+        Inputs ``v_start`` and ``v_end`` (n_stages x 1, m/s), ``e_max_m`` and ``e_min_m``
+        (n_stages x 1, m; ``e_min_m`` 0 for every elevation up to e_max); output ``g``
+        (rows x 1, interval by interval: 3 rows per interval for SBEM:TF with a force peak,
+        else 2), each F / F_limit - 1 <= 0 when admissible, NaN at a negative or NaN
+        elevation.
+    """
+    if not (isinstance(n_stages, int) and not isinstance(n_stages, bool) and n_stages >= 1):
+        raise InputError(f"n_stages = {n_stages!r}: must be an integer >= 1")
+    _check_terrain_kind("e_max", model)
+    v0, v1 = ca.SX.sym("v_start", n_stages), ca.SX.sym("v_end", n_stages)
+    e_hi, e_lo = ca.SX.sym("e_max_m", n_stages), ca.SX.sym("e_min_m", n_stages)
+    rows = interval_force_constraints(v0, v1, e_hi, vehicle, model=model, e_min_m=e_lo)
+    fname = _function_name(name, f"{model}_interval_constraint_of_e_max")
+    fn = ca.Function(fname, [v0, v1, e_hi, e_lo], [rows.g], ["v_start", "v_end", "e_max_m", "e_min_m"], ["g"])
+    fn.__doc__ = (
+        f"{get_model(model).label} force limit over each interval's speeds of vehicle {_vehicle_label(vehicle)}; "
+        f"inputs v_start, v_end (m/s), e_max_m, e_min_m (m); output g ({rows.n_force // n_stages} rows per "
+        f"interval, F / F_limit - 1 <= 0 admissible); F_limit = {rows.limit_n:g} N."
     )
     return fn
 

@@ -158,6 +158,35 @@ class TerrainPreview:
         self.speed_cap = ca.Function("preview_speed_cap", [s, origin, coef], [value],
                                      ["s_m", "origin_m", "cap_coef"], ["speed_cap_mps"])
 
+    def stage_functions(self, *, n_stages: int = 1, prefix: str = "preview") -> tuple[ca.Function, ca.Function]:
+        """:attr:`e_max` and :attr:`speed_cap` at ``n_stages`` positions at once (for C export).
+
+        Parameters
+        ----------
+        n_stages : int, default 1
+            How many positions each call takes.
+        prefix : str, default ``"preview"``
+            The Functions are named ``<prefix>_e_max`` and ``<prefix>_speed_cap`` (C identifiers).
+
+        Returns
+        -------
+        (casadi.Function, casadi.Function)
+            ``(s_m, origin_m, e_coef) -> e_max_m`` and ``(s_m, origin_m, cap_coef) ->
+            speed_cap_mps``: ``s_m`` and the output n_stages x 1 (m, m/s), ``origin_m`` a
+            number (m), the coefficients K x 1 (:meth:`coefficients`).
+        """
+        if not (isinstance(n_stages, int) and not isinstance(n_stages, bool) and n_stages >= 1):
+            raise InputError(f"n_stages = {n_stages!r}: must be an integer >= 1")
+        s, origin = ca.SX.sym("s_m", n_stages), ca.SX.sym("origin_m")
+        out = []
+        for fn, kind, coef_name, output in ((self.e_max, "e_max", "e_coef", "e_max_m"),
+                                            (self.speed_cap, "speed_cap", "cap_coef", "speed_cap_mps")):
+            coef = ca.SX.sym(coef_name, self.n_coefficients)
+            value = ca.vertcat(*(fn(s[i], origin, coef) for i in range(n_stages)))
+            out.append(ca.Function(f"{prefix}_{kind}", [s, origin, coef], [value], ["s_m", "origin_m", coef_name],
+                                   [output]))
+        return out[0], out[1]
+
     def _supports(self, origin_m: float) -> tuple[np.ndarray, np.ndarray]:
         """Each basis function's support [lo, hi] (m) for a horizon starting at ``origin_m``."""
         start = origin_m - _PAD * self.h_m

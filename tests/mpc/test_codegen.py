@@ -186,3 +186,79 @@ def test_generated_c_never_calls_negative_or_nan_terrain_admissible(tmp_path: Pa
         _never_admissible(c(speeds, NOT_TERRAIN), e.kind)
         at_zero = np.asarray(c(speeds, np.zeros(len(NOT_TERRAIN)))).ravel()
         np.testing.assert_array_equal(at_zero, -1.0 if e.kind == "constraint" else 0.0)
+
+
+def _random_inputs(fn: ca.Function, rng: np.random.Generator) -> list[np.ndarray]:
+    """Inputs for the interval rows and the preview's envelopes: speeds 0-20 m/s, elevations
+    0-0.3 m (e_min at most e_max), positions inside the horizon, coefficients of e_max and caps."""
+    names = fn.name_in()
+    values = {}
+    n = fn.size1_in(0)
+    if names[0] == "v_start":
+        values["v_start"], values["v_end"] = rng.uniform(0.0, 20.0, n), rng.uniform(0.0, 20.0, n)
+        values["e_max_m"] = rng.uniform(0.0, 0.3, n)
+        values["e_min_m"] = values["e_max_m"] * rng.uniform(0.0, 1.0, n)
+    else:
+        values["s_m"] = rng.uniform(0.0, 25.0, n)
+        values["origin_m"] = np.array([0.0])
+        k = fn.size1_in(2)
+        values[names[2]] = rng.uniform(0.0, 0.3, k) if names[2] == "e_coef" else rng.uniform(0.5, 20.0, k)
+    return [values[name] for name in names]
+
+
+@pytest.mark.slow
+@pytest.mark.cc
+@needs_cc
+def test_interval_rows_and_preview_in_c_match_python(tmp_path: Path) -> None:
+    # Issue 31: export-c covers the interval rows and the preview's envelopes, not only point forces.
+    from profileopt.mpc.functions import interval_constraint_function
+    from profileopt.mpc.horizon import interval_force_constraints
+    from profileopt.mpc.preview import TerrainPreview
+
+    vehicle = load_vehicle("atv-resonant")
+    out = tmp_path / "c"
+    assert main(["export-c", "--vehicle", "atv-resonant", "-o", str(out), "--model", "sbem_tf", "--model", "iecm",
+                 "--stages", "2", "--intervals", "--preview", "25", "--reach", "1.5"]) == 0
+    preview = TerrainPreview(vehicle, horizon_m=25.0, reach_m=1.5)
+    triples = c_functions(vehicle, models=["sbem_tf", "iecm"], n_stages=2, intervals=True, preview=preview)
+    names = [e.name for e, _, _ in triples]
+    assert "atv_resonant_sbem_tf_interval_constraint_of_e_max" in names
+    assert "atv_resonant_iecm_interval_constraint_of_e_max" in names
+    assert "atv_resonant_preview_e_max" in names and "atv_resonant_preview_speed_cap" in names
+    so = _compile_shared(out / "profileopt_atv_resonant.c", tmp_path / "lib.so")
+    rng = np.random.default_rng(7)
+    for e, fn, jac in triples:
+        if e.kind not in ("interval_constraint", "e_max", "speed_cap"):
+            continue
+        c, c_jac = ca.external(e.name, str(so)), ca.external(e.jacobian_name, str(so))
+        assert c.name_in() == fn.name_in() and c.name_out() == fn.name_out()
+        for _ in range(6):
+            args = _random_inputs(fn, rng)
+            _close(np.asarray(c(*args)), np.asarray(fn(*args)))
+            for got, want in zip(c_jac(*args), jac(*args)):
+                _close(np.asarray(ca.densify(got)), np.asarray(ca.densify(want)))
+    # the exported rows are the Python helpers' own, evaluated independently of the export
+    rows = interval_constraint_function(vehicle, model="sbem_tf", n_stages=2)
+    v0, v1, e_hi, e_lo = np.array([0.2, 6.0]), np.array([3.0, 5.0]), np.array([0.05, 0.2]), np.array([0.0, 0.1])
+    _close(np.asarray(rows(v0, v1, e_hi, e_lo)).ravel(),
+           np.asarray(interval_force_constraints(v0, v1, e_hi, vehicle, e_min_m=e_lo).g).ravel())
+    e_fn, cap_fn = preview.stage_functions(n_stages=2)
+    coef = preview.coefficients(np.arange(0.0, 30.0, 0.05), 0.02 * np.sin(np.arange(0.0, 30.0, 0.05) * 7.0), 0.0)
+    s = np.array([3.0, 11.5])
+    _close(np.asarray(e_fn(s, coef.origin_m, coef.e_max)).ravel(),
+           np.array([float(preview.e_max(x, coef.origin_m, coef.e_max)) for x in s]))
+    assert "interval_constraint_of_e_max" in (out / "README.md").read_text()
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--reach", "2"], "--reach shape(s) the preview"),
+    (["--preview", "-3"], "--preview -3: give a number of metres > 0"),
+    (["--preview", "30", "--reach", "-1"], "--reach -1"),
+    (["--preview", "30", "--unseen", "Q"], "not an ISO 8608 class"),
+])
+def test_preview_options_are_checked_in_one_line(tmp_path: Path, capsys, argv, message) -> None:
+    out = tmp_path / "c"
+    assert main(["export-c", "--vehicle", "atv", "-o", str(out), *argv]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert not out.exists()
