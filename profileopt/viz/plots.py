@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from ..core.profile import Profile
     from ..verification.verify import Verification
 
-__all__ = ["profile_figure", "plot_profile", "verification_figure", "plot_verification", "save_figure",
+__all__ = ["bin_reduce", "profile_figure", "plot_profile", "verification_figure", "plot_verification", "save_figure",
            "envelope_trace", "BINDING_COLOURS", "MAX_DRAWN_SEGMENTS", "OVERVIEW_BINS"]
 
 
@@ -38,9 +38,25 @@ OVERVIEW_BINS = 800
 MAX_DRAWN_WINDOWS = 3000
 
 
-def _bin_reduce(edges: np.ndarray, s: np.ndarray, values: np.ndarray, how: str) -> np.ndarray:
+def bin_reduce(edges: np.ndarray, s: np.ndarray, values: np.ndarray, how: str) -> np.ndarray:
     """Per bin of ``edges``, the lowest (``how="min"``) or highest (``"max"``) of the
-    ``values`` at positions ``s`` inside it, NaN values ignored; NaN for a bin with none."""
+    ``values`` at positions ``s`` inside it, NaN values ignored; NaN for a bin with none.
+
+    Parameters
+    ----------
+    edges : numpy.ndarray, shape (B+1,)
+        Bin edges along the route (m), increasing.
+    s : numpy.ndarray, shape (M,)
+        Positions of the values (m), non-decreasing.
+    values : numpy.ndarray, shape (M,)
+        The values (any unit).
+    how : {"min", "max"}
+        Which extreme of each bin.
+
+    Returns
+    -------
+    numpy.ndarray, shape (B,)
+    """
     which = segment_index(s, edges)
     bins = edges.size - 1
     starts = np.searchsorted(which, np.arange(bins), side="left")
@@ -65,14 +81,14 @@ class _Drawn:
 
     def segments(self, values: np.ndarray, how: str) -> np.ndarray:
         """Per-segment values (shape N) as drawn over :attr:`edges` by ``stairs``."""
-        return _bin_reduce(self.edges, self._mid, values, how) if self.overview else values
+        return bin_reduce(self.edges, self._mid, values, how) if self.overview else values
 
     def rows(self, values: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Per-row values (shape N+1): positions, lowest and highest (the same when not an overview)."""
         if not self.overview:
             return self.s, values, values
         centres = 0.5 * (self.edges[:-1] + self.edges[1:])
-        return centres, _bin_reduce(self.edges, self.s, values, "min"), _bin_reduce(self.edges, self.s, values, "max")
+        return centres, bin_reduce(self.edges, self.s, values, "min"), bin_reduce(self.edges, self.s, values, "max")
 
     def suffix(self, what: str) -> str:
         """A legend's words for an overview's reduction ("" when each segment is drawn)."""
