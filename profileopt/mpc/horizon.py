@@ -61,6 +61,7 @@ from ..terrain.roughness import (
 __all__ = [
     "ConstraintTriple",
     "ForceConstraints",
+    "reach_constraints",
     "terrain_envelope",
     "step_speed_envelope",
     "interval_force_constraints",
@@ -501,6 +502,51 @@ def _interval_rows(model: str, vehicle: "Vehicle") -> ca.Function:
                        ["v_start", "v_end", "e_max_m", "e_min_m"], ["force_n"])
 
 
+def reach_constraints(positions_m: Any, reach_m: float) -> ConstraintTriple:
+    """Rows 0 <= s_{k+1} - s_k <= reach_m for a horizon whose stage positions are variables.
+
+    An envelope built with ``reach_m`` (:func:`terrain_envelope`, :func:`step_speed_envelope`,
+    :class:`~profileopt.mpc.preview.TerrainPreview`) bounds the terrain a stage meets only if
+    the stage is at most ``reach_m`` long: in a free-time (or time-parameterised) problem
+    nothing else keeps a stage that short, and a controller that leaves the row out can
+    return "success" with a stage far longer, over terrain no row saw (issue 31: a 98.5 m
+    stage simulated at 1.81 times the limit). Add these rows with the force rows.
+
+    Parameters
+    ----------
+    positions_m : SX, MX, DM, numpy array or sequence, shape (N+1,)
+        The stage positions s_0 .. s_N (m).
+    reach_m : float
+        The envelopes' reach (m), > 0.
+
+    Returns
+    -------
+    ConstraintTriple
+        ``g`` the N differences s_{k+1} - s_k (m), ``lbg`` 0 (forward driving), ``ubg``
+        ``reach_m``.
+
+    Raises
+    ------
+    InputError
+        Fewer than 2 positions, or a ``reach_m`` that is not a finite number > 0.
+    """
+    reach = _finite_number(reach_m, "reach_constraints: reach_m", "m")
+    if reach <= 0:
+        raise InputError(f"reach_constraints: reach_m = {reach_m!r} m must be > 0: the envelopes' reach")
+    s = _column(positions_m)
+    n = s.shape[0] - 1
+    if n < 1:
+        raise InputError("reach_constraints: give the positions of at least 2 stages (m)")
+    return _Rows(g=s[1:] - s[:-1], lbg=np.zeros(n), ubg=np.full(n, reach))
+
+
+@dataclasses.dataclass(frozen=True)
+class _Rows(ConstraintTriple):
+    g: Any
+    lbg: np.ndarray
+    ubg: np.ndarray
+
+
 def interval_force_constraints(
     v_start: Any,
     v_end: Any,
@@ -509,6 +555,7 @@ def interval_force_constraints(
     *,
     model: str = DEFAULT_MODEL,
     e_min_m: Any = 0.0,
+    speed_backoff_mps: float = 0.0,
 ) -> ForceConstraints:
     """The force limit over every speed between each interval's entry and exit speeds.
 
@@ -573,6 +620,11 @@ def interval_force_constraints(
         below 2 wn r_p X_w(1e-12 m) / pi (2e-6 m/s for the bundled vehicles, where their
         force is under 1e-7 N).
 
+    speed_backoff_mps : float, default 0.0
+        A speed-tracking error (m/s), >= 0: the rows cover every speed from
+        max(min(v_start, v_end) - speed_backoff_mps, 0) to max(v_start, v_end) +
+        speed_backoff_mps, for a vehicle that follows the planned speeds within that much.
+
     Returns
     -------
     ForceConstraints
@@ -583,7 +635,8 @@ def interval_force_constraints(
     ------
     InputError
         Prev:BEM or an unknown model, lengths that do not match, a negative or NaN
-        elevation, ``e_min_m`` above ``e_max_m``, or a negative speed given as a number.
+        elevation, ``e_min_m`` above ``e_max_m``, a negative speed given as a number, or a
+        ``speed_backoff_mps`` that is not a finite number >= 0.
         A symbolic negative or NaN elevation gives NaN rows, never g <= 0.
     """
     if isinstance(e_max_m, Vehicle) and not isinstance(vehicle, Vehicle):
@@ -624,6 +677,11 @@ def interval_force_constraints(
         raise InputError("interval_force_constraints: e_min_m must not exceed e_max_m (the least and the largest "
                          "elevation each interval covers)")
 
+    backoff = _finite_number(speed_backoff_mps, "interval_force_constraints: speed_backoff_mps", "m/s")
+    if backoff < 0:
+        raise InputError(f"interval_force_constraints: speed_backoff_mps = {speed_backoff_mps!r} m/s must be >= 0")
+    if backoff > 0:  # the rows are symmetric in the two speeds: widen the interval both ways
+        v0, v1 = ca.fmax(ca.fmin(v0, v1) - backoff, 0.0), ca.fmax(v0, v1) + backoff
     rows_fn = _interval_rows(model, vehicle)
     # one call of the scalar rows per interval: compact in MX graphs, inlined for SX
     force = ca.vec(rows_fn.map(n)(v0.T, v1.T, e_hi.T, e_lo.T))  # interval by interval

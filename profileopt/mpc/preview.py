@@ -104,18 +104,24 @@ class TerrainPreview:
     unseen : str or float, default ``"worst"``
         The assumption for terrain not measured: ``"worst"`` (ISO 8608 class H), a class A-H
         or an RI.
+    position_error_m : float, default 0
+        How far the controller's position may be from the vehicle's (m), >= 0 (a back-off for
+        the position estimate and its tracking): the envelopes at s then bound every window
+        and ramp overlapping [s - position_error_m, s + reach_m + position_error_m].
 
     Attributes
     ----------
     e_max : casadi.Function
         ``preview_e_max(s_m, origin_m, e_coef) -> e_max_m``: never below the e_max of any
-        roughness window overlapping [s, s + reach_m], for s in [origin_m, origin_m +
-        horizon_m] (behind the origin it is not a bound), with ``e_coef`` from
+        roughness window overlapping [s, s + reach_m] (widened by ``position_error_m`` both
+        ways), for s in [origin_m, origin_m + horizon_m] (behind the origin it is not a
+        bound), with ``e_coef`` from
         :meth:`coefficients` for that origin. Twice
         continuously differentiable in s; ``SX`` inside (``expand`` it), callable on ``MX``.
     speed_cap : casadi.Function
         ``preview_speed_cap(s_m, origin_m, cap_coef) -> speed_cap_mps``: never above SBEM:TF's
-        step cap of any ramp of the wheel's path overlapping [s, s + reach_m] (as
+        step cap of any ramp of the wheel's path overlapping [s, s + reach_m] (widened as
+        ``e_max``; as
         :func:`~profileopt.mpc.horizon.step_speed_envelope`) nor above any speed limit given
         there. A stage from s_k to at most s_k + reach_m at constant acceleration keeps both
         when v_k <= cap(s_k) and v_k+1 <= cap(s_k).
@@ -127,17 +133,19 @@ class TerrainPreview:
 
     def __init__(self, vehicle: "Vehicle", *, horizon_m: float, reach_m: float = 0.0,
                  knot_spacing_m: float = DEFAULT_PREVIEW_KNOT_SPACING_M, window_m: float = 5.0,
-                 unseen: str | float = "worst") -> None:
+                 unseen: str | float = "worst", position_error_m: float = 0.0) -> None:
         from ..core.vehicle import require_vehicle
 
         vehicle = require_vehicle(vehicle, "TerrainPreview")
         for name, value, least in (("horizon_m", horizon_m, "> 0"), ("knot_spacing_m", knot_spacing_m, "> 0"),
-                                   ("window_m", window_m, "> 0"), ("reach_m", reach_m, ">= 0")):
+                                   ("window_m", window_m, "> 0"), ("reach_m", reach_m, ">= 0"),
+                                   ("position_error_m", position_error_m, ">= 0")):
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or (
                     value < 0 if least == ">= 0" else value <= 0):
                 raise InputError(f"TerrainPreview: {name} = {value!r} m must be a finite number {least}")
         self.vehicle = vehicle
         self.horizon_m, self.reach_m = float(horizon_m), float(reach_m)
+        self.position_error_m = float(position_error_m)
         self.h_m, self.window_m = float(knot_spacing_m), float(window_m)
         self.n_intervals = int(math.ceil(self.horizon_m / self.h_m - 1e-9)) + 2 * _PAD
         if self.n_intervals > MAX_PREVIEW_INTERVALS:
@@ -242,7 +250,10 @@ class TerrainPreview:
         trusted = max(float(s[-1]) - self.margin_m, float(s[0]))
         lo, hi = self._supports(float(origin_m))
         # only positions from the origin on are bounded: the support's part behind it does not count
-        lo, hi = np.maximum(lo, float(origin_m)), np.maximum(hi + self.reach_m, float(origin_m))
+        # (widened by the position error both ways: the vehicle may be that far behind or ahead)
+        error = self.position_error_m
+        lo = np.maximum(lo, float(origin_m)) - error
+        hi = np.maximum(hi + self.reach_m, float(origin_m)) + error
         # the windows of the measured samples
         windows = roughness_windows(s, z, self.vehicle.ground_clearance_m, window_m=self.window_m,
                                     source="TerrainPreview.coefficients")

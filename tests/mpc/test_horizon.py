@@ -446,3 +446,36 @@ def test_sx_speeds_with_an_mx_elevation_are_one_line():
 def test_positions_in_km_are_caught():
     s, z = _kerb_route()
     assert "positions in km?" in _errors_of(lambda: terrain_envelope(s / 1000.0, z, ATV))
+
+
+def test_speed_backoff_covers_speeds_just_outside_the_interval(atv_resonant) -> None:
+    # Issue 31's back-off: just below the first band's edge the rows hold; with a tracking
+    # error reaching over the edge they must not (the edge from the band search, independent
+    # of the rows).
+    from profileopt.physics.speeds import speed_bands
+    from profileopt.terrain.roughness import worst_case_elevation
+
+    ri = 0.3
+    edge = float(speed_bands([ri], atv_resonant).first()[0])
+    e = float(worst_case_elevation(ri, atv_resonant))
+    v = np.array([0.97 * edge])
+    g0 = np.asarray(interval_force_constraints(v, v, e, atv_resonant, e_min_m=e).g)
+    g1 = np.asarray(interval_force_constraints(v, v, e, atv_resonant, e_min_m=e, speed_backoff_mps=0.05 * edge).g)
+    assert g0.max() <= 0 < g1.max()
+    with pytest.raises(InputError, match="speed_backoff_mps"):
+        interval_force_constraints(v, v, e, atv_resonant, speed_backoff_mps=-0.1)
+
+
+def test_reach_rows_bound_each_stage(atv) -> None:
+    from profileopt.mpc.horizon import reach_constraints
+
+    g, lbg, ubg = reach_constraints([0.0, 1.5, 4.0, 4.0], 2.0)
+    np.testing.assert_allclose(np.asarray(g).ravel(), [1.5, 2.5, 0.0])
+    assert list(lbg) == [0, 0, 0] and list(ubg) == [2.0, 2.0, 2.0]
+    s = ca.SX.sym("s", 4)
+    assert reach_constraints(s, 3.0).g.shape == (3, 1)
+    for bad in (0.0, -1.0, math.nan):
+        with pytest.raises(InputError, match="reach_m"):
+            reach_constraints([0.0, 1.0], bad)
+    with pytest.raises(InputError, match="at least 2"):
+        reach_constraints([0.0], 1.0)

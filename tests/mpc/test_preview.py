@@ -134,3 +134,27 @@ def test_bad_options_are_one_line(kwargs, words):
 def test_a_vehicle_name_is_refused_with_what_to_pass():
     with pytest.raises(InputError, match="load_vehicle"):
         TerrainPreview("atv", horizon_m=10.0)
+
+
+def test_a_position_error_widens_the_preview_behind_and_ahead(atv_resonant) -> None:
+    # Issue 31's back-off: a rough stretch ending 1.5 m behind s is met by a vehicle whose
+    # position estimate is 2 m ahead of it; with position_error_m = 2 the envelope at s covers
+    # it (from the windows' own e_max, computed here), without it it need not.
+    from profileopt.terrain.roughness import roughness_windows, worst_case_elevation
+
+    s = np.arange(0.0, 80.0 + 1e-9, 0.05)
+    z = np.where((s > 10.0) & (s < 30.0), 0.03 * np.sin(2 * np.pi * s / 0.9), 0.0)
+    windows = roughness_windows(s, z, atv_resonant.ground_clearance_m, window_m=5.0)
+    e = np.asarray(worst_case_elevation(windows.ri, atv_resonant))
+    at = 36.5  # the last rough window's extent ends near 35 m
+    behind = e[(windows.stop_m >= at - 2.0) & (windows.start_m <= at)].max()
+    plain = TerrainPreview(atv_resonant, horizon_m=40.0)
+    backed = TerrainPreview(atv_resonant, horizon_m=40.0, position_error_m=2.0)
+    got = {}
+    for name, preview in (("plain", plain), ("backed", backed)):
+        coef = preview.coefficients(s, z, 20.0)
+        got[name] = float(preview.e_max(at, coef.origin_m, coef.e_max))
+    assert got["backed"] >= behind * (1 - 1e-9)
+    assert got["plain"] < behind  # the back-off is what covers it
+    with pytest.raises(InputError, match="position_error_m"):
+        TerrainPreview(atv_resonant, horizon_m=40.0, position_error_m=-1.0)
