@@ -42,7 +42,8 @@ from .horizon import spline_value
 if TYPE_CHECKING:
     from ..core.vehicle import Vehicle
 
-__all__ = ["TerrainPreview", "PreviewCoefficients", "DEFAULT_PREVIEW_KNOT_SPACING_M", "MAX_PREVIEW_INTERVALS"]
+__all__ = ["TerrainPreview", "PreviewCoefficients", "PathCoefficients", "DEFAULT_PREVIEW_KNOT_SPACING_M",
+           "MAX_PREVIEW_INTERVALS", "UNSEEN_GRADE"]
 
 #: Knot spacing (m) of a preview when none is given: 1 m. With 0.25 m knots a kerb's cap
 #: falls within 1 m and a time-domain MPC near it met IPOPT's iteration limit four times in a
@@ -57,6 +58,35 @@ MAX_PREVIEW_INTERVALS = 20_000
 _PAD = 3
 #: Relative margin of the coefficients over the requirement, for the rounding of the evaluation.
 _ROUNDING_MARGIN = 1e-12
+#: The steepest grade assumed of a path not given (rise over run, either way): 5 %, the online
+#: selector's default unseen descent (:class:`profileopt.online.SpeedSelector`).
+UNSEEN_GRADE = 0.05
+
+
+@dataclasses.dataclass(frozen=True)
+class PathCoefficients:
+    """The parameter values of the path envelopes for one step (:meth:`TerrainPreview.path_coefficients`).
+
+    Attributes
+    ----------
+    origin_m : float
+        As :attr:`PreviewCoefficients.origin_m` (m).
+    curvature : numpy.ndarray, shape (K,)
+        Coefficients of the |curvature| envelope (1/m): never below the path's |kappa| where
+        a stage can be.
+    grade_max, grade_min : numpy.ndarray, shape (K,)
+        Coefficients of the steepest uphill and downhill grade envelopes (rad): the first never
+        below, the second never above the path's grade where a stage can be.
+    path_to_m : float
+        Where the given path ends for the envelopes (m); beyond it the tightest turn the vehicle
+        can make and +-:data:`UNSEEN_GRADE` are assumed.
+    """
+
+    origin_m: float
+    curvature: np.ndarray
+    grade_max: np.ndarray
+    grade_min: np.ndarray
+    path_to_m: float
 
 
 @dataclasses.dataclass(frozen=True)
@@ -125,6 +155,14 @@ class TerrainPreview:
         :func:`~profileopt.mpc.horizon.step_speed_envelope`) nor above any speed limit given
         there. A stage from s_k to at most s_k + reach_m at constant acceleration keeps both
         when v_k <= cap(s_k) and v_k+1 <= cap(s_k).
+    curvature, grade_max, grade_min : casadi.Function
+        ``preview_curvature(s_m, origin_m, curvature_coef) -> curvature_1pm`` never below the
+        path's |curvature| over the same stretch as ``e_max`` (and the smoothing's reach);
+        ``preview_grade_max`` / ``preview_grade_min`` never below / above its grade (rad)
+        there; coefficients from :meth:`path_coefficients`. For
+        :func:`~profileopt.mpc.motion_constraints.lateral_constraints` (``v_k`` and ``v_k+1``
+        with ``curvature(s_k)``) and
+        :func:`~profileopt.mpc.motion_constraints.friction_constraints` (both grades).
     n_coefficients : int
         K, the length of each coefficient vector.
     unseen_e_max_m : float
@@ -165,6 +203,12 @@ class TerrainPreview:
                                  ["e_max_m"])
         self.speed_cap = ca.Function("preview_speed_cap", [s, origin, coef], [value],
                                      ["s_m", "origin_m", "cap_coef"], ["speed_cap_mps"])
+        self.curvature = ca.Function("preview_curvature", [s, origin, coef], [value],
+                                     ["s_m", "origin_m", "curvature_coef"], ["curvature_1pm"])
+        self.grade_max = ca.Function("preview_grade_max", [s, origin, coef], [value],
+                                     ["s_m", "origin_m", "grade_max_coef"], ["grade_max_rad"])
+        self.grade_min = ca.Function("preview_grade_min", [s, origin, coef], [value],
+                                     ["s_m", "origin_m", "grade_min_coef"], ["grade_min_rad"])
 
     def stage_functions(self, *, n_stages: int = 1, prefix: str = "preview") -> tuple[ca.Function, ca.Function]:
         """:attr:`e_max` and :attr:`speed_cap` at ``n_stages`` positions at once (for C export).
@@ -200,6 +244,81 @@ class TerrainPreview:
         start = origin_m - _PAD * self.h_m
         j = np.arange(self.n_coefficients)
         return start + (j - 3) * self.h_m, start + (j + 1) * self.h_m
+
+    def path_coefficients(self, positions_m: ArrayLike, elevations_m: ArrayLike, origin_m: float, *,
+                          x_m: ArrayLike | None = None, y_m: ArrayLike | None = None,
+                          path_tolerance_m: float | None = None) -> PathCoefficients:
+        """The parameter values of the curvature and grade envelopes over a path's samples.
+
+        The path's curvature and grade are the planner's (:func:`profileopt.terrain.geometry.route_geometry`:
+        the smoothed path within ``path_tolerance_m``, estimated from x, y when not given; the
+        grade over twice the roughness window). Coefficient j of the curvature envelope is the
+        largest |kappa| of the samples in basis function j's support widened by the reach, the
+        position error and the smoothing's own reach; of the grade envelopes the largest and
+        least grade there. Where the support reaches past the samples (less half the grade's
+        window and the smoothing's reach) the vehicle's tightest turn (1 / ``min_turn_radius_m``)
+        and +-:data:`UNSEEN_GRADE` are assumed.
+
+        Parameters
+        ----------
+        positions_m, elevations_m : array_like, shape (M,)
+            The path's samples: distance along it (m), strictly increasing, and elevation (m).
+        origin_m : float
+            Where the horizon starts (m), as for :meth:`coefficients`.
+        x_m, y_m : array_like, shape (M,), optional
+            The path in the horizontal plane (m); without them it is straight.
+        path_tolerance_m : float, optional
+            Largest deviation of the smoothed path from a sample (m), > 0; estimated from x, y
+            when not given.
+
+        Returns
+        -------
+        PathCoefficients
+
+        Raises
+        ------
+        InputError
+            Bad samples (as for a route), a non-finite origin, or a vehicle without
+            ``min_turn_radius_m`` when the horizon reaches past the path given.
+        """
+        from ..core.route import Route
+        from ..terrain.geometry import route_geometry
+
+        if isinstance(origin_m, bool) or not isinstance(origin_m, (int, float)) or not math.isfinite(origin_m):
+            raise InputError(f"TerrainPreview.path_coefficients: origin_m = {origin_m!r} must be a finite position (m)")
+        route = Route(s_m=np.asarray(positions_m, dtype=float), z_m=np.asarray(elevations_m, dtype=float),
+                      x_m=None if x_m is None else np.asarray(x_m, dtype=float),
+                      y_m=None if y_m is None else np.asarray(y_m, dtype=float),
+                      source="TerrainPreview.path_coefficients")
+        geometry = route_geometry(route, tolerance_m=path_tolerance_m, grade_scale_m=2.0 * self.window_m,
+                                  min_turn_radius_m=self.vehicle.min_turn_radius_m)
+        s = route.s_m
+        origin_m = math.floor(float(origin_m) / self.h_m + 1e-9) * self.h_m
+        spread = self.reach_m + self.position_error_m + geometry.curvature_reach_m
+        trusted = max(float(s[-1]) - max(self.window_m, geometry.curvature_reach_m), float(s[0]))
+        lo, hi = self._supports(origin_m)
+        lo = np.maximum(lo, origin_m) - self.position_error_m - geometry.curvature_reach_m
+        hi = np.maximum(hi, origin_m) + spread
+        first = np.searchsorted(s, np.clip(lo, s[0], trusted), side="left")
+        stop = np.maximum(np.searchsorted(s, np.clip(hi, s[0], trusted), side="right"), first + 1)
+        stop = np.minimum(stop, s.size)
+        first = np.minimum(first, stop - 1)
+        kappa_hi = range_extremes(np.abs(geometry.curvature_1pm), first, stop)[1]
+        grade_lo, grade_hi = range_extremes(geometry.grade_rad, first, stop)
+        beyond = (hi > trusted) | (lo < s[0])
+        if np.any(beyond):
+            radius = self.vehicle.min_turn_radius_m
+            if radius is None:
+                raise InputError("TerrainPreview.path_coefficients: the horizon reaches past the path given and the "
+                                 "vehicle has no min_turn_radius_m to assume there; give the path as far as the "
+                                 "horizon reaches, or add min_turn_radius_m (m) to the vehicle file")
+            unseen = math.atan(UNSEEN_GRADE)
+            kappa_hi = np.where(beyond, np.maximum(kappa_hi, 1.0 / float(radius)), kappa_hi)
+            grade_hi = np.where(beyond, np.maximum(grade_hi, unseen), grade_hi)
+            grade_lo = np.where(beyond, np.minimum(grade_lo, -unseen), grade_lo)
+        pad = _ROUNDING_MARGIN * max(float(np.max(np.abs(np.concatenate([kappa_hi, grade_hi, grade_lo])))), 1e-300)
+        return PathCoefficients(origin_m=float(origin_m), curvature=kappa_hi + pad, grade_max=grade_hi + pad,
+                                grade_min=grade_lo - pad, path_to_m=trusted)
 
     def coefficients(self, positions_m: ArrayLike, elevations_m: ArrayLike, origin_m: float, *,
                      speed_limit_mps: ArrayLike | None = None) -> PreviewCoefficients:

@@ -3,6 +3,8 @@ parameters set from the terrain measured so far, never below the requirement it 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from conftest import ROUTES
@@ -158,3 +160,40 @@ def test_a_position_error_widens_the_preview_behind_and_ahead(atv_resonant) -> N
     assert got["plain"] < behind  # the back-off is what covers it
     with pytest.raises(InputError, match="position_error_m"):
         TerrainPreview(atv_resonant, horizon_m=40.0, position_error_m=-1.0)
+
+
+def _arc_on_a_climb():
+    # straight 40 m, then an arc of radius 20 m for 30 m, then straight; a 10 % climb from 60 m on
+    s = np.arange(0.0, 140.0 + 1e-9, 0.25)
+    heading = np.where(s < 40.0, 0.0, np.minimum(s - 40.0, 30.0) / 20.0)
+    x = np.concatenate([[0.0], np.cumsum(np.cos(heading[:-1]) * np.diff(s))])
+    y = np.concatenate([[0.0], np.cumsum(np.sin(heading[:-1]) * np.diff(s))])
+    z = 0.1 * np.maximum(s - 60.0, 0.0)
+    return s, x, y, z
+
+
+def test_path_preview_bounds_the_turn_and_the_climb(atv) -> None:
+    # Issue 31: curvature and grade envelopes for lateral_constraints and friction_constraints.
+    # References from the construction: |kappa| = 1 / 20 on the arc, grade atan(0.1) on the climb.
+    s, x, y, z = _arc_on_a_climb()
+    preview = TerrainPreview(atv, horizon_m=60.0, reach_m=3.0)
+    coef = preview.path_coefficients(s, z, 20.0, x_m=x, y_m=y, path_tolerance_m=0.05)
+
+    def at(fn, c, where):
+        return float(fn(where, coef.origin_m, c))
+
+    # a stage starting 2 m before the arc reaches into it: the envelope holds its curvature
+    assert at(preview.curvature, coef.curvature, 38.0) >= (1 / 20.0) * 0.97
+    assert at(preview.curvature, coef.curvature, 20.0) < 0.01  # far before it, the straight
+    assert at(preview.grade_max, coef.grade_max, 58.0) >= math.atan(0.1) * 0.97
+    assert at(preview.grade_min, coef.grade_min, 58.0) <= 1e-6
+    assert at(preview.grade_max, coef.grade_max, 30.0) < 0.01
+    # beyond the path given (the horizon reaches to 80 m, the path to 50 m): the vehicle's
+    # tightest turn and the unseen grade are assumed
+    short = s <= 50.0
+    cut = preview.path_coefficients(s[short], z[short], 20.0, x_m=x[short], y_m=y[short], path_tolerance_m=0.05)
+    assert float(preview.curvature(70.0, cut.origin_m, cut.curvature)) >= 1 / atv.min_turn_radius_m * (1 - 1e-9)
+    assert float(preview.grade_min(70.0, cut.origin_m, cut.grade_min)) <= -math.atan(0.05) * (1 - 1e-9)
+    with pytest.raises(InputError, match="min_turn_radius_m"):
+        TerrainPreview(atv.replace(min_turn_radius_m=None, max_lateral_accel_mps2=None), horizon_m=60.0).path_coefficients(
+            s[short], z[short], 20.0, x_m=x[short], y_m=y[short])
