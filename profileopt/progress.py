@@ -19,7 +19,8 @@ import threading
 import time
 from typing import IO, Iterator
 
-__all__ = ["Progress", "NO_PROGRESS", "terminal_progress", "PROGRESS_DELAY_S", "PROGRESS_ENV", "MISSING_TQDM"]
+__all__ = ["Progress", "NO_PROGRESS", "terminal_progress", "print_line", "PROGRESS_DELAY_S", "PROGRESS_ENV",
+           "MISSING_TQDM"]
 
 #: Seconds of work before a display appears (work shorter than this prints nothing).
 PROGRESS_DELAY_S = 2.0
@@ -96,6 +97,7 @@ class _TqdmProgress(Progress):
 
     def __init__(self, tqdm_class: type, label: str, stream: IO[str], delay_s: float) -> None:
         self._lock = threading.Lock()
+        self._stream = stream
         self._started = False
         self._bar = tqdm_class(total=0, desc=label, file=stream, delay=delay_s, leave=False, mininterval=0.0,
                                miniters=1, dynamic_ncols=True,
@@ -127,11 +129,42 @@ class _TqdmProgress(Progress):
             if time.monotonic() >= self._shown_after:
                 self._bar.refresh()
 
+    def write(self, text: str, stream: IO[str]) -> None:
+        """Print a line on ``stream`` above the display: the bar is cleared first and drawn
+        again after it, so that the line does not run into the bar."""
+        with self._lock:
+            shown = time.monotonic() >= self._shown_after and stream is self._stream
+            if shown:
+                self._bar.clear()
+            print(text, file=stream, flush=True)
+            if shown:
+                self._bar.refresh()
+
     def close(self) -> None:
         self._stop.set()
         self._ticker.join()
         with self._lock:
             self._bar.close()
+
+
+def print_line(progress: Progress, text: str, stream: IO[str] | None = None) -> None:
+    """Print a line (a note) on ``stream`` while ``progress`` may be shown there: above the
+    display, which is cleared and drawn again, instead of running into it.
+
+    Parameters
+    ----------
+    progress : Progress
+        The display the work reports to (:func:`terminal_progress`'s, or any other).
+    text : str
+        The line, without its end.
+    stream : file object, optional
+        Where; default ``sys.stderr`` at the time of the call.
+    """
+    stream = sys.stderr if stream is None else stream
+    if isinstance(progress, _TqdmProgress):
+        progress.write(text, stream)
+    else:
+        print(text, file=stream)
 
 
 @contextlib.contextmanager

@@ -128,3 +128,73 @@ def test_plan_shows_progress_on_a_terminal_and_quiet_silences_it(no_delay: None,
 def test_plan_shows_no_progress_when_stderr_is_a_file(no_delay: None, capsys: pytest.CaptureFixture) -> None:
     assert main(["plan", CURB]) == 0
     assert "profileopt plan: step" not in capsys.readouterr().err
+
+
+def test_verify_shows_progress_on_a_terminal_and_quiet_silences_it(no_delay: None, monkeypatch: pytest.MonkeyPatch,
+                                                                   capsys: pytest.CaptureFixture, tmp_path) -> None:
+    # issue 30, second round: verify of a big route worked for seconds showing nothing, and had
+    # no --quiet (unrecognized)
+    profile = tmp_path / "p.csv"
+    assert main(["plan", CURB, "-o", str(profile), "-q"]) == 0
+    stderr = Terminal()
+    monkeypatch.setattr(sys, "stderr", stderr)
+    # another vehicle than the one planned with: a note in the summary
+    assert main(["verify", CURB, str(profile), "--vehicle", "atv-resonant"]) in (0, 3, 4)
+    assert "profileopt verify: step" in stderr.getvalue() and "simulating the drive" in stderr.getvalue()
+    assert "note:" in capsys.readouterr().out
+    for flag in ("-q", "--quiet"):
+        quiet = Terminal()
+        monkeypatch.setattr(sys, "stderr", quiet)
+        assert main(["verify", CURB, str(profile), "--vehicle", "atv-resonant", flag]) in (0, 3, 4)
+        assert quiet.getvalue() == ""
+        out = capsys.readouterr().out
+        assert "verdict:" in out and "note:" not in out  # the verdict is still said, the notes are not
+
+
+def _track_over_a_cloud(tmp_path):  # noqa: ANN001, ANN202
+    pytest.importorskip("laspy")
+    from geo_data import cloud_points, track_utm_m, write_gpx, write_laz
+
+    cloud = write_laz(tmp_path / "cloud.laz", *cloud_points(density_per_m2=300.0))
+    track = write_gpx(tmp_path / "track.gpx", *track_utm_m())
+    return track, cloud
+
+
+def test_route_and_plan_show_the_terrain_being_read_and_sampled(no_delay: None, monkeypatch: pytest.MonkeyPatch,
+                                                                tmp_path) -> None:
+    # issue 30, second round: route over a large cloud ran 21 s with no display, and plan's bar
+    # started only once the terrain was sampled
+    track, cloud = _track_over_a_cloud(tmp_path)
+    for argv in (["route", str(track), "--terrain", str(cloud), "-o", str(tmp_path / "r.csv")],
+                 ["plan", str(track), "--terrain", str(cloud), "-o", str(tmp_path / "p.csv")]):
+        stderr = Terminal()
+        monkeypatch.setattr(sys, "stderr", stderr)
+        assert main(argv) == 0, stderr.getvalue()
+        text = stderr.getvalue()
+        prog = f"profileopt {argv[0]}: step"
+        assert f"{prog}" in text and "reading the terrain (cloud.laz)" in text and \
+            "sampling the ground along the track" in text, text
+        # the notes are printed above the display, each on a line of its own
+        notes = [line for line in text.replace("\r", "\n").splitlines() if "note:" in line]
+        assert notes and all(line.startswith(f"profileopt {argv[0]}: note: ") for line in notes), notes
+        quiet = Terminal()
+        monkeypatch.setattr(sys, "stderr", quiet)
+        assert main([*argv, "-q"]) == 0
+        assert quiet.getvalue() == ""
+
+
+def test_a_line_is_printed_above_a_shown_display(no_delay: None) -> None:
+    from profileopt.progress import print_line
+
+    stream = Terminal()
+    with terminal_progress("work", stream=stream) as shown:
+        shown.expect(2)
+        shown.step("first thing")
+        print_line(shown, "a note", stream)
+        shown.step("second thing")
+    text = stream.getvalue()
+    before, after = text.split("a note\n")
+    assert before.endswith("\r") and "first thing" in before and "second thing" in after, repr(text)
+    plain = io.StringIO()
+    print_line(NO_PROGRESS, "a note", plain)
+    assert plain.getvalue() == "a note\n"

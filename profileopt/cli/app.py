@@ -128,6 +128,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:  # Ctrl-C while the command line is read: no traceback either
         print("profileopt: interrupted", file=sys.stderr)
         return 130
+    if sys.stdout is None:  # started with standard output closed (>&-): refused before any work
+        text = ("-o -: standard output is closed; give the path of a file to write"
+                if getattr(args, "output", None) == "-" else
+                "standard output is closed, and the command prints its summary there; run it with standard output "
+                "open ('> /dev/null' discards it)")  # not lost silently
+        print(f"profileopt {args.command}: error: {text}", file=sys.stderr)
+        return 2
     previous = _catch_sigterm()
     try:
         status = load_command(args.command).run(args)
@@ -169,6 +176,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"profileopt {args.command}: interrupted", file=sys.stderr)
         return 130
+    except MemoryError:  # past the estimate (profileopt.cli.memory) or a limit set on the process
+        if args.debug:
+            traceback.print_exc()
+        _silence_stdout()
+        print(f"profileopt {args.command}: error: ran out of memory; nothing was written: split the route, give a "
+              "coarser --spacing, or run it where more memory is free (plan and drive estimate their need before "
+              "any work: --max-memory)", file=sys.stderr)
+        return 2
     except Exception as exc:  # an internal error: still one line unless --debug
         return _internal_error(args, exc)
     finally:

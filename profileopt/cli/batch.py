@@ -51,6 +51,7 @@ def run(args: argparse.Namespace) -> int:
 
     if (args.manifest is None) == (not args.routes):
         raise InputError("give either --manifest FILE or route files, not both and not neither")
+    _refuse_names_not_in_utf8(args)
     if args.manifest is not None:
         if args.vehicle or args.model or args.terrain:
             raise InputError("--vehicle, --model and --terrain apply to route files; in a manifest they are its "
@@ -73,6 +74,25 @@ def run(args: argparse.Namespace) -> int:
     print(f"planned {len(summary) - len(failed)} of {len(summary)} routes into {args.out} "
           f"({os.path.join(args.out, SUMMARY_FILE)})" + (f"; {len(failed)} failed" if failed else ""))
     return EXIT_SOME_FAILED if failed else 0
+
+
+def _refuse_names_not_in_utf8(args: argparse.Namespace) -> None:
+    """Refuse a file or folder name that is not UTF-8 (Python keeps its bytes as lone
+    surrogates): the batch writes every name into its summary and its cache keys, which
+    must be text."""
+    from .messages import printable
+
+    names = [("--out", args.out), ("--manifest", args.manifest), *(("a route", route) for route in args.routes),
+             *(("--terrain", terrain) for terrain in args.terrain or ())]
+    for what, name in names:
+        if name is None:
+            continue
+        try:
+            name.encode("utf-8")
+        except UnicodeEncodeError:
+            raise InputError(f"{printable(name)}: the name of {what} has bytes that are not UTF-8 (shown as U+FFFD); "
+                             "batch writes every name into its summary as text: rename it, or plan it alone with "
+                             "'profileopt plan'") from None
 
 
 def _workers(text: str) -> int:

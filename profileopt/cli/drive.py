@@ -14,6 +14,7 @@ from pathlib import Path
 
 from ..defaults import DEFAULT_MODEL, DEFAULT_ROUGHNESS_WINDOW_M, MODEL_KEYS
 from ..errors import InputError
+from .memory import MAX_MEMORY_GB, MAX_MEMORY_HELP
 from .paths import vehicle_input
 from .track import number_argument
 
@@ -58,6 +59,8 @@ def arguments(parser: argparse.ArgumentParser) -> None:
                              "planned, and the simulated force per roughness window")
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
     parser.add_argument("-q", "--quiet", action="store_true", help="no notes or progress display on stderr")
+    parser.add_argument("--max-memory", type=number_argument, default=MAX_MEMORY_GB, metavar="GB",
+                        help=MAX_MEMORY_HELP.replace("whose plan", "whose offline plan"))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -66,10 +69,15 @@ def run(args: argparse.Namespace) -> int:
     from ..io.atomic import OutputSet
     from .messages import printable
 
+    if not args.max_memory > 0:
+        raise InputError(f"--max-memory {args.max_memory:g}: must be a number > 0 in GB ('inf': no bound)")
     outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot)],
                         inputs=[args.route, vehicle_input(args.vehicle)])
     vehicle = load_vehicle(args.vehicle)
     if Path(args.route).suffix.lower() in (".gpx", ".geojson", ".json", ".las", ".laz", ".tif", ".tiff"):
+        from ..io.inputs import check_regular_input
+
+        check_regular_input(args.route, "route file")  # a path that is not there: not found, first
         raise InputError(f"{args.route}: drive takes a route CSV of measured terrain (s,z or x,y,z); make one from "
                          "a track and a terrain map with 'profileopt route' first")
     from ..io.routes import read_route
@@ -78,7 +86,15 @@ def run(args: argparse.Namespace) -> int:
     from ..planning import plan
     from ..progress import terminal_progress
 
+    from ..defaults import DEFAULT_REFINE, DEFAULT_SEGMENT_LENGTH_M
+    from .memory import PlanMemory, check_plan_memory
+
     route = read_route(args.route)
+    # the offline plan (plan's defaults) and the drive beside it: refused before any work
+    # when they would need more than --max-memory (measured: drive peaks 10-25 % above plan,
+    # within plan's estimate)
+    check_plan_memory(args.route, PlanMemory(route.s_m.size, route.length_m, DEFAULT_SEGMENT_LENGTH_M, DEFAULT_REFINE,
+                                             vehicle), args.max_memory, what="driving and planning it")
     if not args.quiet:
         for note in route.notes:
             print(f"note: {printable(note)}", file=sys.stderr)
@@ -98,7 +114,8 @@ def run(args: argparse.Namespace) -> int:
                        progress=progress)
         offline = plan(route, vehicle, model=args.model, roughness_window_m=args.roughness_window, progress=progress)
         unseen_label = unseen_roughness(unseen).label
-        settings = {"route": Path(args.route).name, "vehicle": args.vehicle, "model": args.model,
+        # names as the summary prints them: a file name that is not UTF-8 with U+FFFD for its bytes
+        settings = {"route": printable(Path(args.route).name), "vehicle": printable(args.vehicle), "model": args.model,
                     "sensor_range_m": args.sensor_range, "unseen": unseen_label, "cycle_s": args.cycle,
                     "sensor_noise_m": args.sensor_noise, "sensor_spacing_m": args.sensor_spacing,
                     "seed": args.seed, "segment_length_m": args.segment_length, "unseen_descent": args.unseen_descent,

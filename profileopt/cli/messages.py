@@ -16,13 +16,17 @@ API_FLAGS = {"segment_length_m": "--segment-length", "roughness_window_m": "--ro
              "max_gap_m": "--max-gap", "track_crs": "--track-crs", "terrain_crs": "--terrain-crs",
              "track_index": "--track-index", "roughness_class": "--roughness-class",
              "sensor_range_m": "--sensor-range", "cycle_s": "--cycle", "sensor_noise_m": "--sensor-noise",
-             "sensor_spacing_m": "--sensor-spacing", "unseen_descent": "--unseen-descent"}
+             "sensor_spacing_m": "--sensor-spacing", "unseen_descent": "--unseen-descent",
+             "keep_contact": "--keep-contact", "force_margin": "--force-margin"}
 #: max_jerk_mps3 is a vehicle file's key too: only ``max_jerk_mps3 = ...`` (or a message's
 #: ``ri VALUE``, the form of an option and its argument) is the option.
 API_FLAGS_ASSIGNED = {"model": "--model", "smoothing": "--smoothing", "method": "--method", "band": "--band",
                       "max_jerk_mps3": "--max-jerk", "ri": "--ri", "unseen": "--unseen"}
 _FLAG_PATTERN = re.compile(r"(?<![\w'])(" + "|".join(API_FLAGS) + r")(?![\w'])")
 _ASSIGNED_PATTERN = re.compile(r"(?<![\w.'-])(" + "|".join(API_FLAGS_ASSIGNED) + r")(?= = | VALUE\b)")
+#: A keyword argument as Python writes it, ``(model='dynamic')``: the option and its value,
+#: ``(--model dynamic)``.
+_KEYWORD_PATTERN = re.compile(r"(?<![\w.'-])(" + "|".join(API_FLAGS_ASSIGNED) + r")='([^'\s]*)'")
 
 
 def flags_for_parameters(message: str) -> str:
@@ -38,6 +42,7 @@ def flags_for_parameters(message: str) -> str:
     str
     """
     message = _FLAG_PATTERN.sub(lambda m: API_FLAGS[m.group(1)], message)
+    message = _KEYWORD_PATTERN.sub(lambda m: f"{API_FLAGS_ASSIGNED[m.group(1)]} {m.group(2)}", message)
     return _ASSIGNED_PATTERN.sub(lambda m: API_FLAGS_ASSIGNED[m.group(1)], message)
 
 

@@ -20,6 +20,7 @@ from ..defaults import (
     PLAN_SOLVERS,
 )
 from ..errors import InputError
+from .memory import MAX_MEMORY_GB, MAX_MEMORY_HELP
 from .paths import vehicle_input
 from .route import PATH_TOLERANCE_HELP, smoothed_track_route
 from .track import (
@@ -90,6 +91,8 @@ def arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--map", metavar="PNG",
                         help="draw the route over its terrain, coloured by the planned speed, marking where each "
                              "limit holds it (an x,y route or a track)")
+    parser.add_argument("--max-memory", type=number_argument, default=MAX_MEMORY_GB, metavar="GB",
+                        help=MAX_MEMORY_HELP)
     add_track_arguments(parser)
 
 
@@ -144,6 +147,7 @@ def execute(args: argparse.Namespace, report=None, inputs=()) -> tuple[dict, boo
 
     # first, before any work: every output checked (none may be an input, nor both the same
     # file); then written together, all or none
+    _check_max_memory(args)
     outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot), ("--map", args.map)],
                         inputs=[args.route, vehicle_input(args.vehicle), *track_inputs(args), *inputs])
     vehicle = load_vehicle(args.vehicle)
@@ -151,25 +155,32 @@ def execute(args: argparse.Namespace, report=None, inputs=()) -> tuple[dict, boo
 
     made = track = None
     tolerance = args.path_tolerance
-    if is_track(args.route, args):
-        made, track = smoothed_track_route(args.route, args, "profileopt plan")  # its notes: not with --quiet
-        route = made.route
-        if track.smoothing is not None and track.smoothing.smoothed:
-            tolerance = None  # the points are on the path smoothed within it; what is left is estimated
-    else:
-        refuse_track_options(args.route, args)
-        route = _route_file(args)
-    say = _notes(args)
-    if args.map is not None and route.x_m is None:
-        raise InputError(f"{args.route}: --map draws a route's x,y (or a track's); this route has only s,z: "
-                         "drop --map or give an x,y,z route")
-    say(route.notes)
-    route_name = printable(Path(args.route).name)  # for the pictures' titles
+    route_name = printable(Path(args.route).name)  # for the pictures' titles and the progress display
     vehicle_name = printable(Path(vehicle.name).stem) if vehicle.name else None
     # the outputs are put in place when this block ends: after the progress display has
     # ended and the summary is printed (report), so a full standard output replaces no file
     with outputs:
+        # the display starts before the route is read: a track over a large terrain takes
+        # its time before the plan does (issue 30, item 13)
         with terminal_progress("profileopt plan", enabled=not args.quiet) as progress:
+            say = _notes(args, progress)
+            if is_track(args.route, args):
+                made, track = smoothed_track_route(  # its notes: not with --quiet
+                    args.route, args, "profileopt plan", progress=progress,
+                    before_sampling=lambda found: _check_track_memory(args, found, vehicle))
+                route = made.route
+                if track.smoothing is not None and track.smoothing.smoothed:
+                    tolerance = None  # the points are on the path smoothed within it; what is left is estimated
+            else:
+                refuse_track_options(args.route, args)
+                progress.expect(1)
+                progress.step(f"reading {route_name}")
+                route = _route_file(args, say)
+            if args.map is not None and route.x_m is None:
+                raise InputError(f"{args.route}: --map draws a route's x,y (or a track's); this route has only s,z: "
+                                 "drop --map or give an x,y,z route")
+            say(route.notes)
+            _check_memory(args, route, vehicle, None if made is None else made.spacing_m)
             profile = plan(
                 route, vehicle, segment_length_m=args.segment_length, roughness_window_m=args.roughness_window,
                 path_tolerance_m=tolerance, model=args.model, force_margin=args.force_margin,
@@ -184,16 +195,17 @@ def execute(args: argparse.Namespace, report=None, inputs=()) -> tuple[dict, boo
             if args.plot is not None:
                 from ..viz.plots import plot_profile
 
-                progress.step(f"drawing {args.plot}")
+                progress.step(f"drawing {printable(args.plot)}")
                 plot_profile(profile, args.plot, route=route_name, vehicle=vehicle_name)
             if args.map is not None:
                 from ..viz.maps import plot_plan_map
 
-                progress.step(f"drawing {args.map}")
+                progress.step(f"drawing {printable(args.map)}")
                 plot_plan_map(profile, made if made is not None else _plain_map(route), args.map,
                               route=route_name, vehicle=vehicle_name)
         # the route and the vehicle first, as compare's JSON names them
         summary = {"route": args.route, "vehicle": args.vehicle, **profile.summary()}
+        say = _notes(args)  # the display has ended
         say(summary["notes"])  # the plan's, then each turn sharper than the turning circle
         smoothing = track.smoothing if track is not None else None
         if smoothing is not None:
@@ -205,8 +217,9 @@ def execute(args: argparse.Namespace, report=None, inputs=()) -> tuple[dict, boo
     return summary, outputs.uses_stdout
 
 
-def _route_file(args: argparse.Namespace):  # noqa: ANN202  (Route)
-    """A route CSV, with the roughness the options assume, if any, in place of the file's."""
+def _route_file(args: argparse.Namespace, say):  # noqa: ANN001, ANN202  (Route)
+    """A route CSV, with the roughness the options assume, if any, in place of the file's
+    (``say`` prints the note that says so)."""
     import dataclasses
 
     from ..io.routes import read_route
@@ -220,23 +233,67 @@ def _route_file(args: argparse.Namespace):  # noqa: ANN202  (Route)
     assumed = assumed_roughness(args)
     if assumed is not None:
         if route.assumed_roughness is not None:
-            _notes(args)([f"{args.route}: its assumed roughness ({route.assumed_roughness.label}) is replaced by "
+            say([f"{args.route}: its assumed roughness ({route.assumed_roughness.label}) is replaced by "
                           f"{assumed.label}"])
         route = dataclasses.replace(route, assumed_roughness=assumed)
     return route
 
 
-def _notes(args: argparse.Namespace):  # noqa: ANN202  (Callable[[Iterable[str]], None])
-    """What prints notes on stderr, in the command line's words (``--v0``, not ``v0_mps``);
-    nothing with ``--quiet``."""
+def _notes(args: argparse.Namespace, progress=None):  # noqa: ANN001, ANN202  (Callable[[Iterable[str]], None])
+    """What prints notes on stderr, in the command line's words (``--v0``, not ``v0_mps``),
+    above the progress display if one is shown; nothing with ``--quiet``."""
+    from ..progress import NO_PROGRESS, print_line
     from .messages import flags_for_parameters
 
     def say(notes) -> None:  # noqa: ANN001
         if not args.quiet:
             for note in notes:
-                print(f"profileopt plan: note: {flags_for_parameters(note)}", file=sys.stderr)
+                print_line(progress or NO_PROGRESS, f"profileopt plan: note: {flags_for_parameters(note)}")
 
     return say
+
+
+def _check_max_memory(args: argparse.Namespace) -> None:
+    """Refuse a --max-memory that is not a number > 0 (inf: no bound)."""
+    if not args.max_memory > 0:
+        raise InputError(f"--max-memory {args.max_memory:g}: must be a number > 0 in GB ('inf': no bound)")
+
+
+def _check_memory(args: argparse.Namespace, route, vehicle, spacing_m: float | None) -> None:  # noqa: ANN001
+    """Refuse, before planning, a route whose plan would need more than --max-memory
+    (:func:`profileopt.cli.memory.check_plan_memory`); a bad --segment-length (not > 0, or
+    more segments than samples) is left to the planner to refuse, naming it."""
+    import math
+
+    from .memory import PlanMemory, check_plan_memory
+
+    if not (math.isfinite(args.segment_length) and args.segment_length > 0) or (
+            route.length_m / args.segment_length > route.s_m.size):
+        return  # more segments than samples: the planner refuses it, naming --segment-length
+    check_plan_memory(args.route, PlanMemory(route.s_m.size, route.length_m, args.segment_length, args.refine,
+                                             vehicle), args.max_memory, spacing_m=spacing_m)
+
+
+def _check_track_memory(args: argparse.Namespace, track, vehicle) -> None:  # noqa: ANN001
+    """The memory check of a track before it is sampled, where its spacing is known: given
+    (--spacing) or the default of a track without a terrain (a terrain's is chosen as it is
+    read, and checked once the route is made)."""
+    import math
+
+    from ..defaults import DEFAULT_TRACK_SPACING_M
+    from ..io.tracks import track_length_m
+    from .memory import PlanMemory, check_plan_memory
+
+    spacing = args.spacing if args.spacing is not None else DEFAULT_TRACK_SPACING_M if args.terrain is None else None
+    if spacing is None or not (math.isfinite(spacing) and spacing > 0) or not (
+            math.isfinite(args.segment_length) and args.segment_length > 0):
+        return  # the sampler or the planner refuses a bad one, naming it
+    length = track_length_m(track)
+    samples = int(length / spacing) + 1
+    if length / args.segment_length > samples:
+        return  # more segments than samples: the planner refuses it, naming --segment-length
+    check_plan_memory(args.route, PlanMemory(samples, length, args.segment_length, args.refine, vehicle),
+                      args.max_memory, spacing_m=spacing)
 
 
 def _plain_map(route):  # noqa: ANN001, ANN202

@@ -167,12 +167,17 @@ def run(args: argparse.Namespace) -> int:
     from ..physics.forces import get_model
     from ..verification.limit_check import check_limits
     from ..verification.verify import check_memory, estimated_peak_bytes, verify
+    from ..io.atomic import STDOUT
+    from ..progress import terminal_progress
     from ..viz.plots import plot_verification
 
     from .track import TRACK_SUFFIXES
 
     _check_bounds(args)
     if Path(args.route).suffix.lower() in TRACK_SUFFIXES:
+        from ..io.inputs import check_regular_input
+
+        check_regular_input(args.route, "route file")  # a path that is not there: not found, first
         raise InputError(f"{args.route}: verify drives a route file, not a track: make one with 'profileopt route "
                          f"{args.route} --terrain TERRAIN -o route.csv', plan and verify that")
     # the profile first (small beside the route): it names the vehicle file, which is an input
@@ -183,38 +188,59 @@ def run(args: argparse.Namespace) -> int:
     outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot)],
                         inputs=[args.route, args.profile, *_vehicle_files(args, profile)])
     reference, _, vehicle_notes = _vehicle_of(args, profile)
-    route = read_route(args.route)
-    vehicle = load_vehicle(reference)
-    check_memory(route, profile, vehicle, None if math.isinf(args.max_memory) else args.max_memory * 1e9,
-                 fix=f"pass --max-memory GB (about {math.ceil(estimated_peak_bytes(route, profile, vehicle)[0] / 1e8) / 10:g})")
-    check = check_limits(route, profile, vehicle, model=args.model, max_jerk_mps3=args.max_jerk,
-                         path_tolerance_m=args.path_tolerance, roughness_window_m=args.roughness_window)
-    check = dataclasses.replace(check, notes=(*vehicle_notes, *check.notes))
-    model = get_model(check.model)
-    header = (f"verified {args.profile} on {args.route} with vehicle {args.vehicle}, "
-              f"model {model.label} ({model.quantity} force, limit {check.limit_n:g} N)")
-    try:
-        result = verify(route, profile, vehicle, model=args.model, check=check, roughness_seed=args.seed,
-                        max_peak_bytes=None)  # checked above
-    except InputError as exc:
-        if not check.breaches:
-            raise
-        # a profile so far beyond the vehicle's limits that it cannot be simulated (1e155 m/s)
-        return _report_unsimulated(args, check, header, str(exc))
-    out = sys.stderr if outputs.uses_stdout else sys.stdout  # standard output holds the table
-    status, verdict = _verdict(check, result)
-    # the summary is printed before the files are renamed into place (OutputSet.print): a
-    # full standard output replaces none of them
-    if args.json:
-        text = json.dumps(result.summary(timings=False) | {"exit_status": status}, indent=2)
-    else:
-        text = printable(_summary_text(args, check, result, header, verdict))  # a file name not in UTF-8: U+FFFD
+    unsimulated = None
+    # the outputs are put in place when this block ends: after the progress display has ended
+    # and the summary is printed, so a full standard output replaces no file
     with outputs:
-        if args.output is not None:
-            result.to_csv(args.output)
-        if args.plot is not None:
-            plot_verification(result, args.plot)
-        outputs.print(text, out)
+        with terminal_progress("profileopt verify", enabled=not args.quiet) as progress:
+            progress.expect(3 + (args.output is not None) + (args.plot is not None))
+            progress.step(f"reading {printable(Path(args.route).name)}")
+            route = read_route(args.route)
+            vehicle = load_vehicle(reference)
+            check_memory(route, profile, vehicle, None if math.isinf(args.max_memory) else args.max_memory * 1e9,
+                         fix=f"pass --max-memory GB (about "
+                             f"{math.ceil(estimated_peak_bytes(route, profile, vehicle)[0] / 1e8) / 10:g})")
+            progress.step("checking the limits on paper")
+            check = check_limits(route, profile, vehicle, model=args.model, max_jerk_mps3=args.max_jerk,
+                                 path_tolerance_m=args.path_tolerance, roughness_window_m=args.roughness_window)
+            check = dataclasses.replace(check, notes=(*vehicle_notes, *check.notes))
+            model = get_model(check.model)
+            header = (f"verified {args.profile} on {args.route} with vehicle {args.vehicle}, "
+                      f"model {model.label} ({model.quantity} force, limit {check.limit_n:g} N)")
+            progress.step("simulating the drive")
+            try:
+                result = verify(route, profile, vehicle, model=args.model, check=check, roughness_seed=args.seed,
+                                max_peak_bytes=None)  # checked above
+            except InputError as exc:
+                if not check.breaches:
+                    raise
+                # a profile so far beyond the vehicle's limits that it cannot be simulated (1e155 m/s):
+                # reported once the display has ended, nothing written
+                unsimulated = str(exc)
+            if unsimulated is None:
+                # the names written into the CSV's header and the picture's title: a file name that
+                # is not UTF-8 with U+FFFD for its bytes, as in the summary (matplotlib refuses the rest)
+                named = dataclasses.replace(result, route=printable(str(result.route)),
+                                            vehicle=printable(str(result.vehicle)))
+                if args.output is not None:
+                    progress.step("writing the table" if args.output == STDOUT else
+                                  f"writing {printable(args.output)}")
+                    named.to_csv(args.output)
+                if args.plot is not None:
+                    progress.step(f"drawing {printable(args.plot)}")
+                    plot_verification(named, args.plot)
+        if unsimulated is None:
+            out = sys.stderr if outputs.uses_stdout else sys.stdout  # standard output holds the table
+            status, verdict = _verdict(check, result)
+            # the summary is printed before the files are renamed into place (OutputSet.print): a
+            # full standard output replaces none of them
+            if args.json:
+                text = json.dumps(result.summary(timings=False) | {"exit_status": status}, indent=2)
+            else:  # a file name not in UTF-8: U+FFFD
+                text = printable(_summary_text(args, check, result, header, verdict))
+            outputs.print(text, out)
+    if unsimulated is not None:
+        return _report_unsimulated(args, check, header, unsimulated)
     return status
 
 
@@ -248,7 +274,7 @@ def _summary_text(args: argparse.Namespace, check, result, header: str, verdict:
         f"  simulated {result.travel_time_s:.2f} s of driving in {result.run.steps} steps of "
         f"{1e3 * result.run.time_step_s:.4f} ms",
     ]
-    lines += [f"  note: {note}" for note in result.notes]
+    lines += [] if args.quiet else [f"  note: {note}" for note in result.notes]
     if args.output is not None:
         lines.append("wrote the table to standard output" if args.output == STDOUT else f"wrote {args.output}")
     if args.plot is not None:
@@ -280,7 +306,7 @@ def _report_unsimulated(args: argparse.Namespace, check, header: str, reason: st
         return status
     lines = [header, verdict, *(f"  {breach.describe()}" for breach in check.breaches),
              f"  not simulated: {reason}"]
-    lines += [f"  note: {note}" for note in check.notes]
+    lines += [] if args.quiet else [f"  note: {note}" for note in check.notes]
     if unwritten:
         lines.append(f"not written (there is no simulation to write): {', '.join(unwritten)}")
     print(printable("\n".join(lines)))
@@ -312,6 +338,8 @@ def arguments(parser: argparse.ArgumentParser) -> None:
                              "it ('-': standard output, the summary then goes to stderr)")
     parser.add_argument("--plot", metavar="PNG", help="write forces along s and simulated vs predicted per window")
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="no notes and no progress display (the verdict and errors are still said)")
     parser.add_argument("--max-memory", type=number_argument, default=MAX_MEMORY_GB, metavar="GB",
                         help="refuse, before any work, a route whose verification needs more memory than this, in "
                              "GB ('inf': no bound; default: %(default)g, what planning the largest route needs). "

@@ -356,8 +356,8 @@ class OutputSet:
         text : str
             What the command says to its user (its summary).
         file : text stream, optional
-            Where (default: standard output, as :func:`print`); nothing is printed when it
-            is None at the end (standard output closed when the command started).
+            Where (default: standard output, as :func:`print`); None at the end (standard
+            output closed when the command started) is refused as a stream that fails is.
 
         Raises
         ------
@@ -421,8 +421,10 @@ def _say(text: str, file: IO[str] | None, *, files: bool) -> None:
     line naming it (:meth:`OutputSet.print`), and saying that no file was written if
     ``files`` (the set has file outputs)."""
     stream = sys.stdout if file is None else file
-    if stream is None:  # started with standard output closed: what is printed goes nowhere, as print does
-        return
+    if stream is None:  # started with standard output (or error) closed: refused, not lost
+        name = "standard output" if file is None or sys.stdout is None else "standard error"
+        raise InputError(f"{name} is closed, and the command prints its summary there; no file output was "
+                         f"written; run it with {name} open ('> /dev/null' discards it)")
     try:
         print(text, file=stream)
         stream.flush()
@@ -578,9 +580,11 @@ def atomic_write(path: str | os.PathLike, newline: str = "\n") -> Iterator[IO[st
     Yields
     ------
     file object
-        A UTF-8 text file open for writing.
+        A UTF-8 text file open for writing. Text that UTF-8 cannot encode (the lone
+        surrogates Python keeps for the bytes of a file name that is not UTF-8) is written
+        as its escape (``\\udcff``), never an error after the work is done.
     """
     with atomic_path(path) as tmp:
-        with open(tmp, "w", encoding="utf-8", newline=newline) as handle:
+        with open(tmp, "w", encoding="utf-8", errors="backslashreplace", newline=newline) as handle:
             yield handle
 

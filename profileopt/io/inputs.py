@@ -7,20 +7,17 @@ size, before reading it.
 
 The size caps
 -------------
-Reading and planning a route takes about 15 to 20 bytes of memory per byte of the route
-file (measured with ``s,z`` rows of 22 bytes: an 11 MB route peaks at 200 MB reading it and
-planning it, a 45 MB route at 650 MB reading it), most of it Python's per-line strings. The
-cap :data:`MAX_TABLE_BYTES` (50 MB, about 2 million rows, 200 km at 0.1 m spacing) keeps a
-route's peak near 1 GB, which leaves room for the system and the solver on a small vehicle
-computer with 2 GB of memory. On a machine with M GB of memory, routes up to about
-M x 25 MB fit; split a longer route, or raise the cap (``profileopt.io.inputs.MAX_TABLE_BYTES``)
-from Python on a larger machine. A route made from a track (``profileopt plan TRACK``,
-``profileopt route TRACK``) is checked before it is sampled: it needs about
-:data:`MEMORY_PER_TRACK_SAMPLE` (1.1 kB) per sample, read and planned, more than a route
-file's row as its x, y and the path's curvature come with it (measured: a 10 km GPX track at
-0.05 m, 200,000 samples, peaks at 400 MB, 20 km at 620 MB); :func:`max_route_samples` allows
-as many as fit in the largest route file's memory (``MAX_TABLE_BYTES`` x
-:data:`MEMORY_PER_TABLE_BYTE`, 1 GB): 909,090, 45 km at 0.05 m. Without it a 130-byte track
+Reading a route file takes about 13 bytes of memory per byte of it, most of it Python's
+per-line strings (measured: a 39 MB file of 2.35 million ``s,z`` rows peaks at 0.49 GB, a
+42 MB one at 0.54 GB); the cap :data:`MAX_TABLE_BYTES` (50 MB) keeps that near 0.65 GB.
+Planning the route takes far more, growing with its samples, segments and travel time, not
+with the file: ``profileopt plan`` estimates it before any work and refuses a route over its
+``--max-memory`` (:mod:`profileopt.cli.memory`; 1.5 GB by default, about 600,000 samples at
+0.05 m). A route made from a track (``profileopt route TRACK``, and ``plan TRACK`` before
+that estimate) is checked before it is sampled: at most :func:`max_route_samples` samples
+(909,090: 45 km at 0.05 m; :data:`MEMORY_PER_TRACK_SAMPLE` each in ``MAX_TABLE_BYTES`` x
+:data:`MEMORY_PER_TABLE_BYTE`, 1 GB). Making the route needs less than that (measured with
+``profileopt route``: 893,000 samples peak at 0.34 GB); without the cap a 130-byte track
 spanning 500 km was cut into 10 million samples and ran out of memory after minutes.
 A vehicle file is a dozen lines: 1 MB is generous. A LAS
 or LAZ point cloud is checked against its own header, then decoded in chunks keeping only the
@@ -47,11 +44,12 @@ MAX_TABLE_BYTES = 50_000_000
 MAX_BINARY_BYTES = 500_000_000
 #: Largest vehicle file read (bytes).
 MAX_VEHICLE_BYTES = 1_000_000
-#: Bytes of memory per byte of a route file, read and planned (the upper end of the 15 to 20
-#: measured; see the module's notes).
+#: Bytes of memory allowed per byte of the largest route file (with :data:`MAX_TABLE_BYTES`,
+#: the 1 GB that bounds a route made from a track; see the module's notes).
 MEMORY_PER_TABLE_BYTE = 20
-#: Bytes of memory per sample of a route made from a track, read and planned (measured; see
-#: the module's notes).
+#: Bytes of memory allowed per sample of a route made from a track (with
+#: :data:`MEMORY_PER_TABLE_BYTE`, the cap :func:`max_route_samples`; making the route measured
+#: about 0.4 kB per sample, planning it about 1.1 to 4 kB: :mod:`profileopt.cli.memory`).
 MEMORY_PER_TRACK_SAMPLE = 1_100
 
 

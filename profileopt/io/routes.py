@@ -145,12 +145,16 @@ def _refuse_terrain_file(path: str | os.PathLike) -> None:
     Raises
     ------
     InputError
-        ``path`` ends in a terrain file's ending (``.las``, ``.laz``, ``.tif``, ``.tiff``, ``.crg``).
+        ``path`` ends in a terrain file's ending (``.las``, ``.laz``, ``.tif``, ``.tiff``, ``.crg``)
+        (or, so ending, is not there: not found).
     """
     from .terrain_maps import TERRAIN_SUFFIXES  # its endings (no geo package is imported)
 
     suffix = os.path.splitext(str(path))[1].lower()
     if suffix in TERRAIN_SUFFIXES:
+        from .inputs import check_regular_input
+
+        check_regular_input(path, "route file")  # a path that is not there is not found, whatever its ending
         kind = _TERRAIN_KINDS[TERRAIN_SUFFIXES[suffix]]
         raise InputError(f"{path}: is {kind}, not a route file; give it as --terrain with the track to drive over it "
                          f"(profileopt plan TRACK.gpx --terrain {os.path.basename(str(path))}, or make a route first "

@@ -291,6 +291,8 @@ def read_geotiff(path: str | os.PathLike, *, terrain_crs: str | None = None,
                                             0.0, transform.e, transform.f + window.row_off * transform.e)
     except rasterio.errors.RasterioError as exc:
         raise unreadable_geotiff(path, exc) from None
+    except rasterio.errors.CRSError as exc:  # not a RasterioError: a ValueError, raised as the file is opened
+        raise unreadable_geotiff_crs(path, exc, terrain_crs) from None
     rows, cols = band.shape
     if rows < 2 or cols < 2:
         raise InputError(f"{path}: the raster has {rows} x {cols} cells; interpolation needs at least 2 x 2")
@@ -322,6 +324,32 @@ def unreadable_geotiff(path: Path, exc: Exception) -> InputError:
     """The one line for a file rasterio cannot read as a GeoTIFF (its reason, whitespace folded)."""
     reason = " ".join(str(exc).split())[:160]
     return InputError(f"{path}: is not a readable GeoTIFF (rasterio: {reason}); check the file")
+
+
+def unreadable_geotiff_crs(path: Path, exc: Exception, terrain_crs: str | None = None) -> InputError:
+    """The one line for a GeoTIFF whose CRS (GeoKeys or WKT) GDAL cannot parse as it opens the
+    file (a unit of NaN, 0 or a negative size): the file cannot be read at all, so
+    ``terrain_crs`` cannot stand in for it.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file.
+    exc : Exception
+        rasterio's ``CRSError``.
+    terrain_crs : str, optional
+        The CRS the user gave (``--terrain-crs``), if any.
+
+    Returns
+    -------
+    InputError
+    """
+    reason = " ".join(str(exc).split())[:160]
+    given = (f"; --terrain-crs {terrain_crs} cannot stand in for it, as the file cannot be opened with it"
+             if terrain_crs is not None else "")
+    return InputError(f"{path}: its CRS (GeoTIFF GeoKeys or WKT) cannot be read (GDAL: {reason}; often a unit or "
+                      f"parameter that is not a valid number: NaN, 0, negative){given}; set it right, e.g. "
+                      f"'gdal_edit.py -a_srs EPSG:32633 {path.name}'")
 
 
 def geotiff_crs(path: Path, stated: Any, terrain_crs: str | None, notes: list[str]) -> Any:

@@ -44,6 +44,7 @@ from .terrain_maps import (
     read_terrain,
     track_box_m,
     unreadable_geotiff,
+    unreadable_geotiff_crs,
 )
 
 __all__ = ["GridTiles", "read_tiles", "terrain_files", "MAX_TILES"]
@@ -311,6 +312,8 @@ def _header(path: Path, terrain_crs: str | None) -> _Tile:
             crs = geotiff_crs(path, stated, terrain_crs, [])
     except rasterio.errors.RasterioError as exc:
         raise unreadable_geotiff(path, exc) from None
+    except rasterio.errors.CRSError as exc:  # not a RasterioError: raised as the file is opened
+        raise unreadable_geotiff_crs(path, exc, terrain_crs) from None
     unit = length_units_m(crs, str(path))[0]
     return _Tile(path, "GeoTIFF DEM", (bounds.left * unit, bounds.right * unit, min(bounds.bottom, bounds.top) * unit,
                                        max(bounds.bottom, bounds.top) * unit), crs,

@@ -55,6 +55,12 @@ from .table import read_table, read_text
 __all__ = ["Track", "read_track", "project_track", "local_projected_crs", "track_length_m", "check_track_samples",
            "check_not_degrees", "degrees_like_extent", "JOIN_GAP_M", "TRACK_SUFFIXES", "DEGREES_EXTENT"]
 
+#: What a terrain file given as a track is, by its ending (the endings of
+#: :data:`profileopt.io.terrain_maps.TERRAIN_SUFFIXES`), for the message saying to give it as
+#: ``--terrain``.
+_TERRAIN_FILES = {".las": "a point cloud (LAS)", ".laz": "a point cloud (LAZ)", ".tif": "a terrain map (GeoTIFF DEM)",
+                  ".tiff": "a terrain map (GeoTIFF DEM)", ".crg": "a terrain surface (OpenCRG)"}
+
 #: Largest gap (m) between the end of one GPX track or segment and the start of the next
 #: that is joined (see the module's notes).
 JOIN_GAP_M = 50.0
@@ -187,6 +193,11 @@ def read_track(path: str | os.PathLike, *, track_crs: str | None = None,
     path = Path(path)
     kind = TRACK_SUFFIXES.get(path.suffix.lower())
     if kind is None:
+        what = _TERRAIN_FILES.get(path.suffix.lower())
+        if what is not None:
+            inputs.check_regular_input(path, "track file")  # a path that is not there: not found, first
+            raise InputError(f"{path}: is {what}, not a track; give it as --terrain with the track to drive over it "
+                             f"(profileopt route TRACK.gpx --terrain {path.name} -o route.csv)")
         raise InputError(f"{path}: a track file must end in {', '.join(TRACK_SUFFIXES)} "
                          f"(GPX, GeoJSON or CSV), not {path.suffix or 'no ending'!r}; rename or convert it")
     if track_index is not None and kind != "GPX":

@@ -149,3 +149,64 @@ def test_whole_number_options_take_ascii_digits_only(capsys: pytest.CaptureFixtu
 def test_a_missing_route_without_terrain_gets_no_terrain_hint(capsys: pytest.CaptureFixture) -> None:
     assert refusal(capsys, ["plan"]) == ("profileopt plan: error: the following arguments are required: route "
                                          "(see 'profileopt plan --help')")
+
+
+def test_names_that_are_not_utf8_are_written_with_u_fffd(short_route: Path, tmp_path: Path,
+                                                        capsys: pytest.CaptureFixture) -> None:
+    """issue 30, second round: every place a command writes a file name (CSV comment and
+    header lines, a picture's title) takes one whose bytes are not UTF-8: before, route, verify
+    -o and --plot and drive -o were internal errors (UnicodeEncodeError, matplotlib's
+    TypeError)."""
+    route = tmp_path / os.fsdecode(b"r\xff\xfe.csv")
+    route.write_bytes(short_route.read_bytes())
+    track = tmp_path / os.fsdecode(b"g\xff.gpx")
+    track.write_text('<?xml version="1.0"?><gpx version="1.1" creator="t"><trk><trkseg><trkpt lat="46.0" '
+                     'lon="13.0"><ele>100</ele></trkpt><trkpt lat="46.0005" lon="13.0"><ele>101</ele></trkpt>'
+                     '</trkseg></trk></gpx>')
+    made = tmp_path / "made.csv"
+    assert cli.main(["route", str(track), "--roughness-class", "C", "-o", str(made), "-q"]) == 0, \
+        capsys.readouterr().err
+    assert "g\ufffd.gpx (2 points" in made.read_text(encoding="utf-8")
+    profile = tmp_path / "p.csv"
+    assert cli.main(["plan", str(route), "-o", str(profile), "-q"]) == 0
+    table, picture = tmp_path / "v.csv", tmp_path / "v.png"
+    assert cli.main(["verify", str(route), str(profile), "-o", str(table), "--plot", str(picture)]) == 0, \
+        capsys.readouterr().err
+    assert table.read_text(encoding="utf-8").startswith("# profileopt verify: route r\ufffd\ufffd.csv, vehicle atv")
+    assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    driven = tmp_path / "d.csv"
+    assert cli.main(["drive", str(route), "-o", str(driven), "-q"]) == 0, capsys.readouterr().err
+    assert driven.read_text(encoding="utf-8").startswith("# drive: route=r\ufffd\ufffd.csv vehicle=atv")
+    capsys.readouterr()
+    # batch writes every name into its summary and cache keys: refused, one line
+    assert cli.main(["batch", str(route), "-o", str(tmp_path / "out"), "--workers", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "the name of a route has bytes that are not UTF-8" in err, err
+
+
+def test_a_closed_standard_output_is_refused_before_any_work(short_route: Path, tmp_path: Path) -> None:
+    # issue 30, second round: 'plan route.csv >&-' exited 0 and the summary was lost
+    out = tmp_path / "p.csv"
+    done = subprocess.run([*PROFILEOPT, "plan", str(short_route), "-o", str(out)], stderr=subprocess.PIPE, text=True,
+                          timeout=120, preexec_fn=lambda: os.close(1))
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.splitlines() == ["profileopt plan: error: standard output is closed, and the command prints "
+                                        "its summary there; run it with standard output open ('> /dev/null' "
+                                        "discards it)"]
+    assert not out.exists()
+
+
+def test_running_out_of_memory_is_one_line_exit_2(monkeypatch: pytest.MonkeyPatch,
+                                                 capsys: pytest.CaptureFixture) -> None:
+    # issue 30, second round: 'prlimit --as=4000000000 profileopt plan sz1250.csv' ended with
+    # 'internal error: MemoryError' (exit 1) after 72 s; the estimate now refuses it before any
+    # work, and whatever still runs out of memory is one line, exit 2
+    from profileopt.cli import plan as command
+
+    def exhausted(args):  # noqa: ANN001, ANN202
+        raise MemoryError
+
+    monkeypatch.setattr(command, "run", exhausted)
+    assert cli.main(["plan", str(ROUTES / "curb.csv")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("profileopt plan: error: ran out of memory; nothing was written")

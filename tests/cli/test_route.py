@@ -444,12 +444,21 @@ def test_a_tiny_file_spanning_500_km_is_refused_before_sampling(tmp_path: Path, 
     track = tmp_path / "long.gpx"
     track.write_text(f'{GPX_HEAD}<trk><trkseg><trkpt lat="45" lon="10"><ele>0</ele></trkpt><trkpt lat="47" '
                      'lon="12"><ele>0</ele></trkpt><trkpt lat="49" lon="14"><ele>0</ele></trkpt></trkseg></trk></gpx>')
-    for command in (["plan", str(track), "--ri", "0.05"], ["route", str(track), "--ri", "0.05"]):
+    # route: by the samples a route may have; plan (item 9 of the second round): by the memory its
+    # plan would need, estimated before sampling (profileopt.cli.memory), at any spacing that
+    # would make the route (0.56 m: 960,000 samples, once a 2.7 GB peak)
+    for command, words in ((["route", str(track), "--ri", "0.05"],
+                            ("km long", "--spacing 0.05", "more than the 909,090", "give --spacing 0.6 or more")),
+                           (["plan", str(track), "--ri", "0.05"],
+                            ("planning it needs about 24 GB of memory (10,774,832 route samples over 538.7 km",
+                             "more than --max-memory 1.5 GB; split it into 19 parts of about 28.4 km, or pass "
+                             "--max-memory 23.9")),
+                           (["plan", str(track), "--ri", "0.05", "--spacing", "0.6"],
+                            ("needs about 9.9 GB", "897,903 route samples", "split it into 8 parts"))):
         start = time.perf_counter()
         status, _, err = _run([*command, "-o", str(tmp_path / "out.csv")], capsys)
         assert time.perf_counter() - start < 5.0
-        _one_line_error(status, err, "long.gpx", "km long", "--spacing 0.05", "more than the 909,090",
-                        "give --spacing 0.6 or more")
+        _one_line_error(status, err, "long.gpx", *words)
         assert not (tmp_path / "out.csv").exists()
     status, _, err = _run(["route", str(track), "--ri", "0.05", "--spacing", "1000", "-o", str(tmp_path / "o.csv")],
                           capsys)
@@ -500,3 +509,50 @@ def test_option_numbers_are_ascii_decimal_notation(tmp_path: Path, capsys: pytes
     assert raised.value.code == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "is not a number" in err and err.isascii()
+
+
+def test_a_geotiff_whose_crs_unit_is_nan_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    # issue 30, second round: 'internal error: CRSError: The WKT could not be parsed' (exit 1),
+    # with --terrain-crs too, and from plan
+    import struct
+
+    import rasterio
+    from rasterio.transform import Affine
+
+    wkt = ('PROJCS["UTM33 custom",GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]],'
+           'PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433]],PROJECTION["Transverse_Mercator"],'
+           'PARAMETER["latitude_of_origin",0],PARAMETER["central_meridian",15],PARAMETER["scale_factor",0.9996],'
+           'PARAMETER["false_easting",500000],PARAMETER["false_northing",0],UNIT["odd",0.4321],'
+           'AXIS["Easting",EAST],AXIS["Northing",NORTH]]')
+    dem = tmp_path / "gkt_nan.tif"
+    with rasterio.open(dem, "w", driver="GTiff", height=6, width=8, count=1, dtype="float32", crs=wkt,
+                       transform=Affine(2.0, 0.0, 400000.0, 0.0, -2.0, 5100100.0)) as out:
+        out.write(np.zeros((6, 8), np.float32), 1)
+    dem.write_bytes(dem.read_bytes().replace(struct.pack("<d", 0.4321), struct.pack("<d", float("nan"))))
+    track = tmp_path / "track.csv"
+    track.write_text("x,y\n400002,5100090\n400012,5100090\n")
+    for command in (["route", str(track), "--terrain", str(dem), "-o", str(tmp_path / "r.csv")],
+                    ["route", str(track), "--terrain", str(dem), "--terrain-crs", "EPSG:32633", "-o",
+                     str(tmp_path / "r.csv")],
+                    ["plan", str(track), "--terrain", str(dem)]):
+        status, _, err = _run(command, capsys)
+        _one_line_error(status, err, "gkt_nan.tif: its CRS (GeoTIFF GeoKeys or WKT) cannot be read")
+    assert not (tmp_path / "r.csv").exists()
+
+
+def test_a_point_cloud_given_as_the_track_says_to_give_it_with_terrain(tmp_path: Path,
+                                                                      capsys: pytest.CaptureFixture) -> None:
+    # issue 30 item 17: "a track file must end in .gpx ...; rename or convert it"; and a .laz that
+    # is not there is not found, not "a point cloud"
+    cloud = tmp_path / "small.las"
+    write_laz(cloud, *cloud_points(density_per_m2=50.0))
+    status, _, err = _run(["route", str(cloud), "-o", str(tmp_path / "x.csv")], capsys)
+    _one_line_error(status, err, "small.las: is a point cloud (LAS), not a track; give it as --terrain with the "
+                                 "track to drive over it (profileopt route TRACK.gpx --terrain small.las")
+    missing = str(tmp_path / "nothere.laz")
+    for command, what in ((["route", missing, "-o", str(tmp_path / "x.csv")], "track file"),
+                          (["plan", missing], "route file"), (["drive", missing], "route file"),
+                          (["verify", str(tmp_path / "no.gpx"), missing], "route file")):
+        status, _, err = _run(command, capsys)
+        _one_line_error(status, err, "not found; check the path")
+        assert what in err and "point cloud" not in err, err

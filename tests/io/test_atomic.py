@@ -234,3 +234,12 @@ def test_a_jpeg_picture_is_a_jpeg(tmp_path: Path) -> None:
         fig.add_subplot().plot([0, 1])
         fig.savefig(tmp, format=picture_format(path))
     assert path.read_bytes()[:3] == b"\xff\xd8\xff"  # the JPEG SOI marker
+
+
+def test_atomic_write_escapes_what_utf8_cannot_encode(tmp_path) -> None:
+    # a file name that is not UTF-8 reaches Python as lone surrogates: written as their escape,
+    # never a UnicodeEncodeError once the work is done (issue 30, second round)
+    out = tmp_path / "t.csv"
+    with atomic_write(out) as handle:
+        handle.write(f"# route {os.fsdecode(b'r' + bytes([0xff]) + b'.csv')}\n")
+    assert out.read_bytes() == b"# route r\\udcff.csv\n"

@@ -796,3 +796,37 @@ def test_a_geotiff_whose_crs_unit_is_no_length_is_one_line(tmp_path: Path, unit:
     with pytest.raises(InputError) as raised:
         read_terrain(path, terrain_crs=wkt)
     one_line(raised, str(path), words)
+
+
+def write_tif_with_nan_unit(path: Path) -> Path:
+    """A GeoTIFF whose CRS's linear unit (a GeoKey ProjLinearUnitSize) is NaN: written with a
+    unit of 0.4321 m, whose double is then overwritten with NaN in the file's bytes."""
+    wkt = ('PROJCS["UTM33 custom",GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563]],'
+           'PRIMEM["Greenwich",0],UNIT["degree",0.0174532925199433]],PROJECTION["Transverse_Mercator"],'
+           'PARAMETER["latitude_of_origin",0],PARAMETER["central_meridian",15],PARAMETER["scale_factor",0.9996],'
+           'PARAMETER["false_easting",500000],PARAMETER["false_northing",0],UNIT["odd",0.4321],'
+           'AXIS["Easting",EAST],AXIS["Northing",NORTH]]')
+    write_tif(path, wkt)
+    data = path.read_bytes()
+    unit = struct.pack("<d", 0.4321)
+    assert data.count(unit) == 1
+    path.write_bytes(data.replace(unit, struct.pack("<d", float("nan"))))
+    return path
+
+
+def test_a_geotiff_whose_geokey_unit_is_nan_is_one_line(tmp_path: Path) -> None:
+    # issue 30, second round: rasterio's CRSError (not a RasterioError) as the file was opened was
+    # an internal error, with --terrain-crs too
+    from profileopt.io.tiles import read_tiles
+
+    path = write_tif_with_nan_unit(tmp_path / "nan.tif")
+    for terrain_crs in (None, "EPSG:32633"):
+        with pytest.raises(InputError) as raised:
+            read_terrain(path, terrain_crs=terrain_crs)
+        text = one_line(raised, str(path), "its CRS (GeoTIFF GeoKeys or WKT) cannot be read", "gdal_edit.py -a_srs")
+        assert ("--terrain-crs EPSG:32633 cannot stand in for it" in text) == (terrain_crs is not None)
+    other = tmp_path / "ok.tif"
+    write_tif(other, "EPSG:32633")
+    with pytest.raises(InputError) as raised:  # among tiles: read from its header
+        read_tiles([other, path])
+    one_line(raised, str(path), "cannot be read")
