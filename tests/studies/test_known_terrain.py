@@ -39,6 +39,7 @@ def replanned(route: Route, vehicle: profileopt.Vehicle, scale: float) -> tuple[
     return profile.travel_time_s, float(np.max(np.abs(run.transmitted_n))) / limit_n
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("vehicle_name", ["atv", "atv-resonant"])
 def test_the_largest_scale_keeps_the_limit_and_a_little_more_does_not(vehicle_name: str) -> None:
     route = kerbs_route()
@@ -70,6 +71,7 @@ def test_where_even_the_cap_keeps_the_limit_the_cap_is_the_reference() -> None:
     assert ratio <= 1.0 and ref.travel_time_s == pytest.approx(time_s, rel=1e-9)
 
 
+@pytest.mark.slow
 def test_the_row_compares_the_dynamic_plan_with_the_faster_reference() -> None:
     route = kerbs_route()
     vehicle = profileopt.load_vehicle("atv-resonant")

@@ -285,6 +285,7 @@ class _Slope:
         return 0.05 * (np.asarray(x, dtype=float) - EAST)
 
 
+@pytest.mark.slow
 def test_a_plan_map_over_utm_has_its_labels_and_legend_inside_the_figure(long_map, tall_map) -> None:
     route = u_turn()  # over a DEM, y ticks with decimals: "y (m)" was cut off at the left edge
     s = route.s_m

@@ -37,6 +37,13 @@ BANDED = SolverOptions(nlp_solver="banded")
 IPOPT = SolverOptions(nlp_solver="ipopt")
 plan = functools.partial(profileopt.plan, refine=False, solver_options=BANDED)
 ALL_ROUTES = ("curb", "iri_road", "krc_rms_1in", "krc_rms_2in", "krc_rms_4in", "trail", "washboard")
+#: Every route with both vehicles, the 2 km trail and the resonant ATV on the KRC courses
+#: slow-marked (those plans take 2-7 s each since the bands became exact under the window
+#: definition, issue 33): the fast subset keeps the other combinations.
+ROUTE_VEHICLE_PAIRS = tuple(
+    pytest.param(name, vehicle_name, marks=pytest.mark.slow)
+    if name == "trail" or (vehicle_name == "atv-resonant" and name.startswith("krc")) else (name, vehicle_name)
+    for vehicle_name in ("atv", "atv-resonant") for name in ALL_ROUTES)
 
 
 def banded_matrices(oracle: banded_backend.BandedOracle, x, p, lam_f, lam_g) -> tuple:
@@ -114,8 +121,7 @@ def test_equal_row_bounds_are_a_stop_not_a_wrong_answer() -> None:
     assert not result.success and "equality" in result.status
 
 
-@pytest.mark.parametrize("name", ALL_ROUTES)
-@pytest.mark.parametrize("vehicle_name", ["atv", "atv-resonant"])
+@pytest.mark.parametrize("name, vehicle_name", ROUTE_VEHICLE_PAIRS)
 def test_convex_problem_reaches_the_exact_optimum(name: str, vehicle_name: str) -> None:
     """Without jerk bound and smoothing the NLP is convex in b and the forward-backward
     profile is its exact optimum (issue 3): the banded solver must reach it."""
@@ -128,8 +134,7 @@ def test_convex_problem_reaches_the_exact_optimum(name: str, vehicle_name: str) 
     assert solved.travel_time_s == pytest.approx(exact.travel_time_s, rel=1e-9)
 
 
-@pytest.mark.parametrize("name", ALL_ROUTES)
-@pytest.mark.parametrize("vehicle_name", ["atv", "atv-resonant"])
+@pytest.mark.parametrize("name, vehicle_name", ROUTE_VEHICLE_PAIRS)
 @pytest.mark.parametrize("options", [{}, {"smoothing": 0.0}], ids=["default", "min-time-jerk"])
 def test_banded_and_ipopt_reach_the_same_optimum(name: str, vehicle_name: str, options: dict) -> None:
     route, vehicle = read_route(ROUTES / f"{name}.csv"), load_vehicle(vehicle_name)
