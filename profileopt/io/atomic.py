@@ -457,7 +457,13 @@ def _make_temp(target: _Target) -> Path:
                          f"({exc.strerror}); choose another path") from None
     try:
         os.close(fd)
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; outputs get the usual permissions
+        # mkstemp makes 0600: a file replaced keeps its permissions (as shell redirection
+        # leaves them), a new one gets the usual ones
+        try:
+            mode = stat.S_IMODE(os.stat(target.file).st_mode) if not target.stream else None
+        except OSError:
+            mode = None
+        os.chmod(tmp, 0o666 & ~_umask() if mode is None else mode)
     except BaseException:  # SIGTERM or Ctrl-C between the calls: no temporary file is left
         _remove(Path(tmp))
         raise

@@ -128,8 +128,9 @@ def vehicle_slug(vehicle: "Vehicle") -> str:
         Named by ``vehicle.name`` (its file), ``"vehicle"`` if it has none.
     """
     stem = Path(vehicle.name).stem if vehicle.name else "vehicle"
-    slug = re.sub(r"[^A-Za-z0-9_]", "_", stem)
-    if not slug or slug[0].isdigit():
+    # runs of '_' collapsed and none at the ends: CasADi refuses names with '__' in them
+    slug = re.sub(r"_+", "_", re.sub(r"[^A-Za-z0-9_]", "_", stem)).strip("_") or "vehicle"
+    if slug[0].isdigit():
         slug = "v_" + slug
     return slug
 

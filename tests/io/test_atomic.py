@@ -243,3 +243,30 @@ def test_atomic_write_escapes_what_utf8_cannot_encode(tmp_path) -> None:
     with atomic_write(out) as handle:
         handle.write(f"# route {os.fsdecode(b'r' + bytes([0xff]) + b'.csv')}\n")
     assert out.read_bytes() == b"# route r\\udcff.csv\n"
+
+
+def test_a_file_replaced_keeps_its_permissions(tmp_path) -> None:
+    # Issue 30 item 6 (written through as shell redirection does): '> out.csv' leaves a 0600
+    # file 0600; the output written into it by rename must too.
+    import stat
+
+    from profileopt.io.atomic import atomic_write
+
+    out = tmp_path / "out.csv"
+    out.write_text("old\n")
+    out.chmod(0o600)
+    with atomic_write(out) as handle:
+        handle.write("new\n")
+    assert out.read_text() == "new\n" and stat.S_IMODE(out.stat().st_mode) == 0o600
+    fresh = tmp_path / "fresh.csv"
+    with atomic_write(fresh) as handle:
+        handle.write("x\n")
+    assert stat.S_IMODE(fresh.stat().st_mode) == 0o666 & ~_current_umask()
+
+
+def _current_umask() -> int:
+    import os
+
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask

@@ -262,3 +262,13 @@ def test_preview_options_are_checked_in_one_line(tmp_path: Path, capsys, argv, m
     err = capsys.readouterr().err
     assert message in err and err.count("\n") == 1
     assert not out.exists()
+
+
+@pytest.mark.parametrize("stem, slug", [("atv-resonant", "atv_resonant"), ("v__x", "v_x"), ("v\udcff", "v"),
+                                        ("__", "vehicle"), ("4x4 car", "v_4x4_car")])
+def test_vehicle_names_become_names_casadi_takes(stem: str, slug: str) -> None:
+    from profileopt.mpc.codegen import vehicle_slug
+
+    vehicle = load_vehicle("atv").replace(name=f"/some/folder/{stem}.toml")
+    assert vehicle_slug(vehicle) == slug
+    c_functions(vehicle, models=["iecm"])  # CasADi refused '__' in a Function's name
