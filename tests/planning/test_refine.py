@@ -73,10 +73,14 @@ def _windows_force_over_limit(route: Route, profile, vehicle) -> float:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("name", "vehicle_name"), [("krc_rms_4in.csv", "atv"), ("washboard.csv", "atv-resonant")])
-def test_refined_travel_time_hardly_depends_on_the_segment_length(name: str, vehicle_name: str) -> None:
-    # The two routes whose minimum time differs by more than 2 % between 1 m and 0.5 m
-    # segments (README, "Choosing --segment-length"). The reference for the limit is an
+@pytest.mark.parametrize(("name", "vehicle_name", "first_order_gap"),
+                         [("krc_rms_4in.csv", "atv", 1.02), ("washboard.csv", "atv-resonant", 1.0)])
+def test_refined_travel_time_hardly_depends_on_the_segment_length(name: str, vehicle_name: str,
+                                                                  first_order_gap: float) -> None:
+    # The two routes whose minimum time differed by more than 2 % between 1 m and 0.5 m
+    # segments (README, "Choosing --segment-length"); the resonant washboard's gap was the
+    # bound over each segment's RI range at a crawl, and is 0.4 % since the bands are exact
+    # under the window definition (issue 33), so only its sign is asserted. The reference for the limit is an
     # independent, much finer uniform grid (0.125 m, without refining): refined plans at
     # 1 m and 0.5 m agree with each other within 0.5 % and with it within 1 %, and every
     # roughness window keeps the force limit.
@@ -88,7 +92,7 @@ def test_refined_travel_time_hardly_depends_on_the_segment_length(name: str, veh
     options = {"smoothing": 0.0, "max_jerk_mps3": math.inf}
     uniform = {length: plan(route, vehicle, segment_length_m=length, refine=False, **options).time_s[-1]
                for length in (1.0, 0.5)}
-    assert uniform[1.0] > 1.02 * uniform[0.5]  # the first-order error refining removes
+    assert uniform[1.0] > first_order_gap * uniform[0.5]  # the first-order error refining removes
     reference = plan(route, vehicle, segment_length_m=0.125, refine=False, **options).time_s[-1]
     refined = {}
     for length in (1.0, 0.5):
