@@ -60,7 +60,8 @@ def main() -> int:
         bench_plan.write_level_atv(work / bench_plan.LEVEL_VEHICLE_FILE)
         vehicle = bench_plan.level_atv()
         command = [sys.executable, "-m", "profileopt", "plan", str(route_path), "--vehicle",
-                   str(work / bench_plan.LEVEL_VEHICLE_FILE), "-o", str(work / "cli.csv"), "--json", "--quiet"]
+                   str(work / bench_plan.LEVEL_VEHICLE_FILE), "-o", str(work / "cli.csv"), "--json", "--quiet",
+                   "--max-memory", "inf"]  # large routes are above the 1.5 GB default estimate
         process, inside, startup_floor, import_times = [], [], [], []
         stages: dict[str, list[float]] = {}
         limits: dict[str, list[float]] = {"read": [], "write": [], "windows": [], "solve": []}
