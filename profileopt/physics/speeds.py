@@ -419,7 +419,8 @@ def speed_bands_of_sets(values: ArrayLike, first: ArrayLike, stop: ArrayLike, ve
         return found, memo
     mine = SpeedBands(*(getattr(found, name)[n:] for name in _BAND_FIELDS))
     rows = np.flatnonzero(members.counts)
-    lower, upper, count = _intersected(mine, members.row_of_pair(), members.pair_member(), rows.size)
+    pair_row, member = members.row_of_pair(), members.pair_member()
+    lower, upper, count = _intersected(mine, pair_row, member, rows.size)
     bands = SpeedBands(*(getattr(found, name)[:n] for name in _BAND_FIELDS))
     width = max(bands.lower_mps.shape[1], lower.shape[1])
     lower_all = _widened(bands.lower_mps, width)
@@ -427,7 +428,7 @@ def speed_bands_of_sets(values: ArrayLike, first: ArrayLike, stop: ArrayLike, ve
     lower_all[rows], upper_all[rows] = _widened(lower, width), _widened(upper, width)
     counts = bands.count.copy()
     counts[rows] = count
-    peaks = _peaks_of_pairs(mine.peaks_mps[members.pair_member()], members.row_of_pair(), rows, bands.peaks_mps)
+    peaks = _peaks_of_pairs(mine.peaks_mps[member], pair_row, rows, bands.peaks_mps)
     return SpeedBands(lower_mps=_trimmed(lower_all), upper_mps=_trimmed(upper_all), count=counts,
                       peaks_mps=_trimmed(peaks)), memo
 
