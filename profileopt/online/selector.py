@@ -10,7 +10,8 @@ never go faster than it could if the terrain beyond were as bad as assumed. Each
    :attr:`SpeedSelector.margin_m`), computes once and for all the same speed bands, caps and
    acceleration bounds the offline planner computes (:mod:`profileopt.planning.limits`: force
    windows, steps, speed limits and top speed, turns, friction, grades, drive power) on the
-   measured samples around it, in three stages over three cycles so that no cycle does it all;
+   measured samples around it, within the cycle that finds them measured (the force's first
+   band from a table built once, :mod:`.band_table`, so that the cycle keeps its time budget);
    of the force's bands it keeps the first, [0, v_first] (the paper-notes' "Which root": safe
    for a vehicle that may have to slow down anywhere, as one that sees only so far must);
 2. appends, past the last such segment (the *planning edge*), the terrain not yet measured as
@@ -47,7 +48,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from typing import TYPE_CHECKING, Iterator
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -68,9 +69,10 @@ from ..physics.motion import plans_on_grades, power_accel_mps2, tyre_accel_mps2
 from ..physics.speeds import speed_bands
 from ..physics.steps import MAX_RAMP_M, TREND_HALF_WIDTH_M
 from ..planning.bands import DrivePower, braking_profile, greatest_profile
-from ..planning.limits import PlanContext, default_limits
+from ..planning.limits import ForceLimit, PlanContext, default_limits
 from ..terrain.assumed import unseen_roughness
 from ..terrain.geometry import route_geometry
+from .band_table import first_band_table
 from .sensed import SensedTerrain
 from .tracking import MIN_BRAKING_MPS2, braking_margin_m, cycle_end, jerk_limited_step
 
@@ -357,13 +359,14 @@ class SpeedSelector:
                                                  roughness_window_m=self.roughness_window_m)
         self.limits = default_limits(vehicle, model=model, max_jerk_mps3=math.inf)
         self._power = next((limit for limit in self.limits if limit.name == "power"), None)
+        self._force = next((limit for limit in self.limits if isinstance(limit, ForceLimit)), None)
+        self._band_table = first_band_table(vehicle, model)
         self.terrain = SensedTerrain(start_m=self.start_m)
         self._segments = _Grown()
         self._tail_decel = float(vehicle.max_decel_mps2)
         if plans_on_grades(vehicle):  # the deceleration bound on the steepest descent assumed
             self._tail_decel = float(tyre_accel_mps2(vehicle.max_decel_mps2, -math.atan(self.unseen_descent)))
         self._last_accel = 0.0
-        self._work: Iterator[None] | None = None
         self._driven: list[tuple[float, float]] = []  # positions and speeds on ground not yet planned
         self._late = ""
         self._blind_m = 0.0
@@ -408,7 +411,7 @@ class SpeedSelector:
     def sense(self, s_m: ArrayLike, z_m: ArrayLike, *, x_m: ArrayLike | None = None, y_m: ArrayLike | None = None,
               speed_limit_mps: ArrayLike | None = None) -> None:
         """Take newly sensed samples along the path (:meth:`SensedTerrain.add`). Their segments'
-        speeds are computed by the next calls of :meth:`update`, one stage per cycle.
+        speeds are computed by the next call of :meth:`update`.
 
         Parameters
         ----------
@@ -426,7 +429,7 @@ class SpeedSelector:
         within :attr:`margin_m` of it (a blind spot): the segments whose neighbourhood meets it
         are unseen (v_unseen), and the measured stretch starts again beyond it."""
         gap = self.terrain.gap_m
-        if gap is None or self._work is not None or pos + self.margin_m < gap[0]:
+        if gap is None or pos + self.margin_m < gap[0]:
             return
         first = self._segments.end
         upto = int(math.ceil((gap[1] + self.margin_m - self.start_m) / self.segment_length_m - 1e-9))
@@ -441,22 +444,9 @@ class SpeedSelector:
         self._blind_m += gap[1] - gap[0]
 
     def _advance(self) -> None:
-        """One stage of the work on newly measured segments (:meth:`_chunk_stages`), so that no
-        cycle does all of it."""
-        if self._work is None:
-            self._work = self._chunk_stages()
-        try:
-            next(self._work)
-        except StopIteration:
-            self._work = None
-        except BaseException:
-            self._work = None  # not a dead generator: the next cycle starts the chunk again
-            raise
-
-    def _chunk_stages(self) -> Iterator[None]:
-        """Final speeds of the segments whose neighbourhood is measured (module docstring, 1), in
-        three stages, one per cycle (a generator): the measured stretch around them, its
-        roughness windows and geometry; the force model's speed bands; the other limits."""
+        """Final speeds of the segments whose neighbourhood is now measured (module docstring,
+        1): the measured stretch around them, its roughness windows and geometry, the force
+        model's first band and the other limits."""
         measured = self.terrain.measured_to_m
         total = self._segment_count()
         at_end = self.end_m is not None and measured >= self.end_m - 1e-9
@@ -497,13 +487,16 @@ class SpeedSelector:
                                   min_turn_radius_m=self.vehicle.min_turn_radius_m)
         path = segment_path(route, seg, geometry)
         context = PlanContext(route=route, vehicle=self.vehicle, segments=seg, path=path)
-        yield
-        bands = None
+        first_top = np.full(seg.count, np.inf)
         for limit in self.limits:
-            got = limit.speed_bands(context)
-            if got is not None:
-                bands = got
-        yield
+            if limit is self._force:  # the first band's top, from the table (module docstring, 1)
+                window_first, window_stop = seg.window_ranges()
+                first_top = np.minimum(first_top, self._band_table.first_of_sets(seg.windows.ri, window_first,
+                                                                                 window_stop))
+            else:
+                got = limit.speed_bands(context)
+                if got is not None:
+                    first_top = np.minimum(first_top, got.first())
         n = seg.count
         cap = np.full(n, np.inf)
         decel, accel = np.full(n, np.inf), np.full(n, np.inf)
@@ -520,7 +513,7 @@ class SpeedSelector:
             inner_b = limit.inner_bounds(context, cap, decel, accel)
             if inner_b is not None:
                 cap, decel, accel = inner_b
-        top = bands.first_band_only().capped(cap).first()
+        top = np.minimum(first_top, cap)
         # the forward pass keeps the power limit step by step (slow) only where it can bind
         binds = self._power is not None and self._power.nlp_rows(context, cap, decel, accel) is not None
         self._segments.append(top[new], decel[new], accel[new], path.grade_hi_rad[new],
@@ -672,5 +665,7 @@ class SpeedSelector:
 
     def _braking(self, pos: float, v0: float, edge: float, t0: float, why: str) -> Command:
         """Brake as hard as the vehicle may: no profile keeps the limits from here."""
+        late, self._late = self._late, ""
+        note = "; ".join(n for n in (late, f"at {pos:.6g} m: {why}; braking as hard as the vehicle may") if n)
         return self._finish(pos, v0, -float(self.vehicle.max_decel_mps2), np.array([pos]), np.array([v0]), edge,
-                            t0, emergency=True, note=f"at {pos:.6g} m: {why}; braking as hard as the vehicle may")
+                            t0, emergency=True, note=note)

@@ -75,12 +75,32 @@ def test_never_faster_than_the_plan_that_knows_the_whole_route(atv):
 
 def test_an_assumption_that_fails_is_said_not_hidden(atv):
     """Assuming class A (20 m/s) on unseen ground with 10 m of sensing, a kerb (capped at
-    8.5 m/s) comes into view too late, when the vehicle is past it: the drive counts
+    8.5 m/s) comes into view too late to brake for within the jerk bound: the drive counts
     emergencies and says where and why."""
     driven = drive(_kerb_route(kerb_at_m=80.0, height_m=0.09), atv, sensor_range_m=10.0, unseen="A")
     assert driven.emergencies > 0
-    assert "came into view after the vehicle was there" in driven.notes[0]
-    assert "worse than the unseen assumption (ISO 8608 class A)" in driven.notes[0]
+    assert "keeps the limits of the terrain ahead; braking as hard as the vehicle may" in driven.notes[0]
+
+
+def test_terrain_measured_after_the_vehicle_drove_it_is_said(atv):
+    """Terrain that the sensors deliver only after the vehicle has driven over it (here by
+    hand: 0-50 m measured, the vehicle at 51.5 m at 17 m/s, then 50-70 m with a 9 cm kerb at
+    51.2 m) is worse than the class A assumed: the next command says where and how fast."""
+    from profileopt.online.selector import SpeedSelector
+
+    ground = _kerb_route(length_m=150.0, kerb_at_m=51.2, height_m=0.09)
+    selector = SpeedSelector(atv, sensor_range_m=10.0, unseen="A", start_m=0.0, end_m=150.0)
+    seen = ground.s_m <= 50.0
+    later = (ground.s_m > 50.0) & (ground.s_m <= 70.0)
+    selector.sense(ground.s_m[seen], ground.z_m[seen])
+    for position_m in (40.0, 45.0, 51.5):
+        command = selector.update(position_m, 17.0, 0.0)
+        assert not command.emergency
+    selector.sense(ground.s_m[later], ground.z_m[later])
+    command = selector.update(53.0, 17.0, 0.0)
+    assert command.emergency
+    assert "came into view after the vehicle was there at 17 m/s" in command.note
+    assert "worse than the unseen assumption (ISO 8608 class A)" in command.note
 
 
 @pytest.mark.parametrize("kwargs, words", [
