@@ -24,7 +24,10 @@ enters through ``set_nl_cons`` with two helpers of ``profileopt.mpc``:
   between them included.
 
 A third row keeps every stage able to brake to the unseen terrain's speed where the measured
-terrain ends, so that the next step has a plan too.
+terrain ends, so that the next step has a plan too. After each solve the predicted positions
+are checked (``preview.check_stages``: every stage forward, at most the envelopes' reach
+v_max * dt long and inside the horizon; the speed bounds imply it here); a plan that failed
+the check would not be applied (the example brakes instead) and makes it exit with 1.
 So every interval the controller applies keeps the force limit in every window it passes
 (the proof is in the docstring of interval_force_constraints). The example then checks its
 own closed-loop trajectory independently (examples/mpc_window_check.py: every window, the
@@ -51,6 +54,7 @@ except ImportError:
     sys.exit("mpc_dompc.py needs do-mpc, in the 'mpc' extra: pip install 'profileopt[mpc]'")
 
 from profileopt import get_model, load_vehicle  # noqa: E402
+from profileopt.errors import InputError  # noqa: E402
 from profileopt.mpc.constraints import (  # noqa: E402
     force_constraints, force_limit_n, interval_force_constraints, terrain_envelope)
 from profileopt.mpc.preview import TerrainPreview  # noqa: E402
@@ -61,7 +65,7 @@ from mpc_window_check import report, worst_window  # noqa: E402  (beside this fi
 
 # do-mpc calls numpy functions on CasADi values, which CasADi 3.8 answers with a one-time
 # FutureWarning about its numpy mode: not this example's business
-warnings.filterwarnings("ignore", message=".*numpy function was called on a casadi value", category=FutureWarning)
+warnings.filterwarnings("ignore", message="(?s).*numpy function was called on a casadi value", category=FutureWarning)
 
 HERE = Path(__file__).resolve().parent
 parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -186,7 +190,7 @@ plant.setup()
 x0 = np.array([[s_start], [0.0]])  # from rest
 mpc.x0 = plant.x0 = x0
 mpc.set_initial_guess()
-log_t, log_s, log_v, log_a, solve_s, failures = [0.0], [s_start], [0.0], [], [], 0
+log_t, log_s, log_v, log_a, solve_s, failures, refused = [0.0], [s_start], [0.0], [], [], 0, 0
 t_loop = time.perf_counter()
 while x0[0, 0] < s_stop and len(log_a) < args.max_steps:
     now["coef"] = sensed(float(x0[0, 0]))  # what the sensors have measured, as parameters
@@ -194,6 +198,15 @@ while x0[0, 0] < s_stop and len(log_a) < args.max_steps:
     u0 = mpc.make_step(x0)
     solve_s.append(time.perf_counter() - t0)
     failures += not mpc.solver_stats["success"]
+    # the envelopes bound a stage only if it is at most REACH long and starts inside the
+    # horizon: check the predicted positions before applying the first input
+    predicted = [float(mpc.opt_x_num_unscaled["_x", k, 0, -1, "s"]) for k in range(n_horizon + 1)]
+    try:
+        preview.check_stages(predicted, origin_m=now["coef"].origin_m)
+    except InputError as exc:
+        print(f"t = {log_t[-1]:.2f} s: {exc}; braking instead", file=sys.stderr)
+        refused += 1
+        u0 = np.array([[max(-vehicle.max_decel_mps2, -float(x0[1, 0]) / dt)]])
     x0 = plant.make_step(u0)
     log_a.append(float(u0[0, 0]))
     log_t.append(log_t[-1] + dt)
@@ -209,7 +222,8 @@ print(f"route {Path(route.source).name}, vehicle {Path(vehicle.name).stem}, mode
 print(f"preview: {preview.n_coefficients} coefficients per step, terrain known {args.sensor_range:g} m ahead, reach "
       f"{REACH:g} m, built in {t_env:.2f} s")
 print(f"closed loop: {log_t[-1]:.2f} s of driving in {len(log_a)} do-mpc steps; IPOPT failures: {failures}; "
-      f"solve time per step: median {np.median(ms):.1f} ms, max {ms.max():.1f} ms; loop {t_loop:.1f} s")
+      f"plans refused by the stage check: {refused}; solve time per step: median {np.median(ms):.1f} ms, max "
+      f"{ms.max():.1f} ms; loop {t_loop:.1f} s")
 print(f"speeds driven: {min(log_v):.3f} to {max(log_v):.3f} m/s")
 print(report(check, get_model(model_key).label, limit_n, WINDOW))
 if args.out:
@@ -219,4 +233,4 @@ if args.out:
     table = np.column_stack([log_t, log_s, log_v, np.r_[log_a, np.nan]])
     np.savetxt(path, table, delimiter=",", fmt="%.17g", comments="", header="time_s,s_m,speed_mps,accel_mps2")
     print(path)
-sys.exit(0 if check.over == 0 and failures == 0 else 1)
+sys.exit(0 if check.over == 0 and failures == 0 and refused == 0 else 1)

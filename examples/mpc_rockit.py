@@ -13,7 +13,8 @@ limit holds between the grid points through the two helpers of ``profileopt.mpc.
 * ``env = terrain_envelope(s, z, vehicle, reach_m=REACH)``: a smooth function of the
   position, never below the e_max of any roughness window within REACH ahead; each interval
   is held to at most REACH metres (``ocp.next(s) - s <= REACH``), since its duration is
-  free;
+  free, and the solved positions are checked against it (``check_stage_lengths(s, REACH)``:
+  left out, the row's absence would give "success" with stages far longer than REACH);
 * ``interval_force_constraints(v, ocp.next(v), env(s), vehicle)``: every speed between the
   interval's two speeds is admissible at every elevation up to env(s), the resonance peak
   between them included.
@@ -39,8 +40,10 @@ except ImportError:
     sys.exit("mpc_rockit.py needs rockit-meco, in the 'mpc' extra: pip install 'profileopt[mpc]'")
 
 from profileopt import get_model, load_vehicle  # noqa: E402
+from profileopt.errors import InputError  # noqa: E402
 from profileopt.mpc.constraints import (  # noqa: E402
     force_constraints, force_limit_n, interval_force_constraints, terrain_envelope)
+from profileopt.mpc.horizon import check_stage_lengths  # noqa: E402
 from profileopt.io import read_route  # noqa: E402
 
 from mpc_window_check import report, worst_window  # noqa: E402  (beside this file)
@@ -110,11 +113,16 @@ time_s, s_m = sol.sample(s, grid="control")
 _, speed = sol.sample(v, grid="control")
 _, accel = sol.sample(a, grid="control")
 accel = accel[:n_stages]  # the control's last sample repeats the last interval's
+try:  # the envelope covers a stage only if it is at most REACH long: check the solved positions
+    stage_m = check_stage_lengths(s_m, REACH)
+except InputError as exc:
+    sys.exit(f"mpc_rockit.py: the solution is not covered by the envelope: {exc}")
 
 # --- Its own check: every window, between the grid points --------------------------------------
 check = worst_window(route.s_m, route.z_m, vehicle, time_s, s_m, speed, accel, model=model_key, window_m=WINDOW)
 print(f"route {Path(route.source).name}, vehicle {Path(vehicle.name).stem}, model {model_key}: from rest at "
-      f"{s_start:g} m to {s_end:g} m in {n_stages} intervals of at most {REACH:g} m")
+      f"{s_start:g} m to {s_end:g} m in {n_stages} intervals of at most {REACH:g} m (longest solved: "
+      f"{stage_m.max():.3f} m)")
 print(f"envelope: {keep.sum()} samples, built in {t_env:.2f} s; rockit + IPOPT: {t_solve:.2f} s "
       f"({sol.stats['iter_count']} iterations)")
 print(f"minimum time: {time_s[-1]:.3f} s; speeds {speed.min():.3f} to {speed.max():.3f} m/s")

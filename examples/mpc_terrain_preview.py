@@ -18,7 +18,10 @@ class's beyond the measured terrain) and the speed cap of steps and speed limits
 ``interval_force_constraints`` keeps every speed between an interval's two speeds admissible
 at that e_max, the resonance peak between them included; and a terminal row keeps the last
 stage able to brake to the unseen terrain's speed by the end of the measured terrain, so the
-next step has a plan too. The closed-loop speed is plotted beside the offline plan of
+next step has a plan too. Each solved plan is checked before it is applied
+(``preview.check_stages``: every stage forward, at most the envelopes' reach long and inside
+the horizon; here the speed bounds imply it, and a plan that failed it would be treated as a
+failed solve). The closed-loop speed is plotted beside the offline plan of
 ``profileopt.plan``, and the closed loop is checked independently of the controller, window
 by window (examples/mpc_window_check.py).
 """
@@ -38,6 +41,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from profileopt import get_model, load_vehicle  # noqa: E402
+from profileopt.errors import InputError  # noqa: E402
 from profileopt.io import atomic_path, read_route  # noqa: E402
 from profileopt.mpc.constraints import force_limit_n, interval_force_constraints  # noqa: E402
 from profileopt.mpc.preview import TerrainPreview  # noqa: E402
@@ -146,7 +150,7 @@ a_last = 0.0
 X_guess = np.vstack([s_start + np.arange(N + 1) * 0.0, np.zeros(N + 1)])
 U_guess = np.zeros((1, N))
 log = {"t": [0.0], "s": [state[0]], "v": [state[1]], "a": []}
-solve_times, failures = [], 0
+solve_times, failures, refused = [], 0, 0
 t_loop = time.perf_counter()
 ctrl = build_controller()
 while state[0] < s_stop and len(solve_times) < 20000:
@@ -165,12 +169,17 @@ while state[0] < s_stop and len(solve_times) < 20000:
     try:
         sol = opti.solve()
         X_opt, U_opt = sol.value(X), np.atleast_2d(sol.value(U))
-    except RuntimeError:
-        print(f"t = {log['t'][-1]:.2f} s: IPOPT {opti.stats()['return_status']}; driving the last plan's tail",
-              file=sys.stderr)
-        # Infeasible or not converged: drive the tail of the last plan (it kept every
-        # limit for the remaining stages) and brake at the end of it.
-        failures += 1
+        # the envelopes bound a stage only if it is at most REACH long and starts inside the
+        # horizon: check the solved positions before applying the plan (raises InputError)
+        preview.check_stages(X_opt[0], origin_m=coef.origin_m)
+    except (RuntimeError, InputError) as exc:
+        refused_now = isinstance(exc, InputError)
+        why = str(exc) if refused_now else f"IPOPT {opti.stats()['return_status']}"
+        print(f"t = {log['t'][-1]:.2f} s: {why}; driving the last plan's tail", file=sys.stderr)
+        # Infeasible, not converged or refused: drive the tail of the last plan (it kept
+        # every limit for the remaining stages) and brake at the end of it.
+        refused += refused_now
+        failures += not refused_now
         U_opt = np.hstack([U_guess[:, :-1], [[-vehicle.max_decel_mps2]]])
         X_opt = X_guess
     solve_times.append(time.perf_counter() - t0)
@@ -199,7 +208,8 @@ ms = 1e3 * np.array(solve_times)
 print(f"route {Path(args.route).name} ({s_stop - s_start:g} m driven), vehicle {Path(vehicle.name).stem}, "
       f"model {model}; horizon {N} x {DT:g} s, cruise {args.cruise:g} m/s")
 print(f"closed loop: {log['t'][-1]:.1f} s of driving in {steps} MPC steps, the terrain known {args.sensor_range:g} m "
-      f"ahead ({preview.n_coefficients} preview coefficients per step); IPOPT failures: {failures}")
+      f"ahead ({preview.n_coefficients} preview coefficients per step); IPOPT failures: {failures}; plans refused "
+      f"by the stage check: {refused}")
 print(f"solve time per step: mean {ms.mean():.1f} ms, median {np.median(ms):.1f} ms, max {ms.max():.1f} ms; "
       f"first solve {ms[0]:.0f} ms (CasADi builds the solver once); closed loop {t_loop:.1f} s")
 print(f"offline plan ({profile.status}): {profile.travel_time_s:.1f} s for the whole route, planned in {t_plan:.2f} s")
@@ -234,4 +244,4 @@ png = out / "mpc_terrain_preview.png"
 with atomic_path(png) as tmp:
     fig.savefig(tmp, format="png", dpi=120)
 print(png)
-sys.exit(0 if check.over == 0 else 1)
+sys.exit(0 if check.over == 0 and refused == 0 else 1)

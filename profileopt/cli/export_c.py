@@ -30,8 +30,9 @@ def arguments(parser: argparse.ArgumentParser) -> None:
                         help="also the interval rows (the limit at every speed between two stages' speeds) of each "
                              "model defined on e_max")
     parser.add_argument("--preview", type=float, metavar="HORIZON_M",
-                        help="also a TerrainPreview's two envelopes (e_max and the step speed cap) over a horizon of "
-                             "this length (m), with --reach, --knot-spacing and --unseen")
+                        help="also a TerrainPreview's five envelopes (e_max, the step speed cap, |curvature|, the "
+                             "steepest and least grade) over a horizon of this length (m), with --reach, "
+                             "--knot-spacing and --unseen")
     parser.add_argument("--reach", type=float, default=0.0, metavar="M",
                         help="with --preview: how far beyond its position a stage can take the vehicle (m, default 0)")
     parser.add_argument("--knot-spacing", type=float, default=None, metavar="M",

@@ -12,9 +12,13 @@
 With ``intervals=True`` it adds, for each model defined on e_max, the interval rows of
 :func:`profileopt.mpc.horizon.interval_force_constraints` (``<slug>_<model>_interval_constraint_of_e_max``:
 the limit over every speed between two stages' speeds); with a ``preview``
-(:class:`profileopt.mpc.preview.TerrainPreview`), its two envelopes (``<slug>_preview_e_max``,
-``<slug>_preview_speed_cap``: of the position, the horizon's origin and the coefficient
-vector that :meth:`~profileopt.mpc.preview.TerrainPreview.coefficients` computes each step).
+(:class:`profileopt.mpc.preview.TerrainPreview`), its five envelopes, each of the stage
+positions, the horizon's origin and one coefficient vector: the terrain's
+``<slug>_preview_e_max`` and ``<slug>_preview_speed_cap``, whose coefficients
+:meth:`~profileopt.mpc.preview.TerrainPreview.coefficients` computes each step, and the
+path's ``<slug>_preview_curvature``, ``<slug>_preview_grade_max`` and
+``<slug>_preview_grade_min``, whose coefficients
+:meth:`~profileopt.mpc.preview.TerrainPreview.path_coefficients` computes.
 
 Function names are ``<slug>_<model>_<kind>_of_<terrain>`` with ``kind`` ``force`` (output
 ``force_n``, N) or ``constraint`` (output ``g`` = F / F_limit - 1, dimensionless, <= 0 when
@@ -59,10 +63,10 @@ C_BYTES_PER_STAGE = {"prev_bem": 1275, "iecm": 4815, "sbem_ef": 6674, "sbem_tf":
 #: Bytes of C per stage of each model's interval rows and their Jacobian (measured with
 #: CasADi 3.8 at 1 and 21 stages: 2.5, 3.0 and 18.4 kB; rounded up).
 C_BYTES_PER_INTERVAL = {"iecm": 3000, "sbem_ef": 3500, "sbem_tf": 20000}
-#: Bytes of C per stage and per knot interval of a preview's two envelopes and their
-#: Jacobians (measured with CasADi 3.8 at 1 and 10 stages, 26 knot intervals: 2.7 kB;
-#: rounded up).
-C_BYTES_PER_PREVIEW_KNOT = 3000
+#: Bytes of C per stage and per knot interval of a preview's five envelopes (e_max, speed
+#: cap, curvature, grade_max, grade_min) and their Jacobians (measured with CasADi 3.8.2 at 1
+#: and 10 stages, 26 and 46 knot intervals: 6.5-7.6 kB; rounded up).
+C_BYTES_PER_PREVIEW_KNOT = 8000
 
 
 @dataclasses.dataclass(frozen=True)
@@ -168,13 +172,17 @@ def c_functions(
     intervals : bool, default False
         Also each model's interval rows (models defined on e_max only).
     preview : TerrainPreview, optional
-        Also its two envelopes (built for ``vehicle``).
+        Also its five envelopes (built for ``vehicle``): ``e_max`` and ``speed_cap``
+        (:meth:`~profileopt.mpc.preview.TerrainPreview.stage_functions`), then ``curvature``,
+        ``grade_max`` and ``grade_min``
+        (:meth:`~profileopt.mpc.preview.TerrainPreview.path_stage_functions`).
 
     Returns
     -------
     list of (ExportedFunction, value Function, Jacobian Function)
         For each model: force and constraint against the RI, then (except Prev:BEM) against
-        e_max, then its interval rows; then the preview's envelopes.
+        e_max, then its interval rows; then the preview's five envelopes (``model``
+        ``"preview"``, ``kind`` the envelope's name, ``terrain`` ``"position"``).
     """
     slug = vehicle_slug(vehicle)
     out = []
@@ -201,9 +209,13 @@ def c_functions(
         if preview.vehicle != vehicle:
             raise InputError("c_functions: the preview was built for another vehicle; build it with this one")
         e_fn, cap_fn = preview.stage_functions(n_stages=n_stages, prefix=f"{slug}_preview")
+        kappa_fn, up_fn, down_fn = preview.path_stage_functions(n_stages=n_stages, prefix=f"{slug}_preview")
         k = preview.n_coefficients
         for fn, kind, coef, output in ((e_fn, "e_max", "e_coef", "`e_max_m` (m)"),
-                                       (cap_fn, "speed_cap", "cap_coef", "`speed_cap_mps` (m/s)")):
+                                       (cap_fn, "speed_cap", "cap_coef", "`speed_cap_mps` (m/s)"),
+                                       (kappa_fn, "curvature", "curvature_coef", "`curvature_1pm` (1/m)"),
+                                       (up_fn, "grade_max", "grade_max_coef", "`grade_max_rad` (rad)"),
+                                       (down_fn, "grade_min", "grade_min_coef", "`grade_min_rad` (rad)")):
             out.append((ExportedFunction(fn.name(), f"{fn.name()}_jac", "preview", kind, "position",
                                          f"`s_m` (m), `origin_m` (m, 1 value), `{coef}` ({k} values)", output),
                         fn, jacobian_function(fn)))
@@ -237,7 +249,8 @@ def export_c(
     intervals : bool, default False
         Also the interval rows of each model defined on e_max (:func:`c_functions`).
     preview : TerrainPreview, optional
-        Also the preview's two envelopes, for stage positions (:func:`c_functions`).
+        Also the preview's five envelopes (terrain and path), for stage positions
+        (:func:`c_functions`).
 
     Returns
     -------
@@ -441,13 +454,25 @@ every elevation in [`e_min_m`, `e_max_m`] (give `e_min_m` 0 for "any terrain up 
 """
     if any(e.model == "preview" for e in exported):
         text += """
-The `*_preview_e_max` and `*_preview_speed_cap` functions are a `TerrainPreview`'s envelopes
-(Python: `profileopt.mpc.preview.TerrainPreview`, built with the same horizon, reach, knot
-spacing and unseen assumption): at each stage position `s_m`, given the horizon's origin
-`origin_m` and the coefficient vector that `TerrainPreview.coefficients` computes from the
-terrain measured so far (its `origin_m`, `e_max` and `speed_cap`). The coefficients are
-parameters: compute them each step (in Python, or port that function) and pass them in;
-the code does not change with the terrain.
+The `*_preview_*` functions are a `TerrainPreview`'s envelopes (Python:
+`profileopt.mpc.preview.TerrainPreview`, built with the same horizon, reach, knot spacing
+and unseen assumption), each at every stage position `s_m`, given the horizon's origin
+`origin_m` and one coefficient vector:
+
+* `*_preview_e_max` (m) and `*_preview_speed_cap` (m/s), the terrain's: coefficients from
+  `TerrainPreview.coefficients` over the terrain measured so far (its `origin_m`, `e_max`
+  and `speed_cap`);
+* `*_preview_curvature` (|curvature|, 1/m), `*_preview_grade_max` and `*_preview_grade_min`
+  (steepest and least grade, rad), the path's: coefficients from
+  `TerrainPreview.path_coefficients` (its `origin_m`, `curvature`, `grade_max` and
+  `grade_min`), for the lateral and friction limits (`lateral_constraints` at `v_k` and
+  `v_k+1` with the curvature at `s_k`; `friction_constraints` at both grades).
+
+The coefficients are parameters: compute them each step (in Python, or port those
+functions) and pass them in; the code does not change with the terrain or the path. Each
+envelope holds only for a stage at most the preview's reach long: keep
+0 <= s_k+1 - s_k <= reach in your problem (Python: `reach_constraints`) and check the
+solved positions (`check_stage_lengths`).
 """
     return text
 

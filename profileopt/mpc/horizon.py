@@ -18,7 +18,10 @@ window it passes. Two helpers make the limit hold there too:
 Composed, they make a stage safe: see :func:`interval_force_constraints` ("Why a stage is
 safe"). :func:`step_speed_envelope` adds SBEM:TF's step limit, as the planner keeps it: a
 smooth speed cap of the position where the wheel meets a step or lands after a drop. All
-three are also importable from :mod:`profileopt.mpc.constraints`. :class:`ForceConstraints`
+three are also importable from :mod:`profileopt.mpc.constraints`. Each envelope covers a stage
+at most its reach long: :func:`reach_constraints` gives the rows 0 <= s_{k+1} - s_k <= reach
+for a problem whose stage positions are free, and :func:`check_stage_lengths` checks a solved
+horizon against them before it is applied. :class:`ForceConstraints`
 is the ``(g, lbg, ubg)`` triple both this module and :func:`~profileopt.mpc.constraints.force_constraints`
 return.
 
@@ -62,6 +65,8 @@ __all__ = [
     "ConstraintTriple",
     "ForceConstraints",
     "reach_constraints",
+    "check_stage_lengths",
+    "STAGE_LENGTH_TOLERANCE_M",
     "terrain_envelope",
     "step_speed_envelope",
     "interval_force_constraints",
@@ -538,6 +543,119 @@ def reach_constraints(positions_m: Any, reach_m: float) -> ConstraintTriple:
     if n < 1:
         raise InputError("reach_constraints: give the positions of at least 2 stages (m)")
     return _Rows(g=s[1:] - s[:-1], lbg=np.zeros(n), ubg=np.full(n, reach))
+
+
+#: How far (m) a solved stage may exceed the reach, or run backwards, and still pass
+#: :func:`check_stage_lengths`: IPOPT meets the reach rows (and, in a time-parameterised
+#: problem, the speed bounds that imply them) only to its tolerance, about 1e-8 m for
+#: horizons of metres; 1e-6 m (a micrometre) leaves room for that and no more.
+STAGE_LENGTH_TOLERANCE_M = 1e-6
+
+
+def check_stage_lengths(positions_m: Any, reach_m: float, *, tolerance_m: float = STAGE_LENGTH_TOLERANCE_M,
+                        horizon_m: tuple[float, float] | None = None) -> np.ndarray:
+    """Refuse a solved horizon with a stage longer than the envelopes' reach: call after each solve.
+
+    The envelopes (:func:`terrain_envelope`, :func:`step_speed_envelope`,
+    :class:`~profileopt.mpc.preview.TerrainPreview`) bound the terrain a stage meets only if
+    it runs forward and at most ``reach_m`` far: 0 <= s_{k+1} - s_k <= reach_m, the rows of
+    :func:`reach_constraints`. A problem that leaves those rows out (or whose time steps are
+    free and unbounded) can still end in "success" with a stage far longer, over terrain no
+    force row saw (issue 31: a 98.5 m stage simulated at 1.81 times the limit). This check,
+    on the solved positions, catches that before the plan is applied: it raises, so a
+    controller treats the plan as it treats a failed solve (keep the last plan's tail, brake),
+    and it names the first offending stage so that the missing row can be found. In a
+    time-parameterised problem (s_{k+1} - s_k = (v_k + v_{k+1}) dt / 2 with 0 <= v <= v_max)
+    the speed bounds imply the rows for ``reach_m = v_max * dt``; the check then confirms
+    that the reach the envelopes were built with is that one.
+
+    Parameters
+    ----------
+    positions_m : numpy array, sequence, casadi.DM or number array, shape (N+1,)
+        The solved stage positions s_0 .. s_N (m), e.g. ``sol.value(s)``; a row or column
+        vector is taken as it is. Symbols (``SX``, ``MX``) are refused: give their values.
+    reach_m : float
+        The reach the envelopes were built with (m), >= 0.
+    tolerance_m : float, default :data:`STAGE_LENGTH_TOLERANCE_M` (1e-6)
+        Stages from -tolerance_m to reach_m + tolerance_m long pass (m), >= 0: the solver's
+        tolerance on the rows. Give 0 for the rows exactly.
+    horizon_m : (float, float), optional
+        Where the envelopes are bounds (m), ``(start, end)``: for a
+        :class:`~profileopt.mpc.preview.TerrainPreview`, ``(coef.origin_m, coef.origin_m +
+        preview.horizon_m)``. Given, every stage must also start (s_0 .. s_{N-1}) within it,
+        to the same tolerance.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+        The stage lengths s_{k+1} - s_k (m), each within [-tolerance_m, reach_m +
+        tolerance_m], for a log or a margin.
+
+    Raises
+    ------
+    InputError
+        One line naming the first stage (index k from 0, its start and end in m, its
+        length in m) that is longer than ``reach_m``, runs backwards, has a position that is
+        not a finite number or starts outside ``horizon_m``, with the reach, how many stages
+        are out, and what to add; or bad arguments (fewer than 2 positions, symbols, a
+        matrix, a ``reach_m`` or ``tolerance_m`` that is not a finite number >= 0).
+
+    Examples
+    --------
+    >>> check_stage_lengths([0.0, 1.5, 3.0], 2.0)
+    array([1.5, 1.5])
+    >>> check_stage_lengths([0.0, 1.5, 4.0, 4.0], 2.0)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    profileopt.errors.InputError: check_stage_lengths: stage 1 (from 1.5 to 4 m) is 2.5 m long, longer than ...
+    """
+    name = "check_stage_lengths"
+    reach = _finite_number(reach_m, f"{name}: reach_m", "m")
+    tol = _finite_number(tolerance_m, f"{name}: tolerance_m", "m")
+    if reach < 0 or tol < 0:
+        raise InputError(f"{name}: reach_m = {reach_m!r} m and tolerance_m = {tolerance_m!r} m must be >= 0")
+    if is_symbolic(positions_m):
+        raise InputError(f"{name}: positions_m are symbols; give the solved values (sol.value(s), "
+                         "opti.value(s) or the solver's x), not the variables")
+    try:
+        s = np.asarray(positions_m.full() if isinstance(positions_m, ca.DM) else positions_m, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: positions_m = {positions_m!r}: give the stage positions as numbers (m)") from None
+    if s.ndim > 2 or (s.ndim == 2 and min(s.shape) > 1):
+        raise InputError(f"{name}: positions_m has shape {s.shape}; give one row of stage positions (m), "
+                         "e.g. the position row of the states, not the whole state matrix")
+    s = s.ravel()
+    if s.size < 2:
+        raise InputError(f"{name}: give the positions of at least 2 stages (m); got {s.size}")
+    lengths = np.diff(s)
+    bad_value = ~np.isfinite(s[:-1]) | ~np.isfinite(s[1:])
+    too_long = lengths > reach + tol
+    backwards = lengths < -tol
+    outside = np.zeros(lengths.size, dtype=bool)
+    if horizon_m is not None:
+        try:
+            start, end = (float(x) for x in horizon_m)
+        except (TypeError, ValueError):
+            raise InputError(f"{name}: horizon_m = {horizon_m!r}: give (start, end) in m") from None
+        outside = (s[:-1] < start - tol) | (s[:-1] > end + tol)
+    bad = bad_value | too_long | backwards | outside
+    if not np.any(bad):
+        return lengths
+    k = int(np.argmax(bad))
+    where = f"stage {k} (from {s[k]:.6g} to {s[k + 1]:.6g} m)"
+    out = f"{int(np.sum(bad))} of {lengths.size} stages are out"
+    if bad_value[k]:
+        raise InputError(f"{name}: {where} has a position that is not a finite number; {out}: do not apply this plan")
+    if too_long[k]:
+        raise InputError(f"{name}: {where} is {lengths[k]:.6g} m long, longer than the envelopes' reach "
+                         f"{reach:g} m, over terrain no force row saw; {out}: do not apply this plan, and bound "
+                         f"every stage with reach_constraints(s, {reach:g}) (or build the envelopes with a reach "
+                         "of at least v_max * dt)")
+    if backwards[k]:
+        raise InputError(f"{name}: {where} runs backwards ({lengths[k]:.6g} m); the envelopes hold for forward "
+                         f"driving, 0 <= s[k+1] - s[k]; {out}: do not apply this plan, and keep the speeds >= 0 "
+                         "(reach_constraints(s, reach_m) gives the row)")
+    raise InputError(f"{name}: {where} starts outside the envelopes' horizon {start:.6g} to {end:.6g} m; {out}: do "
+                     "not apply this plan, and build the preview with a longer horizon_m")
 
 
 @dataclasses.dataclass(frozen=True)

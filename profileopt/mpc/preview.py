@@ -20,6 +20,12 @@ horizon reaches past what its sensors measured keeps the force limit there for a
 rougher than assumed. Steps are not part of that assumption: beyond the samples the step cap
 is the vehicle's top speed, and a step that comes into view is kept from then on.
 
+Every envelope at s bounds a stage from s at most ``reach_m`` long that starts within the
+horizon: :meth:`TerrainPreview.check_stages` checks a solved horizon's positions against
+that before the plan is applied. :meth:`TerrainPreview.stage_functions` and
+:meth:`TerrainPreview.path_stage_functions` are the envelopes at n stages at once, the form
+``profileopt export-c --preview`` writes as C.
+
 Units: positions and elevations in m, speeds in m/s.
 """
 
@@ -37,7 +43,7 @@ from ..errors import InputError
 from ..physics.steps import MAX_RAMP_M, TREND_HALF_WIDTH_M, step_caps
 from ..terrain.assumed import unseen_roughness
 from ..terrain.roughness import range_extremes, roughness_windows, worst_case_elevation
-from .horizon import spline_value
+from .horizon import STAGE_LENGTH_TOLERANCE_M, check_stage_lengths, spline_value
 
 if TYPE_CHECKING:
     from ..core.vehicle import Vehicle
@@ -167,6 +173,11 @@ class TerrainPreview:
         K, the length of each coefficient vector.
     unseen_e_max_m : float
         e_max (m) of unmeasured terrain.
+    horizon_m, reach_m, position_error_m : float
+        As given (m). Every envelope holds only for a stage at most ``reach_m`` long that
+        starts within the horizon: keep the rows of
+        :func:`~profileopt.mpc.horizon.reach_constraints` (``reach_m``) in a free-time problem,
+        and check each solved horizon with :meth:`check_stages`.
     """
 
     def __init__(self, vehicle: "Vehicle", *, horizon_m: float, reach_m: float = 0.0,
@@ -226,18 +237,100 @@ class TerrainPreview:
             ``(s_m, origin_m, e_coef) -> e_max_m`` and ``(s_m, origin_m, cap_coef) ->
             speed_cap_mps``: ``s_m`` and the output n_stages x 1 (m, m/s), ``origin_m`` a
             number (m), the coefficients K x 1 (:meth:`coefficients`).
+
+        See Also
+        --------
+        path_stage_functions : the curvature and grade envelopes in the same form.
         """
+        return self._stages(((self.e_max, "e_max", "e_coef", "e_max_m"),
+                             (self.speed_cap, "speed_cap", "cap_coef", "speed_cap_mps")), n_stages, prefix)
+
+    def path_stage_functions(self, *, n_stages: int = 1,
+                             prefix: str = "preview") -> tuple[ca.Function, ca.Function, ca.Function]:
+        """:attr:`curvature`, :attr:`grade_max` and :attr:`grade_min` at ``n_stages`` positions at once (for C export).
+
+        The path envelopes in the form of :meth:`stage_functions`: each stage's value is the
+        scalar Function's at that stage's position (the same expression, evaluated n_stages
+        times), for a controller that evaluates its whole horizon in one call.
+
+        Parameters
+        ----------
+        n_stages : int, default 1
+            How many positions each call takes.
+        prefix : str, default ``"preview"``
+            The Functions are named ``<prefix>_curvature``, ``<prefix>_grade_max`` and
+            ``<prefix>_grade_min`` (C identifiers).
+
+        Returns
+        -------
+        (casadi.Function, casadi.Function, casadi.Function)
+            ``(s_m, origin_m, curvature_coef) -> curvature_1pm`` (1/m), ``(s_m, origin_m,
+            grade_max_coef) -> grade_max_rad`` and ``(s_m, origin_m, grade_min_coef) ->
+            grade_min_rad`` (rad): ``s_m`` and the output n_stages x 1, ``origin_m`` a number
+            (m), the coefficients K x 1 (:meth:`path_coefficients`: ``curvature``,
+            ``grade_max``, ``grade_min``).
+        """
+        return self._stages(((self.curvature, "curvature", "curvature_coef", "curvature_1pm"),
+                             (self.grade_max, "grade_max", "grade_max_coef", "grade_max_rad"),
+                             (self.grade_min, "grade_min", "grade_min_coef", "grade_min_rad")), n_stages, prefix)
+
+    def check_stages(self, positions_m: ArrayLike, *, origin_m: float | None = None,
+                     tolerance_m: float = STAGE_LENGTH_TOLERANCE_M) -> np.ndarray:
+        """Refuse a solved horizon whose stages this preview's envelopes do not cover: call after each solve.
+
+        :func:`~profileopt.mpc.horizon.check_stage_lengths` with this preview's ``reach_m``:
+        every stage must run forward and at most ``reach_m`` far (and, with ``origin_m``,
+        start within the horizon ``[origin_m, origin_m + horizon_m]``), else the envelopes at
+        its start do not bound the terrain it meets.
+
+        Parameters
+        ----------
+        positions_m : array_like, shape (N+1,)
+            The solved stage positions s_0 .. s_N (m), e.g. ``sol.value(s)``.
+        origin_m : float, optional
+            The origin the step's parameters were set with (``coef.origin_m``, m); given,
+            every stage must also start within the horizon.
+        tolerance_m : float, default :data:`~profileopt.mpc.horizon.STAGE_LENGTH_TOLERANCE_M` (1e-6)
+            The solver's tolerance on the rows (m), >= 0.
+
+        Returns
+        -------
+        numpy.ndarray, shape (N,)
+            The stage lengths (m).
+
+        Raises
+        ------
+        InputError
+            One line naming the first stage longer than ``reach_m``, running backwards or
+            starting outside the horizon (its index from 0, its start, end and length in m,
+            and the reach); or bad positions.
+        """
+        horizon = None
+        if origin_m is not None:
+            if isinstance(origin_m, bool) or not isinstance(origin_m, (int, float)) or not math.isfinite(origin_m):
+                raise InputError(f"TerrainPreview.check_stages: origin_m = {origin_m!r} must be a finite position (m)")
+            horizon = (float(origin_m), float(origin_m) + self.horizon_m)
+        try:
+            return check_stage_lengths(positions_m, self.reach_m, tolerance_m=tolerance_m, horizon_m=horizon)
+        except InputError as exc:
+            message = str(exc).replace("check_stage_lengths: ", "", 1)
+            if self.reach_m == 0 and "longer than" in message:
+                message += "; this preview was built with reach_m = 0 (the envelopes at a point only)"
+            raise InputError(f"TerrainPreview.check_stages: {message}") from None
+
+    def _stages(self, specs: tuple, n_stages: int, prefix: str) -> tuple[ca.Function, ...]:
+        """Each ``(fn, kind, coef_name, output)`` of ``specs`` at ``n_stages`` positions, named
+        ``<prefix>_<kind>``."""
         if not (isinstance(n_stages, int) and not isinstance(n_stages, bool) and n_stages >= 1):
             raise InputError(f"n_stages = {n_stages!r}: must be an integer >= 1")
         s, origin = ca.SX.sym("s_m", n_stages), ca.SX.sym("origin_m")
         out = []
-        for fn, kind, coef_name, output in ((self.e_max, "e_max", "e_coef", "e_max_m"),
-                                            (self.speed_cap, "speed_cap", "cap_coef", "speed_cap_mps")):
+        for fn, kind, coef_name, output in specs:
             coef = ca.SX.sym(coef_name, self.n_coefficients)
             value = ca.vertcat(*(fn(s[i], origin, coef) for i in range(n_stages)))
             out.append(ca.Function(f"{prefix}_{kind}", [s, origin, coef], [value], ["s_m", "origin_m", coef_name],
                                    [output]))
-        return out[0], out[1]
+        return tuple(out)
 
     def _supports(self, origin_m: float) -> tuple[np.ndarray, np.ndarray]:
         """Each basis function's support [lo, hi] (m) for a horizon starting at ``origin_m``."""

@@ -190,7 +190,8 @@ def test_generated_c_never_calls_negative_or_nan_terrain_admissible(tmp_path: Pa
 
 def _random_inputs(fn: ca.Function, rng: np.random.Generator) -> list[np.ndarray]:
     """Inputs for the interval rows and the preview's envelopes: speeds 0-20 m/s, elevations
-    0-0.3 m (e_min at most e_max), positions inside the horizon, coefficients of e_max and caps."""
+    0-0.3 m (e_min at most e_max), positions inside the horizon, coefficients of e_max (m),
+    caps (m/s), |curvature| (0-0.5 1/m) and grades (-0.3-0.3 rad)."""
     names = fn.name_in()
     values = {}
     n = fn.size1_in(0)
@@ -202,7 +203,9 @@ def _random_inputs(fn: ca.Function, rng: np.random.Generator) -> list[np.ndarray
         values["s_m"] = rng.uniform(0.0, 25.0, n)
         values["origin_m"] = np.array([0.0])
         k = fn.size1_in(2)
-        values[names[2]] = rng.uniform(0.0, 0.3, k) if names[2] == "e_coef" else rng.uniform(0.5, 20.0, k)
+        low_high = {"e_coef": (0.0, 0.3), "cap_coef": (0.5, 20.0), "curvature_coef": (0.0, 0.5),
+                    "grade_max_coef": (-0.3, 0.3), "grade_min_coef": (-0.3, 0.3)}[names[2]]
+        values[names[2]] = rng.uniform(*low_high, k)
     return [values[name] for name in names]
 
 
@@ -210,7 +213,8 @@ def _random_inputs(fn: ca.Function, rng: np.random.Generator) -> list[np.ndarray
 @pytest.mark.cc
 @needs_cc
 def test_interval_rows_and_preview_in_c_match_python(tmp_path: Path) -> None:
-    # Issue 31: export-c covers the interval rows and the preview's envelopes, not only point forces.
+    # Issue 31: export-c covers the interval rows and the preview's envelopes (the terrain's
+    # e_max and speed cap, the path's curvature and grades), not only point forces.
     from profileopt.mpc.functions import interval_constraint_function
     from profileopt.mpc.horizon import interval_force_constraints
     from profileopt.mpc.preview import TerrainPreview
@@ -225,11 +229,18 @@ def test_interval_rows_and_preview_in_c_match_python(tmp_path: Path) -> None:
     assert "atv_resonant_sbem_tf_interval_constraint_of_e_max" in names
     assert "atv_resonant_iecm_interval_constraint_of_e_max" in names
     assert "atv_resonant_preview_e_max" in names and "atv_resonant_preview_speed_cap" in names
+    path_names = ["atv_resonant_preview_curvature", "atv_resonant_preview_grade_max", "atv_resonant_preview_grade_min"]
+    assert all(name in names for name in path_names)
+    header = (out / "profileopt_atv_resonant.h").read_text()
+    assert all(f"int {name}(const casadi_real** arg" in header for name in path_names)
     so = _compile_shared(out / "profileopt_atv_resonant.c", tmp_path / "lib.so")
     rng = np.random.default_rng(7)
+    path_kinds = ("curvature", "grade_max", "grade_min")
+    compared = set()
     for e, fn, jac in triples:
-        if e.kind not in ("interval_constraint", "e_max", "speed_cap"):
+        if e.kind not in ("interval_constraint", "e_max", "speed_cap", *path_kinds):
             continue
+        compared.add(e.kind)
         c, c_jac = ca.external(e.name, str(so)), ca.external(e.jacobian_name, str(so))
         assert c.name_in() == fn.name_in() and c.name_out() == fn.name_out()
         for _ in range(6):
@@ -247,7 +258,31 @@ def test_interval_rows_and_preview_in_c_match_python(tmp_path: Path) -> None:
     s = np.array([3.0, 11.5])
     _close(np.asarray(e_fn(s, coef.origin_m, coef.e_max)).ravel(),
            np.array([float(preview.e_max(x, coef.origin_m, coef.e_max)) for x in s]))
-    assert "interval_constraint_of_e_max" in (out / "README.md").read_text()
+    assert set(path_kinds) <= compared
+    readme = (out / "README.md").read_text()
+    assert "interval_constraint_of_e_max" in readme
+    assert all(f"`{name}` / `{name}_jac`" in readme for name in path_names)  # the README's table
+    assert "TerrainPreview.path_coefficients" in readme
+    # the compiled path envelopes against the scalar Python Functions a user calls
+    # (preview.curvature, grade_max, grade_min), independently of the export, on the
+    # coefficients of a real path: a 20 m radius arc on a 10 % climb, seen from 10 m on
+    ds = 0.1
+    s_path = np.arange(0.0, 60.0 + ds / 2, ds)
+    heading = np.clip(s_path - 20.0, 0.0, 15.0) / 20.0  # the arc from 20 to 35 m
+    x_path = np.concatenate([[0.0], np.cumsum(np.cos(heading[:-1]) * ds)])
+    y_path = np.concatenate([[0.0], np.cumsum(np.sin(heading[:-1]) * ds)])
+    z_path = 0.1 * np.maximum(s_path - 25.0, 0.0)
+    path = preview.path_coefficients(s_path, z_path, 10.0, x_m=x_path, y_m=y_path, path_tolerance_m=0.05)
+    stages = np.array([14.0, 31.25])
+    for kind, scalar, coef in (("curvature", preview.curvature, path.curvature),
+                               ("grade_max", preview.grade_max, path.grade_max),
+                               ("grade_min", preview.grade_min, path.grade_min)):
+        c = ca.external(f"atv_resonant_preview_{kind}", str(so))
+        _close(np.asarray(c(stages, path.origin_m, coef)).ravel(),
+               np.array([float(scalar(x, path.origin_m, coef)) for x in stages]))
+    # the stage at 31.25 m is on the arc: the compiled envelope is not below its 1 / 20 m
+    kappa = ca.external("atv_resonant_preview_curvature", str(so))
+    assert float(np.asarray(kappa(stages, path.origin_m, path.curvature)).ravel()[1]) >= 0.05 * 0.97
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -272,3 +307,20 @@ def test_vehicle_names_become_names_casadi_takes(stem: str, slug: str) -> None:
     vehicle = load_vehicle("atv").replace(name=f"/some/folder/{stem}.toml")
     assert vehicle_slug(vehicle) == slug
     c_functions(vehicle, models=["iecm"])  # CasADi refused '__' in a Function's name
+
+
+def test_the_size_estimate_covers_the_preview_it_exports(tmp_path: Path) -> None:
+    # C_BYTES_PER_PREVIEW_KNOT is what export_c refuses by before any work: it must not be
+    # below what the preview's envelopes (all five, with their Jacobians) actually write.
+    from profileopt.mpc.codegen import C_BYTES_PER_PREVIEW_KNOT
+    from profileopt.mpc.preview import TerrainPreview
+
+    vehicle = load_vehicle("atv")
+    preview = TerrainPreview(vehicle, horizon_m=20.0, reach_m=1.5)
+    bare = export_c(vehicle, tmp_path / "bare", models=["prev_bem"], n_stages=2).source.stat().st_size
+    full = export_c(vehicle, tmp_path / "full", models=["prev_bem"], n_stages=2, preview=preview)
+    assert {e.kind for e in full.functions if e.model == "preview"} == {
+        "e_max", "speed_cap", "curvature", "grade_max", "grade_min"}
+    written = full.source.stat().st_size - bare
+    assert written <= C_BYTES_PER_PREVIEW_KNOT * preview.n_intervals * 2
+    assert written >= 0.5 * C_BYTES_PER_PREVIEW_KNOT * preview.n_intervals * 2  # and not far above it

@@ -479,3 +479,99 @@ def test_reach_rows_bound_each_stage(atv) -> None:
             reach_constraints([0.0, 1.0], bad)
     with pytest.raises(InputError, match="at least 2"):
         reach_constraints([0.0], 1.0)
+
+
+# ------------------------------------------------ the reach row, checked after a solve (issue 31)
+
+
+def test_a_stage_longer_than_the_reach_is_refused_in_one_line_naming_it() -> None:
+    from profileopt.mpc.horizon import check_stage_lengths
+
+    # Hand-made horizon: the stage lengths are the differences 1.5, 2.5, 0, 3.0 m; with a
+    # 2 m reach stages 1 and 3 are too long and stage 1 (from 1.5 to 4 m, 2.5 m) is the first.
+    with pytest.raises(InputError) as caught:
+        check_stage_lengths([0.0, 1.5, 4.0, 4.0, 7.0], 2.0)
+    message = str(caught.value)
+    assert "\n" not in message
+    assert "stage 1 (from 1.5 to 4 m) is 2.5 m long" in message and "reach 2 m" in message
+    assert "2 of 4 stages" in message and "reach_constraints(s, 2)" in message
+    # as a column (sol.value of an Opti column) and as a DM alike
+    with pytest.raises(InputError, match="stage 1 "):
+        check_stage_lengths(ca.DM([0.0, 1.5, 4.0]), 2.0)
+    with pytest.raises(InputError, match="stage 1 "):
+        check_stage_lengths(np.array([[0.0], [1.5], [4.0]]), 2.0)
+
+
+def test_stages_within_the_reach_pass_and_give_their_lengths() -> None:
+    from profileopt.mpc.horizon import STAGE_LENGTH_TOLERANCE_M, check_stage_lengths
+
+    # lengths 2.0 (the reach exactly), 0.5, 0 (standing still): all inside [0, 2]
+    np.testing.assert_allclose(check_stage_lengths([10.0, 12.0, 12.5, 12.5], 2.0), [2.0, 0.5, 0.0])
+    # the solver's tolerance: 1e-7 m over the reach passes, twice the tolerance does not
+    check_stage_lengths([0.0, 2.0 + 1e-7], 2.0)
+    with pytest.raises(InputError, match="longer than"):
+        check_stage_lengths([0.0, 2.0 + 2 * STAGE_LENGTH_TOLERANCE_M], 2.0)
+    with pytest.raises(InputError, match="longer than"):
+        check_stage_lengths([0.0, 2.0 + 1e-7], 2.0, tolerance_m=0.0)
+
+
+@pytest.mark.parametrize("positions, kwargs, words", [
+    ([0.0, 1.0, 0.4], {}, "stage 1 (from 1 to 0.4 m) runs backwards (-0.6 m)"),
+    ([0.0, 1.0, math.nan], {}, "stage 1 (from 1 to nan m) has a position that is not a finite number"),
+    ([0.0, 1.0, 2.0, 3.0], {"horizon_m": (0.0, 1.5)}, "stage 2 (from 2 to 3 m) starts outside the envelopes' horizon"),
+    ([0.0], {}, "at least 2 stages"),
+    (np.zeros((2, 5)), {}, "shape (2, 5)"),
+    (ca.SX.sym("s", 3), {}, "give the solved values"),
+    ([0.0, 1.0], {"tolerance_m": -1.0}, "must be >= 0"),
+])
+def test_what_else_the_stage_check_refuses_is_one_line(positions, kwargs, words) -> None:
+    from profileopt.mpc.horizon import check_stage_lengths
+
+    with pytest.raises(InputError) as caught:
+        check_stage_lengths(positions, 2.0, **kwargs)
+    assert words in str(caught.value) and "\n" not in str(caught.value)
+
+
+def _free_time_problem(n: int, distance_m: float, reach_m: float, *, with_reach_rows: bool):
+    """Issue 31's failure mode, in a minimum-time casadi.Opti problem with free time steps:
+    from rest at 0 to ``distance_m`` in ``n`` intervals, the force rows of every interval on
+    terrain_envelope(reach_m) of the kerb route, with or without the reach rows."""
+    from profileopt.mpc.horizon import reach_constraints
+
+    s_route, z_route = _kerb_route()
+    env = terrain_envelope(s_route, z_route, ATV, reach_m=reach_m)
+    opti = ca.Opti()
+    s, v, a, dt = opti.variable(n + 1), opti.variable(n + 1), opti.variable(n), opti.variable(n)
+    opti.subject_to([s[1:] == s[:-1] + v[:-1] * dt + a * dt**2 / 2, v[1:] == v[:-1] + a * dt])
+    opti.subject_to([s[0] == 0.0, v[0] == 0.0, s[-1] == distance_m, opti.bounded(0.0, v, ATV.max_speed_mps),
+                     opti.bounded(-ATV.max_decel_mps2, a, ATV.max_accel_mps2), opti.bounded(0.01, dt, 20.0)])
+    opti.subject_to(interval_force_constraints(v[:-1], v[1:], env.map(n)(s[:-1].T).T, ATV).g <= -1e-6)
+    if with_reach_rows:
+        g, lbg, ubg = reach_constraints(s, reach_m)
+        opti.subject_to(opti.bounded(lbg, g, ubg))
+    opti.minimize(ca.sum1(dt))
+    opti.set_initial(s, np.linspace(0.0, distance_m, n + 1))
+    opti.set_initial(v, 3.0)
+    opti.set_initial(dt, distance_m / n / 3.0)
+    opti.solver("ipopt", {"print_time": False, "expand": True}, {"print_level": 0, "sb": "yes", "max_iter": 500})
+    sol = opti.solve()
+    return sol.value(s)
+
+
+def test_a_free_time_problem_without_the_reach_rows_is_caught_by_the_check() -> None:
+    """Without the rows IPOPT reports success, yet the 6 stages sum to 60 m, so at least one
+    is 10 m long (pigeonhole), five times the 2 m reach the envelope covers: the check
+    refuses it, naming the first such stage of the solution. With the rows (40 stages of at
+    most 2 m) the same problem passes."""
+    from profileopt.mpc.horizon import check_stage_lengths
+
+    s = _free_time_problem(6, 60.0, 2.0, with_reach_rows=False)  # solve() raises unless IPOPT succeeded
+    lengths = np.diff(s)
+    assert lengths.max() >= 60.0 / 6 - 1e-6
+    first = int(np.argmax(lengths > 2.0 + 1e-6))
+    with pytest.raises(InputError) as caught:
+        check_stage_lengths(s, 2.0)
+    assert f"stage {first} (from {s[first]:.6g} to {s[first + 1]:.6g} m) is {lengths[first]:.6g} m long" in str(
+        caught.value)
+    s = _free_time_problem(40, 60.0, 2.0, with_reach_rows=True)
+    assert check_stage_lengths(s, 2.0).max() <= 2.0 + 1e-6

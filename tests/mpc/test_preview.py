@@ -197,3 +197,53 @@ def test_path_preview_bounds_the_turn_and_the_climb(atv) -> None:
     with pytest.raises(InputError, match="min_turn_radius_m"):
         TerrainPreview(atv.replace(min_turn_radius_m=None, max_lateral_accel_mps2=None), horizon_m=60.0).path_coefficients(
             s[short], z[short], 20.0, x_m=x[short], y_m=y[short])
+
+
+# ------------------------------------------------------------- the preview's reach, checked (issue 31)
+
+
+def test_check_stages_holds_a_solved_horizon_to_the_preview_reach_and_horizon(atv) -> None:
+    preview = TerrainPreview(atv, horizon_m=25.0, reach_m=1.5)
+    assert preview.reach_m == 1.5 and preview.horizon_m == 25.0
+    # lengths 1.5 (the reach), 1.0, 0.0: within the reach and inside [0, 25]
+    np.testing.assert_allclose(preview.check_stages([3.0, 4.5, 5.5, 5.5], origin_m=0.0), [1.5, 1.0, 0.0])
+    with pytest.raises(InputError) as caught:  # stage 1: 4.5 -> 6.5 m is 2 m, over the 1.5 m reach
+        preview.check_stages([3.0, 4.5, 6.5, 7.0])
+    message = str(caught.value)
+    assert message.startswith("TerrainPreview.check_stages: stage 1 (from 4.5 to 6.5 m) is 2 m long")
+    assert "reach 1.5 m" in message and "\n" not in message
+    # a stage starting past origin + horizon_m (24.5 + 1 = 25.5 > 0 + 25) is outside what the envelopes bound
+    with pytest.raises(InputError, match=r"stage 2 \(from 25.5 to 26 m\) starts outside the envelopes' horizon 0 to 25"):
+        preview.check_stages([23.5, 24.5, 25.5, 26.0], origin_m=0.0)
+    preview.check_stages([23.5, 24.5, 25.5, 26.0], origin_m=1.0)  # the next step's horizon covers it
+    with pytest.raises(InputError, match="built with reach_m = 0"):
+        TerrainPreview(atv, horizon_m=25.0).check_stages([0.0, 0.5])
+
+
+def test_path_envelopes_at_every_stage_are_the_scalar_functions_and_the_b_spline(atv) -> None:
+    """path_stage_functions evaluates curvature, grade_max and grade_min at n stages at once.
+    References: the scalar Functions at each stage, and the uniform cubic B-spline's own
+    values (de Boor, A Practical Guide to Splines, ch. IX; Piegl & Tiller, The NURBS Book,
+    Eq. 2.5): on knot m the three basis functions that do not vanish are 1/6, 4/6, 1/6, so the
+    value is (c_m + 4 c_m+1 + c_m+2) / 6; at the middle of knot interval m the four are 1/48,
+    23/48, 23/48, 1/48. Knot m of a preview lies at origin + (m - 3) h (3 intervals of padding)."""
+    preview = TerrainPreview(atv, horizon_m=20.0, reach_m=2.0, knot_spacing_m=1.0)
+    kappa_fn, up_fn, down_fn = preview.path_stage_functions(n_stages=3, prefix="p")
+    assert [f.name() for f in (kappa_fn, up_fn, down_fn)] == ["p_curvature", "p_grade_max", "p_grade_min"]
+    assert kappa_fn.name_in() == ["s_m", "origin_m", "curvature_coef"] and kappa_fn.name_out() == ["curvature_1pm"]
+    assert down_fn.name_in()[2] == "grade_min_coef" and up_fn.name_out() == ["grade_max_rad"]
+    rng = np.random.default_rng(3)
+    c = rng.uniform(-0.2, 0.2, preview.n_coefficients)
+    origin, h = 40.0, 1.0
+    m = np.array([5, 9, 14])  # on knots 5, 9, 14: 42, 46 and 51 m
+    on_knots = origin + (m - 3) * h
+    mid = on_knots + h / 2  # the middle of knot intervals 5, 9, 14
+    expected_knot = (c[m] + 4 * c[m + 1] + c[m + 2]) / 6
+    expected_mid = (c[m] + 23 * c[m + 1] + 23 * c[m + 2] + c[m + 3]) / 48
+    for fn, scalar in ((kappa_fn, preview.curvature), (up_fn, preview.grade_max), (down_fn, preview.grade_min)):
+        for x, expected in ((on_knots, expected_knot), (mid, expected_mid)):
+            got = np.asarray(fn(x, origin, c)).ravel()
+            np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-15)
+            np.testing.assert_array_equal(got, [float(scalar(xi, origin, c)) for xi in x])
+    with pytest.raises(InputError, match="n_stages"):
+        preview.path_stage_functions(n_stages=0)
