@@ -10,8 +10,8 @@ never go faster than it could if the terrain beyond were as bad as assumed. Each
    :attr:`SpeedSelector.margin_m`), computes once and for all the same speed bands, caps and
    acceleration bounds the offline planner computes (:mod:`profileopt.planning.limits`: force
    windows, steps, speed limits and top speed, turns, friction, grades, drive power) on the
-   measured samples around it, within the cycle that finds them measured (the force's first
-   band from a table built once, :mod:`.band_table`, so that the cycle keeps its time budget);
+   measured samples around it, in two stages over two cycles so that no cycle does it all (the
+   force's first band from a table built once, :mod:`.band_table`);
    of the force's bands it keeps the first, [0, v_first] (the paper-notes' "Which root": safe
    for a vehicle that may have to slow down anywhere, as one that sees only so far must);
 2. appends, past the last such segment (the *planning edge*), the terrain not yet measured as
@@ -48,7 +48,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Iterator
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -98,6 +98,12 @@ MAX_HORIZON_SEGMENTS = 10_000
 #: The most segments one chunk of work computes: samples given far ahead at once are planned a
 #: bounded piece at a time.
 MAX_CHUNK_SEGMENTS = 200
+#: How much newly measured route (m) is planned at once. Each chunk has a fixed cost (about
+#: 2 ms for each of its two stages, one per cycle) and its wait is latency: the planning edge
+#: lags the sensors by up to a chunk and a cycle. On the trail at 50 m of sensing (atv) chunks
+#: of 5 m drove 1.102 times the offline time, of 3 m 1.092, of 2 m the same with twice the
+#: median compute (benchmarks/bench_online.py).
+CHUNK_M = 3.0
 #: Where a segment's higher cap begins after the boundary's lower one (m): the envelope's
 #: step up, a knot this far after the boundary.
 JUMP_M = 1e-6
@@ -367,12 +373,12 @@ class SpeedSelector:
         if plans_on_grades(vehicle):  # the deceleration bound on the steepest descent assumed
             self._tail_decel = float(tyre_accel_mps2(vehicle.max_decel_mps2, -math.atan(self.unseen_descent)))
         self._last_accel = 0.0
+        self._work: Iterator[None] | None = None
         self._driven: list[tuple[float, float]] = []  # positions and speeds on ground not yet planned
         self._late = ""
         self._blind_m = 0.0
-        #: Segments whose speeds are computed together (a stretch of at least one roughness
-        #: window): each computation has a fixed cost, about 5 ms, so fewer are cheaper.
-        self._chunk = max(int(math.ceil(self.roughness_window_m / self.segment_length_m - 1e-9)), 1)
+        #: Segments whose speeds are computed together (:data:`CHUNK_M`).
+        self._chunk = max(int(math.ceil(CHUNK_M / self.segment_length_m - 1e-9)), 1)
 
     # -- the segment grid ------------------------------------------------------------------
     def _boundary_m(self, k: int | np.ndarray) -> float | np.ndarray:
@@ -411,7 +417,7 @@ class SpeedSelector:
     def sense(self, s_m: ArrayLike, z_m: ArrayLike, *, x_m: ArrayLike | None = None, y_m: ArrayLike | None = None,
               speed_limit_mps: ArrayLike | None = None) -> None:
         """Take newly sensed samples along the path (:meth:`SensedTerrain.add`). Their segments'
-        speeds are computed by the next call of :meth:`update`.
+        speeds are computed by the next calls of :meth:`update`, one stage per cycle.
 
         Parameters
         ----------
@@ -429,7 +435,7 @@ class SpeedSelector:
         within :attr:`margin_m` of it (a blind spot): the segments whose neighbourhood meets it
         are unseen (v_unseen), and the measured stretch starts again beyond it."""
         gap = self.terrain.gap_m
-        if gap is None or pos + self.margin_m < gap[0]:
+        if gap is None or self._work is not None or pos + self.margin_m < gap[0]:
             return
         first = self._segments.end
         upto = int(math.ceil((gap[1] + self.margin_m - self.start_m) / self.segment_length_m - 1e-9))
@@ -444,9 +450,21 @@ class SpeedSelector:
         self._blind_m += gap[1] - gap[0]
 
     def _advance(self) -> None:
+        """One stage of the work on newly measured segments (:meth:`_chunk_stages`)."""
+        if self._work is None:
+            self._work = self._chunk_stages()
+        try:
+            next(self._work)
+        except StopIteration:
+            self._work = None
+        except BaseException:
+            self._work = None  # not a dead generator: the next cycle starts the chunk again
+            raise
+
+    def _chunk_stages(self) -> Iterator[None]:
         """Final speeds of the segments whose neighbourhood is now measured (module docstring,
-        1): the measured stretch around them, its roughness windows and geometry, the force
-        model's first band and the other limits."""
+        1), in two stages, one per cycle (a generator): the measured stretch around them, its
+        roughness windows and geometry; the force model's first band and the other limits."""
         measured = self.terrain.measured_to_m
         total = self._segment_count()
         at_end = self.end_m is not None and measured >= self.end_m - 1e-9
@@ -487,6 +505,7 @@ class SpeedSelector:
                                   min_turn_radius_m=self.vehicle.min_turn_radius_m)
         path = segment_path(route, seg, geometry)
         context = PlanContext(route=route, vehicle=self.vehicle, segments=seg, path=path)
+        yield
         first_top = np.full(seg.count, np.inf)
         for limit in self.limits:
             if limit is self._force:  # the first band's top, from the table (module docstring, 1)
