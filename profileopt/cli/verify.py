@@ -179,7 +179,8 @@ def run(args: argparse.Namespace) -> int:
 
         check_regular_input(args.route, "route file")  # a path that is not there: not found, first
         raise InputError(f"{args.route}: verify drives a route file, not a track: make one with 'profileopt route "
-                         f"{args.route} --terrain TERRAIN -o route.csv', plan and verify that")
+                         f"{args.route} --terrain TERRAIN -o route.csv' (or '--roughness-class CLASS' without a "
+                         "terrain map), plan and verify that")
     # the profile first (small beside the route): it names the vehicle file, which is an input
     # as much as one typed on the command line
     profile = read_profile(args.profile)

@@ -353,8 +353,12 @@ def smooth_track_elevations(s_m: np.ndarray, z_m: np.ndarray, *, scale_m: float 
 
     A smoothing spline of z over s (:func:`scipy.interpolate.make_smoothing_spline`) with
     lam = (n / L) scale^4, which smooths over about ``scale_m``. A reading equal to the one
-    before it (to every digit the log keeps) is a frozen altimeter, not a measurement: it
-    gets a weight of 1e-6.
+    before it (to every digit the log keeps) is a frozen altimeter, not a measurement: it is
+    left out (n counts the readings kept). Before the first reading kept and after the last
+    the curve holds their values; with fewer than 5 readings kept it runs straight between them
+    (one: a constant). (Weighing frozen readings 1e-6 instead, a track whose elevation never
+    changes was left with one reading of weight 1 among hundreds of 1e-6: the spline's system
+    was near singular and a constant 500 m read as 500-1020 m.)
 
     Parameters
     ----------
@@ -374,8 +378,12 @@ def smooth_track_elevations(s_m: np.ndarray, z_m: np.ndarray, *, scale_m: float 
 
     s = np.asarray(s_m, dtype=float)
     z = np.asarray(z_m, dtype=float)
-    frozen = np.concatenate([[False], np.diff(z) == 0])
-    return make_smoothing_spline(s, z, w=np.where(frozen, 1e-6, 1.0), lam=s.size / s[-1] * scale_m**4)
+    read = np.concatenate([[True], np.diff(z) != 0])
+    s_read, z_read = s[read], z[read]
+    if s_read.size < 5:
+        return lambda at_m: np.interp(at_m, s_read, z_read)
+    spline = make_smoothing_spline(s_read, z_read, lam=s_read.size / (s[-1] - s[0]) * scale_m**4)
+    return lambda at_m: spline(np.clip(at_m, s_read[0], s_read[-1]))
 
 
 def _bin_quantile(bins: np.ndarray, z: np.ndarray, count: int, quantile: float) -> tuple[np.ndarray, np.ndarray]:
@@ -576,7 +584,7 @@ def route_from_track(track: "Track", terrain: Any = None, *, spacing_m: float | 
         if tx.size >= 5:
             z = smooth_track_elevations(along, track.z_m)(s)
             how = (f"smoothed over about {GPS_ELEVATION_SCALE_M:g} m (a spline; GPS elevations are noisy by metres; "
-                   "repeated readings, a frozen altimeter, weigh 1e-6)")
+                   "repeated readings, a frozen altimeter, left out)")
         else:
             z = np.interp(s, along, track.z_m)
             how = "linear between them (too few to smooth)"

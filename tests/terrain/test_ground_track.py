@@ -190,6 +190,41 @@ def test_a_track_alone_gives_geometry_and_grade_with_an_assumed_class() -> None:
     np.testing.assert_allclose(np.interp([5.0, 15.0], result.route.s_m, result.route.z_m), [0.5, 1.25])
 
 
+@pytest.mark.parametrize("seed", [1, 4, 6])
+def test_a_noisy_out_and_back_track_at_one_elevation_keeps_it(seed: int) -> None:
+    # Reference: every point reads 500 m, so the ground is 500 m everywhere. A GPS out and back
+    # along 150 m (a point every 3 m, 1.5 m of noise) whose elevations never change: every
+    # reading after the first repeats it. Weighing them 1e-6 against the first's 1 left the
+    # smoothing spline near singular: 500 m read as 500 to 1020 m (issue 29, from outside).
+    from profileopt.io.tracks import Track
+    from profileopt.terrain.assumed import AssumedRoughness
+
+    rng = np.random.default_rng(seed)
+    out = np.arange(0.0, 150.0 + 1e-9, 3.0)
+    x = np.concatenate([out, 150.0 - out[1:]]) + rng.normal(0.0, 1.5, 2 * out.size - 1)
+    y = rng.normal(0.0, 1.5, x.size)
+    track = Track(x=x, y=y, z_m=np.full(x.size, 500.0), crs=None, source="t.gpx", notes=())
+    result = route_from_track(track, None, assumed_roughness=AssumedRoughness(road_class="B"))
+    np.testing.assert_allclose(result.route.z_m, 500.0, rtol=0, atol=1e-9)
+
+
+def test_frozen_readings_are_left_out_and_the_ends_held() -> None:
+    # Reference (hand): a track climbing 1 m per 10 m whose altimeter froze from 110 m to
+    # 200 m (it repeats 10 m) and from 310 m on (it repeats 30 m). The readings kept lie on the
+    # line z = s / 10, which the smoothing spline reproduces exactly (a line costs no
+    # curvature): 15 m at 150 m; past the last reading kept (300 m) the curve holds 30 m, where
+    # weighed 1e-6 the frozen readings let it run on up the line (39 m at 400 m).
+    from profileopt.terrain.ground_track import smooth_track_elevations
+
+    s = np.arange(0.0, 400.0 + 1e-9, 10.0)
+    z = s / 10.0
+    z[(s > 100.0) & (s <= 200.0)] = 10.0
+    z[s > 300.0] = 30.0
+    curve = smooth_track_elevations(s, z)
+    np.testing.assert_allclose(curve(np.array([50.0, 150.0, 250.0])), [5.0, 15.0, 25.0], atol=1e-6)
+    np.testing.assert_allclose(curve(np.array([300.0, 350.0, 400.0])), 30.0, atol=1e-6)
+
+
 def test_a_csv_tracks_speed_limit_holds_from_its_point_to_the_next(tmp_path: Path) -> None:
     from profileopt.io import read_route, read_track
     from profileopt.io.routes import write_route
