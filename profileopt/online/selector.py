@@ -11,7 +11,8 @@ never go faster than it could if the terrain beyond were as bad as assumed. Each
    acceleration bounds the offline planner computes (:mod:`profileopt.planning.limits`: force
    windows, steps, speed limits and top speed, turns, friction, grades, drive power) on the
    measured samples around it, in two stages over two cycles so that no cycle does it all (the
-   force's first band from a table built once, :mod:`.band_table`);
+   force's first band from a table built once, :mod:`.band_table`), and where a step's cap
+   binds, rounds of a simulation gate (below);
    of the force's bands it keeps the first, [0, v_first] (the paper-notes' "Which root": safe
    for a vehicle that may have to slow down anywhere, as one that sees only so far must);
 2. appends, past the last such segment (the *planning edge*), the terrain not yet measured as
@@ -37,10 +38,13 @@ past the sensing range that the assumption does not cover, seen too late), the s
 brakes harder than the jerk bound, or as hard as the vehicle may, and says so
 (:attr:`Command.emergency`).
 
-What it does not keep: the offline planner's simulation gate (:mod:`profileopt.planning.gate`:
-the exact simulation needs the speeds after the horizon), so where the model's caps fall short
-of the simulated force (issue 29's short blocks and pits) so does the selector;
-``profileopt drive`` reports the simulated force of every roughness window.
+The offline planner's simulation gate (:mod:`profileopt.planning.gate`), in part: where a step's
+cap binds on a new stretch (its bound assumes the suspension at rest), the stretch is driven
+in the exact simulation at its caps, from rest at the start of the margin before it, and the
+caps are lowered where the force goes over the limit, one round per cycle
+(:meth:`SpeedSelector._gate_round`). The simulation of the caps is not that of the speeds the
+vehicle will drive (those depend on terrain not yet measured), so ``profileopt drive``
+simulates the driven profile and reports every roughness window.
 """
 
 from __future__ import annotations
@@ -68,7 +72,9 @@ from ..errors import InputError
 from ..physics.motion import plans_on_grades, power_accel_mps2, tyre_accel_mps2
 from ..physics.speeds import speed_bands
 from ..physics.steps import MAX_RAMP_M, TREND_HALF_WIDTH_M
+from ..physics.simulate import simulate_quarter_car
 from ..planning.bands import DrivePower, braking_profile, greatest_profile
+from ..planning.gate import MAX_GATE_ROUNDS, GateCheck, gate_applies, gate_caps
 from ..planning.limits import ForceLimit, PlanContext, default_limits
 from ..terrain.assumed import unseen_roughness
 from ..terrain.geometry import route_geometry
@@ -77,6 +83,7 @@ from .sensed import SensedTerrain
 from .tracking import MIN_BRAKING_MPS2, braking_margin_m, cycle_end, jerk_limited_step
 
 if TYPE_CHECKING:
+    from ..core.route import Route
     from ..core.vehicle import Vehicle
 
 __all__ = ["SpeedSelector", "Command", "unseen_speed_mps", "DEFAULT_SENSOR_RANGE_M",
@@ -367,6 +374,9 @@ class SpeedSelector:
         self._power = next((limit for limit in self.limits if limit.name == "power"), None)
         self._force = next((limit for limit in self.limits if isinstance(limit, ForceLimit)), None)
         self._band_table = first_band_table(vehicle, model)
+        #: Whether new stretches where a step's cap binds are driven in the exact simulation
+        #: before their speeds are final (the transmitted force's models: SBEM:TF).
+        self._gated = gate_applies(model)
         self.terrain = SensedTerrain(start_m=self.start_m)
         self._segments = _Grown()
         self._tail_decel = float(vehicle.max_decel_mps2)
@@ -463,8 +473,9 @@ class SpeedSelector:
 
     def _chunk_stages(self) -> Iterator[None]:
         """Final speeds of the segments whose neighbourhood is now measured (module docstring,
-        1), in two stages, one per cycle (a generator): the measured stretch around them, its
-        roughness windows and geometry; the force model's first band and the other limits."""
+        1), in stages, one per cycle (a generator): the measured stretch around them, its
+        roughness windows and geometry; the force model's first band and the other limits; where
+        a step's cap binds, rounds of the simulation gate (:meth:`_gate_round`)."""
         measured = self.terrain.measured_to_m
         total = self._segment_count()
         at_end = self.end_m is not None and measured >= self.end_m - 1e-9
@@ -519,10 +530,13 @@ class SpeedSelector:
         n = seg.count
         cap = np.full(n, np.inf)
         decel, accel = np.full(n, np.inf), np.full(n, np.inf)
+        step_cap = np.full(n, np.inf)
         for limit in self.limits:
             limited = limit.speed_cap_mps(context)
             if limited is not None:
                 cap = np.minimum(cap, limited)
+                if limit.name == "step":
+                    step_cap = np.asarray(limited, dtype=float)
             bounds_a = limit.accel_bounds_mps2(context)
             if bounds_a is not None:
                 decel, accel = np.minimum(decel, bounds_a[0]), np.minimum(accel, bounds_a[1])
@@ -533,11 +547,47 @@ class SpeedSelector:
             if inner_b is not None:
                 cap, decel, accel = inner_b
         top = np.minimum(first_top, cap)
+        if self._gated and np.any(step_cap[new] <= top[new] * (1 + 1e-9)) and np.all(top > 0):
+            # a step's cap binds: its bound assumes the suspension at rest (the gate, below)
+            for round_number in range(1, MAX_GATE_ROUNDS + 1):
+                yield
+                lowered = self._gate_round(route, bounds, top, new, round_number)
+                if lowered is None:
+                    break
+                top = lowered
         # the forward pass keeps the power limit step by step (slow) only where it can bind
         binds = self._power is not None and self._power.nlp_rows(context, cap, decel, accel) is not None
         self._segments.append(top[new], decel[new], accel[new], path.grade_hi_rad[new],
                               np.full(new.stop - new.start, binds))
         self._check_passed(bounds[new.start:new.stop + 1], top[new])
+
+    def _gate_round(self, route: "Route", bounds: np.ndarray, top: np.ndarray, new: slice,
+                    round_number: int) -> np.ndarray | None:
+        """One round of the simulation gate on a new stretch (module docstring, 1): the exact
+        quarter car (:func:`profileopt.physics.simulate.simulate_quarter_car`, the one ``verify``
+        uses) driven over the measured stretch at the caps, from rest at its start (the margin
+        before the new segments lets it settle); where the transmitted force over the new
+        segments goes over the limit, their caps are lowered as the offline planner's gate
+        lowers them (:func:`profileopt.planning.gate.gate_caps`). None: it holds."""
+        b = top * top
+        upper = np.concatenate([[b[0]], np.minimum(b[:-1], b[1:]), [b[-1]]])
+        run = simulate_quarter_car(route.s_m, route.z_m, bounds, np.sqrt(upper), self.vehicle)
+        limit = float(self.vehicle.max_transmitted_force_n)
+        inside = (run.s_m >= bounds[new.start]) & (run.s_m <= bounds[new.stop])
+        ratio = np.where(inside, np.abs(run.transmitted_n) / limit, 0.0)
+        worst = int(np.argmax(ratio))
+        check = GateCheck(run=run, limit_n=limit, worst_ratio=float(ratio[worst]), worst_s_m=float(run.s_m[worst]),
+                          ratio=ratio)
+        if check.passes:
+            return None
+        caps = gate_caps(check, self.vehicle, round_number)
+        lowered = top.copy()
+        for start_m, end_m, cap_mps in zip(caps.start_m, caps.end_m, caps.cap_mps):
+            meets = (bounds[1:] > start_m) & (bounds[:-1] < end_m)
+            meets[:new.start] = False
+            meets[new.stop:] = False
+            lowered[meets] = np.minimum(lowered[meets], cap_mps)
+        return lowered if np.any(lowered < top) else None
 
     def _check_passed(self, bounds: np.ndarray, top: np.ndarray) -> None:
         """Whether the vehicle already drove faster than the caps of segments just computed

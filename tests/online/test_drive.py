@@ -47,15 +47,10 @@ def test_surprises_beyond_the_sensing_range_stay_within_the_force_limit(make_rou
                                                                          request):
     """The exact simulation of the driven speed (the one verify uses) has no roughness window
     over the force limit, and the selector never had to break its promise (no emergency). The
-    surprise lies beyond the sensing range at the start: at 70 m, or 20 m past the range."""
-    if make_route is _class_h_route and vehicle_name == "atv_resonant" and sensor_range_m == 100.0:
-        # Known gap (docs/guide/online.md, "What the selector does not keep"): the stretch at
-        # 120 m ends in a 0.79 m step where its class H profile meets the class B ground; the
-        # resonant atv crawls over it at the step limit's cap, 0.095 m/s, with the body still
-        # moving from the rough ground, and the simulation finds 1.28 times the limit there.
-        # The offline planner's simulation gate lowers that cap to 0.067 m/s; the selector
-        # has no gate. Strict: if it passes, this marker must go.
-        request.applymarker(pytest.mark.xfail(strict=True, reason="the selector keeps no simulation gate"))
+    surprise lies beyond the sensing range at the start: at 70 m, or 20 m past the range. (At
+    100 m the class H stretch at 120 m ends in a 0.79 m step onto the class B ground, which the
+    resonant atv crawls over at the step limit's cap with its body still moving: without the
+    selector's simulation gate, 1.28 times the limit in simulation.)"""
     vehicle = request.getfixturevalue(vehicle_name)
     at_m = max(70.0, sensor_range_m + 20.0)
     route = (_kerb_route(length_m=at_m + 50.0, kerb_at_m=at_m) if make_route is _kerb_route
