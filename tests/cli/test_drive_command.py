@@ -35,8 +35,11 @@ def test_the_summary_compares_with_the_offline_plan_and_the_outputs_are_written(
     assert s_m[0] == 0.0 and s_m[-1] == pytest.approx(200.0) and speed[-1] == 0.0
     assert time_s[-1] == pytest.approx(summary["travel_time_s"], rel=1e-8)
     # each knot's time from the speeds (constant acceleration between knots: dt = 2 ds / (v0 + v1))
+    # (9 significant digits: s near 200 m is written to 1e-6 m, which on the last piece, the
+    # stop, 1e-4 m driven at 1 mm/s, is 1 % of ds; the tolerance carries that)
     dt = 2.0 * np.diff(s_m) / (speed[:-1] + speed[1:])
-    np.testing.assert_allclose(np.diff(time_s), dt, rtol=1e-4, atol=1e-7)  # 9 significant digits
+    rounding = 2.0 * 1e-6 * np.maximum(np.abs(s_m[1:]), 1.0) / 200.0 / (speed[:-1] + speed[1:])
+    assert np.all(np.abs(np.diff(time_s) - dt) <= 1e-4 * dt + rounding + 1e-7)
     assert picture.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
