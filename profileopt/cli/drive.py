@@ -71,6 +71,14 @@ def run(args: argparse.Namespace) -> int:
 
     if not args.max_memory > 0:
         raise InputError(f"--max-memory {args.max_memory:g}: must be a number > 0 in GB ('inf': no bound)")
+    if args.unseen.strip().lower() != "route":
+        from ..terrain.assumed import unseen_roughness
+
+        try:
+            unseen_roughness(args.unseen)
+        except InputError:
+            raise InputError(f"--unseen {args.unseen!r} is not 'worst', 'route', an ISO 8608 class A-H or an RI from 0 "
+                             "to 2 (the RMS roughness over the ground clearance, dimensionless)") from None
     outputs = OutputSet([("-o", args.output, True), ("--plot", args.plot)],
                         inputs=[args.route, vehicle_input(args.vehicle)])
     vehicle = load_vehicle(args.vehicle)

@@ -53,7 +53,8 @@ def test_the_human_summary_names_the_numbers(capsys) -> None:
 @pytest.mark.parametrize("argv, words", [
     (["--sensor-range", "-5"], "--sensor-range"),
     (["--sensor-range", "5"], "7.5 m of measured terrain"),
-    (["--unseen", "Z"], "ISO 8608 class"),
+    (["--unseen", "Z"], "--unseen 'Z' is not 'worst', 'route', an ISO 8608 class A-H"),
+    (["--unseen", "-1"], "--unseen '-1' is not"),
     (["--cycle", "nan"], "--cycle"),
     (["--segment-length", "1e-9"], "--segment-length"),
     (["--roughness-window", "1e9"], "--sensor-range"),
