@@ -107,9 +107,9 @@ MAX_HORIZON_SEGMENTS = 10_000
 MAX_CHUNK_SEGMENTS = 200
 #: How much newly measured route (m) is planned at once. Each chunk has a fixed cost (about
 #: 2 ms for each of its two stages, one per cycle) and its wait is latency: the planning edge
-#: lags the sensors by up to a chunk and a cycle. On the trail at 50 m of sensing (atv) chunks
-#: of 5 m drove 1.102 times the offline time, of 3 m 1.092, of 2 m the same with twice the
-#: median compute (benchmarks/bench_online.py).
+#: lags the sensors by up to a chunk and a cycle. On the trail at 50 m of sensing (atv, the
+#: route's class assumed) chunks of 5 m drove 1.102 times the offline time, of 3 m 1.092, of
+#: 2 m the same with a higher median compute per cycle (4.2 ms against 3.4 ms, a loaded machine).
 CHUNK_M = 3.0
 #: Where a segment's higher cap begins after the boundary's lower one (m): the envelope's
 #: step up, a knot this far after the boundary.
