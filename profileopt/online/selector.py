@@ -72,9 +72,8 @@ from ..errors import InputError
 from ..physics.motion import plans_on_grades, power_accel_mps2, tyre_accel_mps2
 from ..physics.speeds import speed_bands
 from ..physics.steps import MAX_RAMP_M, TREND_HALF_WIDTH_M
-from ..physics.simulate import simulate_quarter_car
 from ..planning.bands import DrivePower, braking_profile, greatest_profile
-from ..planning.gate import MAX_GATE_ROUNDS, GateCheck, gate_applies, gate_caps
+from ..planning.gate import MAX_GATE_ROUNDS, check_speeds, gate_applies, gate_caps
 from ..planning.limits import ForceLimit, PlanContext, default_limits
 from ..terrain.assumed import unseen_roughness
 from ..terrain.geometry import route_geometry
@@ -225,6 +224,12 @@ class _Grown:
             self.top, self.decel, self.accel = self.top[drop:], self.decel[drop:], self.accel[drop:]
             self.grade_hi, self.power_binds = self.grade_hi[drop:], self.power_binds[drop:]
             self.offset += drop
+
+
+def _boundary_b(top_b: np.ndarray, *, end_b: float) -> np.ndarray:
+    """Squared speed allowed at each boundary (m^2/s^2), shape (N+1,): the lower of the caps
+    of the segments either side (``top_b``, shape (N,)); at the last, also ``end_b``."""
+    return np.concatenate([[top_b[0]], np.minimum(top_b[:-1], top_b[1:]), [min(top_b[-1], end_b)]])
 
 
 def _envelope(where: np.ndarray, top_b: np.ndarray, braking: np.ndarray, decel: np.ndarray
@@ -569,15 +574,9 @@ class SpeedSelector:
         before the new segments lets it settle); where the transmitted force over the new
         segments goes over the limit, their caps are lowered as the offline planner's gate
         lowers them (:func:`profileopt.planning.gate.gate_caps`). None: it holds."""
-        b = top * top
-        upper = np.concatenate([[b[0]], np.minimum(b[:-1], b[1:]), [b[-1]]])
-        run = simulate_quarter_car(route.s_m, route.z_m, bounds, np.sqrt(upper), self.vehicle)
-        limit = float(self.vehicle.max_transmitted_force_n)
-        inside = (run.s_m >= bounds[new.start]) & (run.s_m <= bounds[new.stop])
-        ratio = np.where(inside, np.abs(run.transmitted_n) / limit, 0.0)
-        worst = int(np.argmax(ratio))
-        check = GateCheck(run=run, limit_n=limit, worst_ratio=float(ratio[worst]), worst_s_m=float(run.s_m[worst]),
-                          ratio=ratio)
+        speed = np.sqrt(_boundary_b(top * top, end_b=math.inf))
+        check = check_speeds(route, bounds, speed, self.vehicle, window_m=self.roughness_window_m,
+                             judged_m=(float(bounds[new.start]), float(bounds[new.stop])))
         if check.passes:
             return None
         caps = gate_caps(check, self.vehicle, round_number)
@@ -690,7 +689,7 @@ class SpeedSelector:
         decel, accel = _sliding_min(decel, reach), _sliding_min(accel, reach)
         length = np.diff(where)
         top_b = top * top
-        upper = np.concatenate([[top_b[0]], np.minimum(top_b[:-1], top_b[1:]), [min(top_b[-1], end_b)]])
+        upper = _boundary_b(top_b, end_b=end_b)
         braking = braking_profile(upper, length, decel)
         if v0 * v0 > braking[0] * (1 + 1e-9) + 1e-12:  # faster than any limit-keeping profile allows
             allowed = math.sqrt(max(braking[0], 0.0))  # < 0: a descent ahead too steep to brake on

@@ -62,7 +62,7 @@ if TYPE_CHECKING:
     from .limits.base import Limit
 
 __all__ = ["GATE_MARGIN", "GATE_SHRINK", "MAX_GATE_ROUNDS", "GateCheck", "GateRun", "gate_applies", "check_plan",
-           "gate_caps", "merged_caps", "covered_m", "segment_peaks_n", "run_gate", "gate_note"]
+           "check_speeds", "gate_caps", "merged_caps", "covered_m", "segment_peaks_n", "run_gate", "gate_note"]
 
 #: A simulated force above (1 - GATE_MARGIN) of the limit sends the plan back; a new cap aims
 #: at that much below the limit, so the profile as written to a file (rounded speeds) and
@@ -148,13 +148,40 @@ def check_plan(route: "Route", profile: "Profile", vehicle: "Vehicle", *, window
     -------
     GateCheck
     """
+    return check_speeds(route, profile.s_m, profile.speed_mps, vehicle, window_m=window_m,
+                        force_margin=force_margin, keep_contact=keep_contact)
+
+
+def check_speeds(route: "Route", s_m: np.ndarray, speed_mps: np.ndarray, vehicle: "Vehicle", *, window_m: float,
+                 force_margin: float = 0.0, keep_contact: bool = False,
+                 judged_m: tuple[float, float] | None = None) -> GateCheck:
+    """:func:`check_plan` for speeds at boundaries, judged over the whole run or a stretch of it.
+
+    Parameters
+    ----------
+    route : Route
+        As for :func:`check_plan`.
+    s_m, speed_mps : numpy.ndarray, shape (N+1,)
+        Boundaries (m) and the speed at each (m/s), constant acceleration between them.
+    vehicle, window_m, force_margin, keep_contact
+        As for :func:`check_plan`.
+    judged_m : (float, float), optional
+        Only points of the run within [start, end] (m) are judged (their ratio elsewhere is
+        0): the rest is driven for the suspension's state there only.
+
+    Returns
+    -------
+    GateCheck
+    """
     if route.assumed_roughness is not None:
         route, _ = with_assumed_roughness(route, vehicle, window_m=window_m, seed=0)
-    run = simulate_quarter_car(route.s_m, route.z_m, profile.s_m, profile.speed_mps, vehicle)
+    run = simulate_quarter_car(route.s_m, route.z_m, s_m, speed_mps, vehicle)
     limit = float(vehicle.max_transmitted_force_n) * (1.0 - force_margin)
     ratio = np.abs(run.transmitted_n) / limit
     if keep_contact:
         ratio = np.maximum(ratio, -run.transmitted_n / (vehicle.quarter_mass_kg * STANDARD_GRAVITY_MPS2))
+    if judged_m is not None:
+        ratio = np.where((run.s_m >= judged_m[0]) & (run.s_m <= judged_m[1]), ratio, 0.0)
     worst = int(np.argmax(ratio))
     return GateCheck(run=run, limit_n=limit, worst_ratio=float(ratio[worst]), worst_s_m=float(run.s_m[worst]),
                      ratio=ratio)
