@@ -6,10 +6,11 @@ Run by hand, never by the test suite (minutes; the numbers depend on the machine
     pip install -e '.[batch]'
     python benchmarks/bench_batch.py                 # 40 routes, 2 workers, 3 repeats
     python benchmarks/bench_batch.py --workers 2 --repeats 1 --separate
+    python benchmarks/bench_batch.py --route-length-m 3000   # routes of 3 km
 
 The routes: the bundled ones (``examples/routes/*.csv``) and seeded ISO 8608 profiles of
-classes A-E (300 m at 0.05 m) to make 40. Each is planned with the vehicle ``atv`` and the
-default options. Each way is a fresh process started from the shell, so each pays its own
+classes A-E (``--route-length-m`` long, default 300 m, sampled every 0.05 m) to make 40.
+Each is planned with the vehicle ``atv`` and the default options. Each way is a fresh process started from the shell, so each pays its own
 imports, and they alternate, repeat by repeat, in one run:
 
 ``serial``
@@ -40,7 +41,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def make_routes(folder: Path, count: int) -> list[Path]:
+def make_routes(folder: Path, count: int, length_m: float) -> list[Path]:
     from profileopt.core.route import Route
     from profileopt.io.routes import write_route
     from profileopt.terrain.synthetic import iso8608_profile
@@ -49,7 +50,7 @@ def make_routes(folder: Path, count: int) -> list[Path]:
     seed = 0
     while len(routes) < count:
         road_class = "ABCDE"[seed % 5]
-        s_m, z_m = iso8608_profile(road_class, 300.0, 0.05, seed)
+        s_m, z_m = iso8608_profile(road_class, length_m, 0.05, seed)
         path = folder / f"iso_{road_class}_{seed}.csv"
         write_route(Route(s_m, z_m, source=path.name), path)
         routes.append(path)
@@ -69,6 +70,7 @@ def _run(argv: list[str], cwd: Path) -> float:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--routes", type=int, default=40)
+    parser.add_argument("--route-length-m", type=float, default=300.0, help="length of the generated routes (m)")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--separate", action="store_true", help="also time one 'profileopt plan' per route")
@@ -77,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
     env_note = "OPENBLAS_NUM_THREADS=1" if os.environ.get("OPENBLAS_NUM_THREADS") == "1" else ""
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        routes = make_routes(folder, args.routes)
+        routes = make_routes(folder, args.routes, args.route_length_m)
         ids = [f"r{k:02d}_{path.stem}" for k, path in enumerate(routes)]
         for route, ident in zip(routes, ids):  # batch names each profile after its route file: copies
             (folder / f"{ident}.csv").write_bytes(route.read_bytes())
@@ -108,10 +110,11 @@ def main(argv: list[str] | None = None) -> int:
                     print(f"{other}: differs from the serial batch's profile", file=sys.stderr)
                     return 1
     serial, dask = statistics.median(times["serial"]), statistics.median(times["dask"])
-    print("| routes | workers | serial batch, one process (s) | Dask LocalCluster (s) | serial / Dask |"
+    print("| routes | generated routes (m) | workers | serial batch, one process (s) | Dask LocalCluster (s) | serial / Dask |"
           + (" 40 separate plans (s) | separate / Dask |" if args.separate else ""))
-    print("|---|---|---|---|---|" + ("---|---|" if args.separate else ""))
-    line = f"| {args.routes} | {args.workers} | {serial:.1f} | {dask:.1f} | {serial / dask:.2f} |"
+    print("|---|---|---|---|---|---|" + ("---|---|" if args.separate else ""))
+    line = (f"| {args.routes} | {args.route_length_m:.0f} | {args.workers} | {serial:.1f} | {dask:.1f} "
+            f"| {serial / dask:.2f} |")
     if args.separate:
         line += f" {times['separate'][0]:.1f} | {times['separate'][0] / dask:.2f} |"
     print(line)
