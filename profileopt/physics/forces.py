@@ -42,6 +42,7 @@ import casadi as ca
 import numpy as np
 
 from ..core.symbolic import elementwise, is_symbolic
+from ..core.vehicle import require_vehicle
 from ..defaults import DEFAULT_MODEL, MODEL_KEYS
 from ..errors import InputError
 from ..terrain.roughness import check_e_max, check_ri, step_width, worst_case_elevation
@@ -544,6 +545,7 @@ def force_n(speed_mps: Any, vehicle: "Vehicle", *, ri: Any = None, e_max_m: Any 
         Unknown ``model``, both or neither of ``ri`` and ``e_max_m``, ``e_max_m`` with
         Prev:BEM, or a NaN or negative terrain value.
     """
+    vehicle = require_vehicle(vehicle, "force_n")
     spec = get_model(model)
     if (ri is None) == (e_max_m is None):
         raise InputError("give exactly one of ri (roughness index) and e_max_m (worst-case elevation, m)")

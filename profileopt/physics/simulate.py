@@ -79,6 +79,7 @@ import numpy as np
 
 from ..core.kinematics import segment_accel_mps2, segment_time_s
 from ..core.stations import segment_index, segment_samples
+from ..core.vehicle import require_vehicle
 from ..errors import InputError
 from .quarter_car import hermite_extremum, knot_jumps, respond, transition
 from .wheel import WheelPath, wheel_path
@@ -391,6 +392,7 @@ def simulate_quarter_car(
         large to simulate, a segment never crossed, or more than :data:`MAX_STEPS` steps.
     """
     t_start = time.perf_counter()
+    vehicle = require_vehicle(vehicle, "simulate_quarter_car")
     s = np.asarray(s_m, dtype=float)
     z = np.asarray(z_m, dtype=float)
     b = np.asarray(boundaries_m, dtype=float)

@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core.symbolic import numpy_evaluator
+from ..core.vehicle import require_vehicle
 from ..errors import InputError
 from ..terrain.roughness import check_ri, range_extremes, worst_case_elevation
 from .forces import DEFAULT_MODEL, get_model, sbem_tf_crawl_bound_n
@@ -263,6 +264,7 @@ def speed_bands(ri: ArrayLike, vehicle: "Vehicle", *, model: str = DEFAULT_MODEL
     InputError
         Unknown ``model``, or a NaN or negative ``ri``.
     """
+    vehicle = require_vehicle(vehicle, "speed_bands")
     return speed_bands_reusing(ri, vehicle, model=model, ri_min=ri_min)[0]
 
 
@@ -738,6 +740,7 @@ def allowable_speed(
     InputError
         Unknown ``model`` or ``band``, or a NaN or negative ``ri``.
     """
+    vehicle = require_vehicle(vehicle, "allowable_speed")
     _check_band(band)
     get_model(model)
     values = np.asarray(ri, dtype=float)

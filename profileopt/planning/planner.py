@@ -37,7 +37,7 @@ from ..core.segments import (
     roughness_source,
     segment_route,
 )
-from ..core.vehicle import PLAUSIBLE_RANGES, vehicle_reference
+from ..core.vehicle import PLAUSIBLE_RANGES, require_vehicle, vehicle_reference
 from ..defaults import (
     DEFAULT_PATH_TOLERANCE_M,
     DEFAULT_REFINE,
@@ -224,6 +224,7 @@ def plan(
         :data:`~profileopt.planning.gate.MAX_GATE_ROUNDS` rounds (please report it).
     """
     t_start = time.perf_counter()
+    vehicle = require_vehicle(vehicle, "plan")
     jerk = vehicle.max_jerk_mps3 if max_jerk_mps3 is None else float(max_jerk_mps3)
     limits = (*default_limits(vehicle, model=model, max_jerk_mps3=jerk), *extra_limits)  # refuses a bad model
     _validate_options(vehicle, smoothing, jerk, v0_mps, vend_mps, method, band, refine)

@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 
 from ..defaults import DEFAULT_REFINE, DEFAULT_SIMULATION_GATE
+from ..core.vehicle import require_vehicle
 from ..errors import InfeasibleError
 from ..physics.forces import MODELS, get_model
 from ..progress import NO_PROGRESS, Progress
@@ -314,6 +315,7 @@ def compare_models(
     tuple of ModelRun
         One per model, in the order given.
     """
+    vehicle = require_vehicle(vehicle, "compare_models")
     keys = list(MODELS) if models is None else list(models)
     progress.expect(len(keys))
     runs = []

@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core.symbolic import elementwise, is_symbolic
+from ..core.vehicle import require_vehicle
 from ..errors import InputError
 from .window_sums import (  # window_line_moments: re-exported
     batched_window_moments,
@@ -508,6 +509,7 @@ def worst_case_elevation(ri: Any, vehicle: "Vehicle") -> Any:
     -------
     Same kind and shape as ``ri``: e_max (m).
     """
+    vehicle = require_vehicle(vehicle, "worst_case_elevation")
     check_ri(ri)
     return elevation_z_score(vehicle.confidence) * vehicle.ground_clearance_m * ri
 
@@ -531,6 +533,6 @@ def step_width(e_max_m: Any, vehicle: "Vehicle") -> Any:
     -------
     Same kind and shape as ``e_max_m``: X_w (m).
     """
-    r = vehicle.wheel_radius_m
+    r = require_vehicle(vehicle, "step_width").wheel_radius_m
     e_c = ca.fmin(e_max_m, r)
     return ca.sqrt(e_c * (2.0 * r - e_c))

@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..core.stations import segment_index
+from ..core.vehicle import require_vehicle
 from ..errors import InputError
 from ..defaults import DEFAULT_PATH_TOLERANCE_M, DEFAULT_ROUGHNESS_WINDOW_M
 from ..io.atomic import atomic_write
@@ -444,6 +445,7 @@ def verify(
         segment is never crossed (speed 0 at both of its ends), a speed is too large to
         simulate, the model is unknown, or it would need more memory than ``max_peak_bytes``.
     """
+    vehicle = require_vehicle(vehicle, "verify")
     check_memory(route, profile, vehicle, max_peak_bytes)
     t_start = time.perf_counter()
     if check is None:

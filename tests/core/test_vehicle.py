@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from pathlib import Path
 
@@ -234,3 +235,45 @@ def test_a_lone_carriage_return_in_a_vehicle_file_is_refused(tmp_path):
         other = tmp_path / "ends.toml"
         other.write_bytes(write_vehicle(tmp_path).read_text(encoding="utf-8").replace("\n", end).encode())
         assert load_vehicle(other) == load_vehicle(write_vehicle(tmp_path))
+
+
+@functools.cache
+def _public_calls():
+    """Every public function of the package that takes a vehicle, called with ``vehicle``."""
+    import numpy as np
+
+    import profileopt
+
+    route = profileopt.Route(np.arange(0.0, 20.0, 0.1), np.zeros(200), source="flat.csv")
+    profile = profileopt.plan(route, load_vehicle("atv"))
+    return {
+        "force_n": lambda vehicle: profileopt.force_n(5.0, vehicle, ri=0.1),
+        "allowable_speed": lambda vehicle: profileopt.allowable_speed(0.1, vehicle),
+        "speed_bands": lambda vehicle: profileopt.speed_bands(0.1, vehicle),
+        "step_width": lambda vehicle: profileopt.step_width(0.05, vehicle),
+        "worst_case_elevation": lambda vehicle: profileopt.worst_case_elevation(0.1, vehicle),
+        "plan": lambda vehicle: profileopt.plan(route, vehicle),
+        "simulate_quarter_car": lambda vehicle: profileopt.simulate_quarter_car(
+            route.s_m, route.z_m, np.array([0.0, 10.0]), np.array([1.0, 1.0]), vehicle),
+        "verify": lambda vehicle: profileopt.verify(route, profile, vehicle),
+        "compare_models": lambda vehicle: profileopt.compare_models(route, vehicle, models=["iecm"]),
+    }
+
+
+@pytest.mark.parametrize("given, words", [
+    ("atv", "vehicle = 'atv' is a name or a file; give a Vehicle: profileopt.load_vehicle('atv')"),
+    (Path("my_atv.toml"), "profileopt.load_vehicle('my_atv.toml')"),
+    (0.1, "are two arguments swapped"),
+    (None, "no vehicle was given"),
+])
+def test_every_public_function_says_what_a_vehicle_is_when_given_something_else(given: object, words: str) -> None:
+    """A name, a path, a number or nothing where a Vehicle goes: one line naming the function
+    and how to load one, never an AttributeError from deep inside."""
+    calls = _public_calls()
+    for name, call in calls.items():
+        with pytest.raises(InputError) as info:
+            call(given)
+        assert str(info.value).startswith(f"{name}: ") and words in str(info.value), (name, str(info.value))
+    if given == "atv":  # and each takes the Vehicle itself
+        for call in calls.values():
+            call(load_vehicle("atv"))
