@@ -154,6 +154,7 @@ def test_a_track_far_from_every_tile_is_refused(ground: Path, tmp_path: Path) ->
         read_tiles(ground / "tiles", track=read_track(tmp_path / "away.gpx"))
 
 
+@pytest.mark.slow
 def test_route_and_plan_take_several_terrain_files_or_a_folder(ground: Path, tmp_path: Path) -> None:
     runs = {}
     for name, terrain in (("merged", ["merged.laz"]), ("folder", ["tiles"]),

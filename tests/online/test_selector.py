@@ -34,7 +34,7 @@ class _ExactFirstBand:
         return speed_bands_of_sets(values, first, stop, self.vehicle)[0].first()
 
 
-@pytest.mark.parametrize("name", ["curb.csv", "washboard.csv"])
+@pytest.mark.parametrize("name", ["curb.csv", pytest.param("washboard.csv", marks=pytest.mark.slow)])
 def test_with_the_whole_route_measured_the_plan_is_the_offline_exact_plan(name, atv_resonant):
     """Every segment's speeds are computed on the measured stretch around it only (a window
     and a step's ramp either side): if that stretch were too short, a kerb's or a window's cap

@@ -56,6 +56,7 @@ def test_iso_rough_ground_is_driven_near_top_speed_by_the_resonant_atv(name: str
     assert profile.travel_time_s < share * sbem_tf.travel_time_s
 
 
+@pytest.mark.slow
 def test_a_kerb_is_met_at_the_speed_the_suspension_takes() -> None:
     check_dynamic(profileopt.read_route(ROUTES / "curb.csv"), "atv-resonant")
 
@@ -192,6 +193,7 @@ def test_a_short_block_takes_sbem_tf_s_finer_caps_when_they_are_faster() -> None
     assert profile.settings["model"] == "dynamic" and "the SBEM:TF plan" in profile.notes[-1]
 
 
+@pytest.mark.slow
 def test_washboard_entered_at_rest_is_crossed_at_top_speed() -> None:
     """Washboard from the first metre (3 cm, 0.8 m wavelength): accelerating from rest crosses
     the resonant ATV's resonance band in less time than a resonance takes to build up; SBEM:TF
