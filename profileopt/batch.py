@@ -29,16 +29,13 @@ names, sizes and modification times of its terrain files.
 from __future__ import annotations
 
 import csv
-import ctypes
 import dataclasses
-import functools
 import hashlib
 import io
 import json
 import math
 import os
 import re
-import sys
 from pathlib import Path
 from typing import Any, Iterable, Sequence
 
@@ -61,9 +58,6 @@ MISSING_DASK = "planning on several workers needs Dask: pip install 'profileopt[
 #: Options a batch sets itself, or that write files it does not collect.
 _NOT_IN_A_ROW = {"output", "plot", "map", "json", "quiet", "help"}
 _ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,99}")
-#: glibc's ceiling for its own dynamic mmap threshold on 64-bit (``DEFAULT_MMAP_THRESHOLD_MAX``),
-#: in bytes: the threshold a long-running process that frees large arrays reaches by itself.
-_MMAP_THRESHOLD_BYTES = 32 * 1024 * 1024
 
 
 @dataclasses.dataclass(frozen=True)
@@ -353,10 +347,11 @@ def plan_row(argv: Sequence[str], inputs: Iterable[str | os.PathLike] = ()) -> d
         ratio, binding shares and notes; or ``"failed"`` with ``error``, one line.
     """
     from .cli import plan as command
+    from .cli.app import keep_arrays_on_the_heap
     from .cli.messages import flags_for_parameters
     from .errors import PlanningError
 
-    _keep_arrays_on_the_heap()
+    keep_arrays_on_the_heap()  # Dask's workers are started with MALLOC_TRIM_THRESHOLD_=65536
     parser = _plan_parser()
     try:
         args = parser.parse_args(list(argv))
@@ -373,31 +368,6 @@ def plan_row(argv: Sequence[str], inputs: Iterable[str | os.PathLike] = ()) -> d
             "mean_speed_mps": summary["mean_speed_mps"], "segments": summary["segments"],
             "force_ratio": force, "binding": json.dumps(summary["binding"], separators=(",", ":")),
             "notes": " | ".join(summary["notes"]), "error": ""}
-
-
-@functools.cache
-def _keep_arrays_on_the_heap() -> None:
-    """Let glibc keep freed arrays of up to 32 MiB for reuse in this process, once.
-
-    Dask's nanny starts its workers with ``MALLOC_TRIM_THRESHOLD_=65536``
-    (``distributed.nanny.pre-spawn-environ``). Setting any malloc threshold turns off glibc's
-    dynamic mmap threshold, so every array over 128 kB is mapped afresh from the kernel,
-    page-faulted in, and unmapped when freed: a plan took 2-3 times the CPU in a worker that
-    it takes in a plain process (benchmarks/bench_batch.py; ``docs/guide/batch.md``). This
-    sets the thresholds to the ceiling glibc's dynamic rule would reach by itself (mmap above
-    32 MiB, trim above 64 MiB), in whichever process plans, a worker of any cluster or the
-    serial batch alike. Nothing is done off Linux or without glibc's ``mallopt``; the numbers
-    planned do not depend on it.
-    """
-    if not sys.platform.startswith("linux"):
-        return
-    try:
-        mallopt = ctypes.CDLL(None).mallopt  # the process's own C library
-    except (OSError, AttributeError):
-        return
-    m_trim_threshold, m_mmap_threshold = -1, -3  # <malloc.h>
-    mallopt(m_mmap_threshold, _MMAP_THRESHOLD_BYTES)
-    mallopt(m_trim_threshold, 2 * _MMAP_THRESHOLD_BYTES)
 
 
 def _route_bytes(row: BatchRow) -> int:
