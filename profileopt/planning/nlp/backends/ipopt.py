@@ -8,7 +8,11 @@ with parameters. Options are :attr:`SolverOptions.ipopt
 
 from __future__ import annotations
 
+import ctypes
+import functools
+import os
 import time
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -17,7 +21,7 @@ from ...options import SolverOptions
 from ..problem import NlpResult, cached_nlp
 from .base import NlpInstance
 
-__all__ = ["BACKEND", "IpoptBackend", "solve_ipopt", "STALL_ACCEPTABLE_TOL"]
+__all__ = ["BACKEND", "IpoptBackend", "solve_ipopt", "one_blas_thread", "STALL_ACCEPTABLE_TOL"]
 
 #: IPOPT's ``acceptable_tol`` in the planner's options: a final iterate whose scaled dual and
 #: primal infeasibility and barrier parameter are all below it is a solution.
@@ -47,6 +51,7 @@ class IpoptBackend:
         """
         t = time.perf_counter()
         solver = cached_nlp(problem.n, problem.with_jerk, options.ipopt_key(), problem.families)
+        one_blas_thread()  # once IPOPT's plugin, and with it CasADi's OpenBLAS, is loaded
         timings["build"] = timings.get("build", 0.0) + time.perf_counter() - t
         t = time.perf_counter()
         result = solve_ipopt(solver, problem)
@@ -78,6 +83,34 @@ def solve_ipopt(solver: ca.Function, problem: NlpInstance) -> NlpResult:
     status = "optimal" if success else str(stats.get("return_status", "failed"))
     return NlpResult(np.asarray(result["x"]).ravel(), np.asarray(result["lam_g"]).ravel(), success, status,
                      int(stats.get("iter_count", 0)), "ipopt")
+
+
+@functools.cache
+def one_blas_thread() -> None:
+    """IPOPT's linear solver on one thread, unless the environment chose (once per process).
+
+    CasADi's IPOPT factorises with MUMPS on CasADi's own OpenBLAS (``libcasadi-tp-openblas``),
+    which runs a thread per core. On the planner's banded systems the extra threads only spin:
+    a 3 km plan in process took 1.54 s of wall time on two threads and 1.60 s on one, but 2.58 s
+    of CPU time against 1.60 s, a core taken from whatever else runs (another plan, a batch's
+    other worker, a controller). The command line sets ``OPENBLAS_NUM_THREADS=1`` before
+    anything is loaded; this does the same for a Python program, through OpenBLAS's
+    ``openblas_set_num_threads``, once the library is loaded. ``OPENBLAS_NUM_THREADS`` or
+    ``OMP_NUM_THREADS`` in the environment is left to rule; a CasADi without that library (or
+    a platform without ``RTLD_NOLOAD``) is left as it is.
+    """
+    if os.environ.get("OPENBLAS_NUM_THREADS") or os.environ.get("OMP_NUM_THREADS"):
+        return
+    no_load = getattr(os, "RTLD_NOLOAD", None)
+    if no_load is None:
+        return
+    for path in sorted(Path(ca.__file__).parent.glob("libcasadi-tp-openblas*")):
+        try:
+            library = ctypes.CDLL(str(path), mode=no_load | os.RTLD_LAZY)  # only if already loaded
+            library.openblas_set_num_threads(1)
+        except (OSError, AttributeError):
+            continue
+        return
 
 
 def _converged_but_stalled(stats: dict) -> bool:
