@@ -66,6 +66,9 @@ class SegmentPath:
     turns : tuple of SharpTurn
         The stretches sharper than that turning circle, and the reversals
         (:func:`profileopt.terrain.geometry.sharp_turns`); :func:`turn_notes` words them.
+    curvature_reach_m : float
+        How far beyond its own samples a segment's largest curvature was taken (m; the
+        module docstring).
     """
 
     curvature_max_1pm: np.ndarray
@@ -81,6 +84,7 @@ class SegmentPath:
     noise_points: int = 0
     min_turn_radius_m: float | None = None
     turns: tuple = ()
+    curvature_reach_m: float = 0.0
 
     @property
     def has_turns(self) -> bool:
@@ -120,7 +124,7 @@ def segment_path(route: "Route", segments: "Segments", geometry: "RouteGeometry"
         tolerance_m=float(geometry.tolerance_m), grade_scale_m=float(geometry.grade_scale_m),
         max_deviation_m=float(geometry.max_deviation_m), tolerance_source=geometry.tolerance_source,
         noise_m=float(geometry.noise_m), noise_points=int(geometry.noise_points),
-        min_turn_radius_m=geometry.min_turn_radius_m, turns=tuple(geometry.turns),
+        min_turn_radius_m=geometry.min_turn_radius_m, turns=tuple(geometry.turns), curvature_reach_m=reach,
     )
 
 

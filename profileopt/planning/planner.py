@@ -177,8 +177,9 @@ def plan(
         Choose the bands, then cut every segment where the minimum-time profile comes within
         :data:`REFINE_AT_CAP` of its band's top, set by the force, wherever its windows'
         roughness changes (:func:`profileopt.planning.refine.refine_segments`), and every
-        segment where it comes that close to a step's cap or a speed limit just outside the
-        step's ramp or the limit's zone (:func:`profileopt.planning.refine.stretch_cuts`), choose the bands again on those
+        segment where it comes that close to a step's cap, a speed limit or a sharp turn's crawl
+        just outside the step's ramp, the limit's zone or the turn
+        (:func:`profileopt.planning.refine.stretch_cuts`), choose the bands again on those
         segments, and solve once.
         A segment is held to every window that shares a point with it, so without this the
         travel time converges only to first order in ``segment_length_m``; with it, it hardly
@@ -362,8 +363,8 @@ def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *,
         timings["choose"] = timings.get("choose", 0.0) + time.perf_counter() - t
         if not refine or refine_note:
             break
-        # cut where the profile meets the force's cap and the roughness changes, or a step's
-        # or a speed limit's cap (refine.py); then the bands are chosen again
+        # cut where the profile meets the force's cap and the roughness changes, or a step's,
+        # a speed limit's or a sharp turn's cap (refine.py); then the bands are chosen again
         t = time.perf_counter()
         progress.step("refining the segments where the plan meets a cap")
         band_top = usable.upper_mps[np.arange(seg.count), chosen.band]
@@ -372,7 +373,8 @@ def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *,
         if finer is seg:
             break
         refine_note = (f"refined: {finer.count - seg.count} segments added where the plan meets the force's cap "
-                       f"and the roughness changes, or a step's or a speed limit's cap ({seg.count} -> {finer.count})")
+                       f"and the roughness changes, or a step's, a speed limit's or a sharp turn's cap "
+                       f"({seg.count} -> {finer.count})")
         seg = finer
     if refine_note:
         notes.append(refine_note)

@@ -7,7 +7,7 @@ to its speeds over its whole length. After the bands are chosen once, the planne
 - the segments where the minimum-time profile meets its band's top, set by the force, where
   the roughness of their windows changes (:func:`refine_segments`);
 - the segments where it meets a cap set on stretches of the route (a step's, a speed-limit
-  zone's; :meth:`.limits.Limit.cap_stretches_m`) just outside the stretch that sets it
+  zone's, a sharp turn's or a reversal's crawl; :meth:`.limits.Limit.cap_stretches_m`) just outside the stretch that sets it
   (:func:`stretch_cuts`), and where their roughness changes as well: the cap hid
   their band's top, which the pieces off the stretch meet once they are free of it;
 

@@ -718,6 +718,8 @@ class SharpTurn:
     reversal : bool
         Whether the heading turns by more than REVERSAL_HEADING_CHANGE_RAD within
         REVERSAL_LENGTH_M there.
+    start_m, end_m : float
+        The stretch's first and last sample (m along the route).
     """
 
     s_m: float
@@ -726,6 +728,8 @@ class SharpTurn:
     radius_m: float
     heading_change_rad: float
     reversal: bool
+    start_m: float
+    end_m: float
 
 
 def sharp_turns(s_m: ArrayLike, x_m: ArrayLike, y_m: ArrayLike, path: SmoothPath, *,
@@ -776,7 +780,8 @@ def sharp_turns(s_m: ArrayLike, x_m: ArrayLike, y_m: ArrayLike, path: SmoothPath
         turned = abs(float(np.diff(np.interp([s[a] - half, s[b - 1] + half], s, heading))[0]))
         turns.append(SharpTurn(s_m=float(s[i]), x_m=float(x[i]), y_m=float(y[i]),
                                radius_m=float(1.0 / kappa[i]) if kappa[i] > 0 else math.inf,
-                               heading_change_rad=turned, reversal=bool(np.any(reversal[a:b]))))
+                               heading_change_rad=turned, reversal=bool(np.any(reversal[a:b])),
+                               start_m=float(s[a]), end_m=float(s[b - 1])))
     return turns
 
 

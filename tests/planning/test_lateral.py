@@ -86,3 +86,26 @@ def test_a_vehicle_without_a_limit_of_turns_says_the_reversal_is_not_slowed(atv)
     profile = plan(out_and_back(0.0), bare)
     notes = [note for note in profile.summary()["notes"] if "reverses" in note]
     assert len(notes) == 1 and "not slowed there" in notes[0]
+
+
+@pytest.mark.parametrize("route", [out_and_back(0.0), out_and_back(30.0), hairpin(2.0)], ids=["reversal",
+                                                                                              "reversal-30", "hairpin-2m"])
+def test_refining_holds_the_crawl_to_the_turn_not_to_the_segments_around_it(atv, route: Route) -> None:
+    """With 5 m segments a crawl through a reversal or a hairpin inside the turning circle held
+    every segment that reached the turn (10-15 m at walking pace). Refined, the crawl holds the
+    sharp stretch (the samples sharper than the turning circle, or turning back, widened by the
+    reach over which a segment takes its curvature) and at most a sample's spacing more on
+    either side; the rest of those segments is driven faster."""
+    refined = plan(route, atv)
+    whole = plan(route, atv, refine=False)
+
+    def crawled_m(profile):
+        top = np.maximum(profile.speed_mps[:-1], profile.speed_mps[1:])
+        return float(np.diff(profile.s_m)[top <= top.min() * (1 + 1e-9)].sum())
+
+    turn = refined.path.turns[0]
+    spacing = float(np.max(np.diff(route.s_m)))
+    assert crawled_m(refined) <= turn.end_m - turn.start_m + 2 * refined.path.curvature_reach_m + 2 * spacing + 1e-9
+    assert crawled_m(whole) >= 10.0 - 1e-9 and refined.travel_time_s < whole.travel_time_s - 3.0
+    assert refined.speed_mps.max() > 9.0  # the 40 m legs are driven fast either way
+    assert refined.summary()["margins"]["lateral"]["ratio"] <= 1.0 + 1e-9

@@ -59,6 +59,33 @@ class LateralLimit(Limit):
         return turn_speed_cap_mps(self.limit_mps2, context.turns_and_slopes.curvature_max_1pm,
                                   context.vehicle.min_turn_radius_m)
 
+    def cap_stretches_m(self, context: PlanContext) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """The route's sharp turns and reversals (:attr:`SegmentPath.turns
+        <profileopt.core.path.SegmentPath.turns>`): each stretch widened by the curvature's reach
+        (a segment takes its largest curvature that far beyond its samples), and the cap of its
+        sharpest point (m/s). Refining then cuts a segment held at that cap just outside the
+        stretch, so that a crawl through a hairpin or a reversal holds the turn, not the whole
+        segment around it; the pieces outside take their own curvature's cap. None without
+        sharp turns (an ordinary turn's cap holds whole segments).
+
+        Parameters
+        ----------
+        context : PlanContext
+            The route, vehicle and segments of the plan.
+
+        Returns
+        -------
+        (start_m, end_m, cap_mps) : tuple of numpy.ndarray, shape (R,), or None
+        """
+        path = context.path
+        if path is None or not path.turns:
+            return None
+        reach = path.curvature_reach_m
+        start = np.array([turn.start_m for turn in path.turns]) - reach
+        end = np.array([turn.end_m for turn in path.turns]) + reach
+        kappa = np.array([1.0 / turn.radius_m for turn in path.turns])  # radius inf: 0
+        return start, end, turn_speed_cap_mps(self.limit_mps2, kappa, context.vehicle.min_turn_radius_m)
+
     def check(self, profile: "Profile") -> float:
         """How far the largest lateral acceleration in any segment exceeds the limit, or its
         speed the crawl where it turns sharper than the turning circle (relative).
