@@ -14,7 +14,8 @@ never go faster than it could if the terrain beyond were as bad as assumed. Each
    force's first band from a table built once, :mod:`.band_table`), and where a step's cap
    binds, rounds of a simulation gate (below);
    of the force's bands it keeps the first, [0, v_first] (the paper-notes' "Which root": safe
-   for a vehicle that may have to slow down anywhere, as one that sees only so far must);
+   for a vehicle that may have to slow down anywhere, as one that sees only so far must), and,
+   where that binds, the highest band above it, for a short feature (below);
 2. appends, past the last such segment (the *planning edge*), the terrain not yet measured as
    the ``unseen`` assumption: a roughness class (or an RI) whose first admissible band,
    [0, v_unseen], is the speed allowed there;
@@ -33,10 +34,40 @@ vehicle can keep to any terrain no worse than assumed. The state after each comm
 *safe* (a jerk-limited braking manoeuvre from it stays under the envelope), so the next
 cycle has a command too, whenever the newly measured terrain is no worse than assumed (its
 caps are at least v_unseen): the vehicle is never faster than on the offline plan of a route
-whose unmeasured part is exactly as bad as assumed. Where the terrain turns out worse (a kerb
+whose unmeasured part is exactly as bad as assumed (the plan on the first band; on every band
+where a feature is crossed in its upper band, below). Where the terrain turns out worse (a kerb
 past the sensing range that the assumption does not cover, seen too late), the selector
 brakes harder than the jerk bound, or as hard as the vehicle may, and says so
 (:attr:`Command.emergency`).
+
+The upper band. A resonant vehicle's speeds on rough ground may be [0, v1] and [lo, hi] above
+resonance, every speed between over the limit: the offline plan crosses a kerb's roughness
+windows at speed in [lo, hi], and a vehicle there must not slow down below lo before the
+rough ground ends. The selector does so for a *feature*, a run of measured segments whose
+upper band (:meth:`SpeedSelector._upper_band`, from a table built once, as the first band's)
+starts above their first band's top, only when what is measured proves it can: (a) the
+feature ends before the planning edge, and the vehicle is not yet on its *lead-in* (below);
+(b) the envelope with the feature capped at hi (the other caps, and the unseen tail, as
+before) is at least lo at every boundary from the vehicle to the feature, and lo plus the
+*tracking lag* at the feature's boundaries; (c) the vehicle is already at lo plus that lag.
+The tracking lag is how far the commanded speed can fall below the envelope: the tracker
+rides a braking curve to its end, then takes its deceleration d back to 0 at the jerk bound J,
+losing d^2 / (2 J) (1.6 m/s for the resonant atv at 4 m/s^2: it stopped dead at a kerb's first
+band), so on the feature and a lead-in before it the envelope brakes at a lower d_f, for which
+d_f^2 / (2 J) + d_f dt is half the band's narrowest width; at the feature's end, where the
+braking for what follows begins, the lag is d^2 / (8 J) + d dt
+(:meth:`SpeedSelector._tracking_lag_mps`). The lead-in is long enough for the vehicle to come
+off the approach's harder braking and catch up with the shallower curve. The choice is made
+only in a cycle whose command keeps the jerk bound under the new envelope. It is sticky once
+the vehicle is on the lead-in; before that, a choice whose (b) fails is taken back when the
+vehicle can keep the jerk bound under the first band. (b) keeps holding while the terrain
+that comes into view is no worse than assumed, because the envelope never comes down where the
+vehicle can be (above); if it is worse, the emergency path brakes as for any surprise, and a
+speed below a chosen band at a cycle's start is said (:attr:`Command.note`). On
+``examples/routes/curb.csv`` (resonant atv, 50 m of sensing, class B assumed) it drives
+74.8 s, 1.089 times the offline plan's 68.6 s, where the first band alone took 105.4 s
+(1.535); the exact simulation finds no window over the limit (at most 0.95 of it). The upper
+band's caps are not driven in the simulation gate (below); the drive's simulation judges.
 
 The offline planner's simulation gate (:mod:`profileopt.planning.gate`), in part: where a step's
 cap binds on a new stretch (its bound assumes the suspension at rest), the stretch is driven
@@ -50,6 +81,7 @@ simulates the driven profile and reports every roughness window.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
 from typing import TYPE_CHECKING, Iterator
@@ -72,11 +104,12 @@ from ..errors import InputError
 from ..physics.motion import plans_on_grades, power_accel_mps2, tyre_accel_mps2
 from ..physics.speeds import speed_bands
 from ..physics.steps import MAX_RAMP_M, TREND_HALF_WIDTH_M
-from ..planning.bands import DrivePower, braking_profile, greatest_profile
+from ..planning.bands import DrivePower, boundary_bounds, braking_profile, greatest_profile
 from ..planning.gate import MAX_GATE_ROUNDS, check_speeds, gate_applies, gate_caps
 from ..planning.limits import ForceLimit, PlanContext, default_limits
 from ..terrain.assumed import unseen_roughness
 from ..terrain.geometry import route_geometry
+from ..terrain.roughness import range_extremes
 from .band_table import first_band_table
 from .sensed import SensedTerrain
 from .tracking import MIN_BRAKING_MPS2, braking_margin_m, cycle_end, jerk_limited_step
@@ -205,24 +238,41 @@ class _Grown:
         self.accel = np.empty(0)
         self.grade_hi = np.empty(0)
         self.power_binds = np.empty(0, dtype=bool)
+        #: The force's upper band (m/s) above the first band's gap, capped by the other limits
+        #: (module docstring, "The upper band"); NaN where there is none.
+        self.upper_lo = np.empty(0)
+        self.upper_hi = np.empty(0)
+        #: Whether the upper band was chosen for the segment (sticky, :meth:`SpeedSelector.update`).
+        self.chosen = np.empty(0, dtype=bool)
+        #: The deceleration (m/s^2) the envelope assumes on the segment when it is in a chosen
+        #: feature or its lead-in, so that the vehicle tracks it closely (inf: the segment's own).
+        self.envelope_decel = np.empty(0)
 
     @property
     def end(self) -> int:
         return self.offset + self.top.size
 
     def append(self, top: np.ndarray, decel: np.ndarray, accel: np.ndarray, grade_hi: np.ndarray,
-               power_binds: np.ndarray) -> None:
+               power_binds: np.ndarray, upper_lo: np.ndarray | None = None,
+               upper_hi: np.ndarray | None = None) -> None:
+        n = top.size
         self.top = np.concatenate([self.top, top])
         self.decel = np.concatenate([self.decel, decel])
         self.accel = np.concatenate([self.accel, accel])
         self.grade_hi = np.concatenate([self.grade_hi, grade_hi])
         self.power_binds = np.concatenate([self.power_binds, power_binds])
+        self.upper_lo = np.concatenate([self.upper_lo, np.full(n, np.nan) if upper_lo is None else upper_lo])
+        self.upper_hi = np.concatenate([self.upper_hi, np.full(n, np.nan) if upper_hi is None else upper_hi])
+        self.chosen = np.concatenate([self.chosen, np.zeros(n, dtype=bool)])
+        self.envelope_decel = np.concatenate([self.envelope_decel, np.full(n, np.inf)])
 
     def forget_before(self, index: int) -> None:
         drop = min(max(index - self.offset, 0), self.top.size)
         if drop:
             self.top, self.decel, self.accel = self.top[drop:], self.decel[drop:], self.accel[drop:]
             self.grade_hi, self.power_binds = self.grade_hi[drop:], self.power_binds[drop:]
+            self.upper_lo, self.upper_hi = self.upper_lo[drop:], self.upper_hi[drop:]
+            self.chosen, self.envelope_decel = self.chosen[drop:], self.envelope_decel[drop:]
             self.offset += drop
 
 
@@ -254,6 +304,43 @@ def _piece_values(knots: np.ndarray, where: np.ndarray, values: np.ndarray) -> n
     """Per piece between ``knots``, the value of the segment (between ``where``) it lies in."""
     mid = 0.5 * (knots[:-1] + knots[1:])
     return values[np.clip(np.searchsorted(where, mid, side="right") - 1, 0, values.size - 1)]
+
+
+@functools.lru_cache(maxsize=16)
+def _upper_band_table(vehicle: "Vehicle", model: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The force's highest band for the RI ranges of the first band's table
+    (:func:`~.band_table.first_band_table`), built once per process and vehicle (about 0.1 s).
+
+    Returns
+    -------
+    grid : numpy.ndarray, shape (M,)
+        The table's RIs r_0 .. r_(M-1) (dimensionless).
+    lo, hi : numpy.ndarray, shape (M,)
+        Entry i: the edges (m/s) of the highest band admissible for every RI in
+        [r_(i-1), r_i] (:func:`~profileopt.physics.speeds.speed_bands` with ``ri_min``): the
+        first, [0, v1], where it is the only one (smooth ground, which any speed up to v1
+        keeps); NaN where there is none.
+    """
+    grid = first_band_table(vehicle, model).ri_grid
+    bands = speed_bands(grid, vehicle, model=model, ri_min=np.concatenate([[0.0], grid[:-1]]))
+    last = np.maximum(bands.count - 1, 0)
+    some = bands.count >= 1
+    lo = np.where(some, bands.lower_mps[np.arange(grid.size), last], np.nan)
+    hi = np.where(some, bands.upper_mps[np.arange(grid.size), last], np.nan)
+    for array in (lo, hi):
+        array.setflags(write=False)
+    return grid, lo, hi
+
+
+def _features(upper_lo: np.ndarray, top: np.ndarray, final: np.ndarray) -> list[tuple[int, int]]:
+    """The *features* of a horizon (module docstring, "The upper band"): maximal runs
+    [i0, i1) of pieces of final segments with an upper band whose lower edge is above the
+    first band's top ``top``, each as (i0, i1)."""
+    inside = final & np.isfinite(upper_lo) & (top < np.where(np.isfinite(upper_lo), upper_lo, np.inf))
+    if not np.any(inside):
+        return []
+    change = np.diff(np.concatenate([[0], inside.astype(np.int8), [0]]))
+    return list(zip(np.flatnonzero(change == 1).tolist(), np.flatnonzero(change == -1).tolist()))
 
 
 def _sliding_min(values: np.ndarray, half_width: int) -> np.ndarray:
@@ -379,6 +466,7 @@ class SpeedSelector:
         self._power = next((limit for limit in self.limits if limit.name == "power"), None)
         self._force = next((limit for limit in self.limits if isinstance(limit, ForceLimit)), None)
         self._band_table = first_band_table(vehicle, model)
+        _upper_band_table(vehicle, model)  # built now (about 0.1 s), not in a cycle
         #: Whether new stretches where a step's cap binds are driven in the exact simulation
         #: before their speeds are final (the transmitted force's models: SBEM:TF).
         self._gated = gate_applies(model)
@@ -523,15 +611,17 @@ class SpeedSelector:
         context = PlanContext(route=route, vehicle=self.vehicle, segments=seg, path=path)
         yield
         first_top = np.full(seg.count, np.inf)
+        force_top = np.full(seg.count, np.inf)
         for limit in self.limits:
             if limit is self._force:  # the first band's top, from the table (module docstring, 1)
                 window_first, window_stop = seg.window_ranges()
-                first_top = np.minimum(first_top, self._band_table.first_of_sets(seg.windows.ri, window_first,
-                                                                                 window_stop))
+                force_top = self._band_table.first_of_sets(seg.windows.ri, window_first, window_stop)
             else:
                 got = limit.speed_bands(context)
                 if got is not None:
                     first_top = np.minimum(first_top, got.first())
+        others_top = first_top  # every limit's first band but the force's
+        first_top = np.minimum(first_top, force_top)
         n = seg.count
         cap = np.full(n, np.inf)
         decel, accel = np.full(n, np.inf), np.full(n, np.inf)
@@ -560,11 +650,70 @@ class SpeedSelector:
                 if lowered is None:
                     break
                 top = lowered
+        # the force's upper band (module docstring, "The upper band"), where the first band's top
+        # binds below every other cap and the top speed
+        other_cap = np.minimum(np.minimum(others_top, cap), float(self.vehicle.max_speed_mps))
+        upper_lo, upper_hi = np.full(n, np.nan), np.full(n, np.nan)
+        needs = np.zeros(n, dtype=bool)
+        needs[new] = (force_top[new] < other_cap[new] * (1 - 1e-9)) & (top[new] >= force_top[new] * (1 - 1e-9))
+        if self._force is not None and np.any(needs):
+            window_first, window_stop = seg.window_ranges()
+            upper_lo, upper_hi = self._upper_band(seg.windows.ri, window_first, window_stop, other_cap, top, needs)
         # the forward pass keeps the power limit step by step (slow) only where it can bind
         binds = self._power is not None and self._power.nlp_rows(context, cap, decel, accel) is not None
         self._segments.append(top[new], decel[new], accel[new], path.grade_hi_rad[new],
-                              np.full(new.stop - new.start, binds))
+                              np.full(new.stop - new.start, binds), upper_lo[new], upper_hi[new])
         self._check_passed(bounds[new.start:new.stop + 1], top[new])
+
+    def _upper_band(self, ri: np.ndarray, window_first: np.ndarray, window_stop: np.ndarray, other_cap: np.ndarray,
+                    top: np.ndarray, needs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The force's upper band of each segment that ``needs`` it: edges (lo, hi) in m/s,
+        shape (N,) each, NaN where there is none.
+
+        Segment i meets the roughness windows ``ri[window_first[i]:window_stop[i]]``. Each
+        window's highest band comes from :func:`_upper_band_table` (for the RI range holding
+        the window's RI: admissible for every RI of the range; on smooth ground the first,
+        [0, v1]); the segment's band is their intersection [largest lo, least hi], capped by
+        ``other_cap`` (every other cap and the top speed), when that is not empty and starts
+        above ``top`` (the first band's top as the selector has it): an upper band. It is
+        admissible for every window, so for the segment, and never wider than the exact bands
+        (:meth:`ForceLimit.speed_bands`), which cost 15-50 ms per new stretch of the bundled
+        routes with the resonant atv: a cycle's budget three times over. The highest band is
+        the fastest; a vehicle that enters it from smooth ground brakes from above into it, so
+        the bands between are never driven.
+
+        Parameters
+        ----------
+        ri : numpy.ndarray, shape (K,)
+            The roughness windows' RIs (dimensionless).
+        window_first, window_stop : numpy.ndarray of int, shape (N,)
+            The windows each segment meets.
+        other_cap : numpy.ndarray, shape (N,)
+            Every cap but the force's first band, and the top speed (m/s).
+        top : numpy.ndarray, shape (N,)
+            The segments' caps with the force's first band (m/s).
+        needs : numpy.ndarray of bool, shape (N,)
+            The segments whose upper band is wanted.
+
+        Returns
+        -------
+        lo, hi : numpy.ndarray, shape (N,)
+            The band's edges (m/s), NaN where there is none.
+        """
+        grid, band_lo, band_hi = _upper_band_table(self.vehicle, self.model)
+        at = np.searchsorted(grid, ri, side="left")  # the range (r_(at-1), r_at] holding each RI
+        beyond = at >= grid.size  # rougher than the table: no upper band (the first band, as before)
+        at = np.minimum(at, grid.size - 1)
+        lo_w = np.where(beyond | np.isnan(band_lo[at]), np.inf, band_lo[at])
+        hi_w = np.where(beyond | np.isnan(band_hi[at]), -np.inf, band_hi[at])
+        rows = np.flatnonzero(needs)
+        _, lo = range_extremes(lo_w, window_first[rows], window_stop[rows])
+        hi, _ = range_extremes(hi_w, window_first[rows], window_stop[rows])
+        hi = np.minimum(hi, other_cap[rows])
+        ok = np.isfinite(lo) & (hi > lo) & (lo > top[rows])
+        upper_lo, upper_hi = np.full(top.size, np.nan), np.full(top.size, np.nan)
+        upper_lo[rows[ok]], upper_hi[rows[ok]] = lo[ok], hi[ok]
+        return upper_lo, upper_hi
 
     def _gate_round(self, route: "Route", bounds: np.ndarray, top: np.ndarray, new: slice,
                     round_number: int) -> np.ndarray | None:
@@ -656,6 +805,10 @@ class SpeedSelector:
         where = np.concatenate([[pos], self._boundary_m(rows + segs.offset + 1)])
         top, decel, accel = segs.top[rows], segs.decel[rows], segs.accel[rows]
         grade_hi, power_binds = segs.grade_hi[rows], bool(np.any(segs.power_binds[rows]))
+        # per piece: its segment (global; -1 in the unseen tail), the upper band, the choice
+        piece_seg = rows + segs.offset
+        upper_lo, upper_hi = segs.upper_lo[rows], segs.upper_hi[rows]
+        chosen, env_decel = segs.chosen[rows], segs.envelope_decel[rows]
         edge = float(where[-1])
         finished = finished and k0 + MAX_HORIZON_SEGMENTS >= segs.end
         if not finished:  # the unseen terrain: [0, v_unseen], long enough to stop from it
@@ -676,11 +829,16 @@ class SpeedSelector:
             decel = np.append(decel, [d, d])
             accel = np.append(accel, [float(self.vehicle.max_accel_mps2)] * 2)
             grade_hi = np.append(grade_hi, [0.0, 0.0])
+            piece_seg = np.append(piece_seg, [-1, -1])
+            upper_lo, upper_hi = np.append(upper_lo, [np.nan] * 2), np.append(upper_hi, [np.nan] * 2)
+            chosen, env_decel = np.append(chosen, [False, False]), np.append(env_decel, [np.inf] * 2)
             end_b = self.vend_mps ** 2 if ends else 0.0
         else:
             end_b = self.vend_mps ** 2
         if where[1:].size and where[1] - where[0] <= 1e-9:  # at a boundary: drop the empty first piece
             where, top, decel, accel, grade_hi = where[1:], top[1:], decel[1:], accel[1:], grade_hi[1:]
+            piece_seg, upper_lo, upper_hi = piece_seg[1:], upper_lo[1:], upper_hi[1:]
+            chosen, env_decel = chosen[1:], env_decel[1:]
         if top.size == 0:
             return self._finish(pos, v0, 0.0, np.array([pos]), np.array([v0]), edge, t0, emergency=False, note="")
         # a command holds one acceleration for a cycle, which may cross segment boundaries: each
@@ -688,38 +846,229 @@ class SpeedSelector:
         reach = int(math.ceil(self.vehicle.max_speed_mps * self.cycle_s / self.segment_length_m)) + 1
         decel, accel = _sliding_min(decel, reach), _sliding_min(accel, reach)
         length = np.diff(where)
-        top_b = top * top
-        upper = _boundary_b(top_b, end_b=end_b)
-        braking = braking_profile(upper, length, decel)
+        final = piece_seg >= 0  # the final segments' pieces (not the unseen tail)
+        # the upper band (module docstring, "The upper band"): the features whose choice is open
+        trial_chosen, trial_decel = chosen.copy(), env_decel.copy()
+        opened, closed = [], []
+        stored_braking = None
+        for i0, i1 in _features(upper_lo, top, final):
+            if np.all(chosen[i0:i1]):  # chosen in an earlier cycle
+                k = i0
+                while k > 0 and np.isfinite(env_decel[k - 1]) and not chosen[k - 1]:  # its lead-in
+                    k -= 1
+                if k == 0:
+                    continue  # the vehicle is on its lead-in or in it: committed (sticky, below)
+                if stored_braking is None:
+                    stored_braking = braking_profile(_boundary_b(np.where(chosen, upper_hi, top) ** 2, end_b=end_b),
+                                                     length, np.minimum(decel, env_decel))
+                if self._upper_band_holds(stored_braking, upper_lo, upper_hi, decel, float(env_decel[i0]), None,
+                                          i0, i1):
+                    continue
+                # not committed yet, and (b) no longer holds (what came into view after it is
+                # worse than assumed): back to the first band, if the vehicle can (below)
+                trial_chosen[i0:i1] = False
+                trial_decel[k:i1] = np.inf
+                closed.append((k, i0, i1))
+                continue
+            lead = self._upper_band_lead_in(where, top, decel, upper_lo, upper_hi, trial_chosen, trial_decel,
+                                            final, end_b, v0, i0, i1)
+            if lead is not None:
+                j0, d_lead = lead
+                trial_chosen[i0:i1] = True
+                trial_decel[j0:i1] = np.minimum(trial_decel[j0:i1], d_lead)
+                opened.append((i0, i1))
+        max_accel = float(accel[0])
+        if self._power is not None and v0 > 0:
+            faster = v0 + max(max_accel, 0.0) * self.cycle_s  # the power bound at the cycle's highest speed
+            max_accel = min(max_accel, float(power_accel_mps2(self._power.max_power_w, self._power.mass_kg, faster,
+                                                              grade_hi[0])))
+        cap_top = np.where(trial_chosen, upper_hi, top)
+        upper, braking, knots, envelope = self._envelope_of(where, cap_top, decel, trial_decel, end_b)
+        step = jerk_limited_step(pos, v0, a0, where_m=knots, envelope_b=envelope, max_accel_mps2=max_accel,
+                                 decel_mps2=_piece_values(knots, where, decel), jerk_mps3=self.max_jerk_mps3,
+                                 cycle_s=self.cycle_s)
+        if (opened or closed) and not step.jerk_kept:
+            # the vehicle's state is not safe under the new envelope (an upper band's lead-in lies
+            # below the first band's braking curve there; or, going back to the first band, its
+            # caps lie below the vehicle's braking): the last cycle's choice, unless that is no
+            # better (terrain worse than assumed came into view late, a kerb at speed: both
+            # brake harder than the jerk bound) and brakes harder; on a tie (both as hard as the
+            # vehicle may) the new one (an upper band: whose caps on the feature it can still
+            # reach)
+            kept = self._envelope_of(where, np.where(chosen, upper_hi, top), decel, env_decel, end_b)
+            kept_step = jerk_limited_step(pos, v0, a0, where_m=kept[2], envelope_b=kept[3],
+                                          max_accel_mps2=max_accel, decel_mps2=_piece_values(kept[2], where, decel),
+                                          jerk_mps3=self.max_jerk_mps3, cycle_s=self.cycle_s)
+            if kept_step.jerk_kept or kept_step.accel_mps2 > step.accel_mps2:
+                trial_chosen, trial_decel, opened, closed = chosen, env_decel, [], []
+                (upper, braking, knots, envelope), step = kept, kept_step
+        # The choices are stored per segment. Once the vehicle is on a feature's lead-in, the
+        # choice is kept (sticky) whatever comes into view: dropping it inside the feature would
+        # mean braking through resonance on rough ground. (b) keeps holding in the cycles after
+        # whenever the newly measured terrain is no worse than assumed: the feature's caps and
+        # the envelope's deceleration on it are fixed, and new segments past the planning edge,
+        # whose caps are at least v_unseen, only raise the envelope where the vehicle can be (the
+        # module docstring's safety argument), so the speeds (b) asked for are still there. When
+        # the terrain is worse (a step past the planning edge, rougher ground than assumed),
+        # the envelope after the feature comes down: before the lead-in the first band is taken
+        # back (above); after it, the tracker brakes for it as for any surprise, harder than the
+        # jerk bound if it must (Command.emergency), and a speed below the band at a cycle's
+        # start is said (the note of ``below``): the vehicle then crosses speeds between the
+        # bands, over the limit by the force model, as the offline plan would on that terrain.
+        for i0, i1 in opened:
+            rows_now = piece_seg[i0:i1] - segs.offset
+            segs.chosen[rows_now] = True
+            lead_rows = piece_seg[:i1][(piece_seg[:i1] >= 0) & np.isfinite(trial_decel[:i1])] - segs.offset
+            segs.envelope_decel[lead_rows] = np.minimum(segs.envelope_decel[lead_rows],
+                                                        trial_decel[:i1][np.isfinite(trial_decel[:i1])])
+        for k, i0, i1 in closed:
+            segs.chosen[piece_seg[i0:i1] - segs.offset] = False
+            segs.envelope_decel[piece_seg[k:i1] - segs.offset] = np.inf
+        below = ""
+        if trial_chosen[0] and v0 < upper_lo[0] * (1 - 1e-6):
+            below = (f"{v0:.4g} m/s at {pos:.6g} m, below the upper band [{upper_lo[0]:.4g}, {upper_hi[0]:.4g}] m/s "
+                     "chosen there: the speeds between the bands are over the force limit (terrain after it worse "
+                     "than assumed, or the tracking fell short)")
         if v0 * v0 > braking[0] * (1 + 1e-9) + 1e-12:  # faster than any limit-keeping profile allows
             allowed = math.sqrt(max(braking[0], 0.0))  # < 0: a descent ahead too steep to brake on
             return self._braking(pos, v0, edge, t0, f"{v0:.4g} m/s, where at most {allowed:.4g} m/s keeps the "
                                                     "limits of the terrain ahead")
-        knots, envelope = _envelope(where, top_b, braking, decel)
         power = None
         if self._power is not None and power_binds:
             power = DrivePower(self._power.max_power_w / self._power.mass_kg, grade_hi)
         plan_upper = upper.copy()
         plan_upper[0] = v0 * v0
         plan = np.sqrt(np.maximum(greatest_profile(plan_upper, plan_upper, length, accel, decel, power), 0.0))
-        max_accel = float(accel[0])
-        if self._power is not None and v0 > 0:
-            faster = v0 + max(max_accel, 0.0) * self.cycle_s  # the power bound at the cycle's highest speed
-            max_accel = min(max_accel, float(power_accel_mps2(self._power.max_power_w, self._power.mass_kg, faster,
-                                                              grade_hi[0])))
-        step = jerk_limited_step(pos, v0, a0, where_m=knots, envelope_b=envelope, max_accel_mps2=max_accel,
-                                 decel_mps2=_piece_values(knots, where, decel), jerk_mps3=self.max_jerk_mps3,
-                                 cycle_s=self.cycle_s)
         keep = where.size - (0 if finished else 2)
         note = "" if step.jerk_kept else (f"braking harder than the jerk bound allows at {pos:.6g} m to stay within "
                                           "the limits of terrain that came into view worse than assumed")
         late, self._late = self._late, ""
-        note = "; ".join(n for n in (late, note) if n)
+        note = "; ".join(n for n in (late, below, note) if n)
         self._last_accel = step.accel_after_mps2
         return Command(speed_mps=step.speed_mps, accel_mps2=step.accel_mps2, position_next_m=step.position_m,
                        horizon_s_m=where[:keep].copy(), horizon_speed_mps=plan[:keep].copy(), edge_m=edge,
                        edge_speed_mps=float(plan[keep - 1]), unseen_speed_mps=self.unseen_speed_mps,
-                       emergency=not step.jerk_kept or bool(late), note=note, compute_s=time.perf_counter() - t0)
+                       emergency=not step.jerk_kept or bool(late) or bool(below), note=note,
+                       compute_s=time.perf_counter() - t0)
+
+    def _envelope_of(self, where: np.ndarray, cap_top: np.ndarray, decel: np.ndarray, envelope_decel: np.ndarray,
+                     end_b: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The envelope (module docstring, 3) under the caps ``cap_top`` (m/s, per piece), braking
+        at the pieces' bounds ``decel`` but no harder than ``envelope_decel`` (m/s^2; inf where
+        the bound holds: lower on a chosen feature and its lead-in, "The upper band").
+
+        Returns
+        -------
+        upper, braking : numpy.ndarray, shape (N+1,)
+            The caps at the boundaries and the braking profile there (m^2/s^2).
+        knots, envelope : numpy.ndarray, shape (K,)
+            The envelope's knots (m) and b there (m^2/s^2) (:func:`_envelope`).
+        """
+        length = np.diff(where)
+        shaped = np.minimum(decel, envelope_decel)
+        top_b = cap_top * cap_top
+        upper = _boundary_b(top_b, end_b=end_b)
+        braking = braking_profile(upper, length, shaped)
+        knots, envelope = _envelope(where, top_b, braking, shaped)
+        return upper, braking, knots, envelope
+
+    def _tracking_lag_mps(self, decel_mps2: float, *, ramp_in: bool = False) -> float:
+        """The most (m/s) the command's speed falls below the envelope where the envelope's
+        braking at ``decel_mps2`` ends in a cap, or with ``ramp_in`` where it starts, plus one
+        cycle of that braking (d dt: a command is chosen once a cycle, among
+        :data:`~.tracking.CANDIDATES`).
+
+        Where it ends, the vehicle on the braking curve must ramp its deceleration back to 0 at
+        the jerk bound J (:func:`~.tracking.jerk_limited_step` takes the largest acceleration
+        that keeps under the envelope, so it rides the curve to its end): it loses d^2 / (2 J)
+        more. Where it starts, the vehicle ramps up to d at J and is below the line by at most
+        d^2 / (8 J) where it starts (it begins the ramp half of it, d / (2 J), before the line,
+        the earliest the safety manoeuvre of :mod:`.tracking`, a ramp to d and d held, asks)."""
+        jerk = self.max_jerk_mps3
+        lag = 0.0 if not math.isfinite(jerk) else decel_mps2 * decel_mps2 / ((8.0 if ramp_in else 2.0) * jerk)
+        return lag + decel_mps2 * self.cycle_s
+
+    def _decel_for_lag(self, lag_mps: float) -> float:
+        """The deceleration (m/s^2) whose :meth:`_tracking_lag_mps` is ``lag_mps`` (its inverse)."""
+        jerk, dt = self.max_jerk_mps3, self.cycle_s
+        if not math.isfinite(jerk):
+            return lag_mps / dt
+        return jerk * (math.sqrt(dt * dt + 2.0 * lag_mps / jerk) - dt)
+
+    def _upper_band_lead_in(self, where: np.ndarray, top: np.ndarray, decel: np.ndarray, upper_lo: np.ndarray,
+                            upper_hi: np.ndarray, chosen: np.ndarray, envelope_decel: np.ndarray, final: np.ndarray,
+                            end_b: float, v0: float, i0: int, i1: int) -> tuple[int, float] | None:
+        """Whether the upper band may be chosen for the feature of pieces [i0, i1) of the horizon
+        (module docstring, "The upper band"), and if so the first piece of its lead-in and the
+        deceleration (m/s^2) the envelope assumes on the lead-in and the feature; None: the
+        first band.
+
+        Required: (a) the feature ends before the planning edge (``final`` pieces after it) and
+        the vehicle is not yet on its lead-in; (b) the envelope with the feature capped at its
+        upper band (the pieces before it unchanged, the unseen tail as assumed) is at least the
+        band's lower edge at every boundary from the vehicle to the feature, and that plus the
+        tracking lag (:meth:`_tracking_lag_mps`) at the feature's boundaries: the lag of the
+        envelope's deceleration inside it, of the horizon's hardest at its end, where braking
+        for what follows starts; (c) the vehicle is already that fast.
+
+        The envelope brakes on the feature and its lead-in at d_f, chosen so that the lag is
+        half the band's narrowest width, no harder than the bounds: inside the feature the
+        vehicle tracks the caps without falling out of the band. The lead-in, before it, lets
+        the vehicle come off the harder braking of the approach (from D to d_f at the jerk
+        bound: it falls (D - d_f)^2 / (2 J) behind) and catch up (2 sqrt(that / J) at the
+        jerk bound) before the feature: its length is what that time takes at the envelope's
+        speed there."""
+        if i0 == 0 or i1 >= final.size or not final[i1]:  # inside it already, or (a)
+            return None
+        width = float(np.min(np.diff(self._feature_floor(upper_lo, upper_hi, i0, i1), axis=0)))
+        if not width > 0:
+            return None
+        hardest = float(np.max(decel))
+        d_f = min(self._decel_for_lag(0.5 * width), hardest)
+        # the lead-in: T to come off the approach's braking and catch up; L = T v, v^2 = h + 2 d_f L
+        jerk = self.max_jerk_mps3
+        behind = 0.0 if not math.isfinite(jerk) else (hardest - d_f) ** 2 / (2.0 * jerk)
+        recover_s = 0.0 if not math.isfinite(jerk) else (hardest - d_f) / jerk + 2.0 * math.sqrt(behind / jerk)
+        recover_s += self.cycle_s
+        h = float(np.max(upper_hi[i0:i1])) ** 2
+        lead_m = recover_s * recover_s * d_f + math.sqrt(recover_s ** 4 * d_f * d_f + recover_s * recover_s * h)
+        start_m = float(where[i0]) - lead_m
+        if start_m < where[0]:
+            return None  # (a) the vehicle is on the lead-in already: too late to change its braking
+        j0 = int(np.searchsorted(where, start_m, side="right")) - 1
+        trial_top = np.where(chosen, upper_hi, top)
+        trial_top[i0:i1] = upper_hi[i0:i1]
+        trial_decel = envelope_decel.copy()
+        trial_decel[j0:i1] = np.minimum(trial_decel[j0:i1], d_f)
+        braking = braking_profile(_boundary_b(trial_top * trial_top, end_b=end_b), np.diff(where),
+                                  np.minimum(decel, trial_decel))
+        if not self._upper_band_holds(braking, upper_lo, upper_hi, decel, d_f, v0, i0, i1):
+            return None
+        return j0, d_f
+
+    @staticmethod
+    def _feature_floor(upper_lo: np.ndarray, upper_hi: np.ndarray, i0: int, i1: int) -> np.ndarray:
+        """The upper band at the feature's boundaries i0 .. i1 (m/s), shape (2, i1 - i0 + 1):
+        the least and the greatest speed there that keeps the band of the pieces either side
+        (:func:`profileopt.planning.bands.boundary_bounds`)."""
+        lo, hi = upper_lo[i0:i1], upper_hi[i0:i1]
+        lower_b, _ = boundary_bounds(lo, hi, float(lo[0]), float(lo[-1]))
+        _, upper_b = boundary_bounds(lo, hi, float(hi[0]), float(hi[-1]))
+        return np.sqrt(np.stack([lower_b, upper_b]))
+
+    def _upper_band_holds(self, braking: np.ndarray, upper_lo: np.ndarray, upper_hi: np.ndarray, decel: np.ndarray,
+                          d_f: float, v0: float | None, i0: int, i1: int) -> bool:
+        """Conditions (b) and (c) of :meth:`_upper_band_lead_in` for the feature [i0, i1) under the
+        envelope's braking profile ``braking`` (m^2/s^2 at the boundaries, the feature capped at
+        its upper band and braking at ``d_f`` m/s^2 on it and its lead-in); (b) alone when
+        ``v0`` is None (a choice already made: the vehicle's speed was checked then, and the
+        tracking keeps it since)."""
+        floor = self._feature_floor(upper_lo, upper_hi, i0, i1)[0]
+        margin_in = self._tracking_lag_mps(d_f)
+        margin_end = max(margin_in, self._tracking_lag_mps(float(np.max(decel[i1:])), ramp_in=True))
+        speed = np.sqrt(np.maximum(braking[:i1 + 1], 0.0))
+        need = np.concatenate([np.full(i0, floor[0]), floor[:-1] + margin_in, [floor[-1] + margin_end]])
+        return bool(np.all(speed >= need) and (v0 is None or v0 >= floor[0] + margin_in))
 
     def _finish(self, pos: float, v0: float, accel: float, where: np.ndarray, speed: np.ndarray, edge: float,
                 t0: float, *, emergency: bool, note: str) -> Command:
