@@ -30,8 +30,8 @@ def _kerb_route(rough_from_m: float | None = None) -> Route:
     return Route(s_m=ground.s_m, z_m=z, source="kerb" if rough_from_m is None else "kerb, then class H")
 
 
-@pytest.mark.parametrize("make_route", [lambda: read_route(ROUTES / "curb.csv"), _kerb_route],
-                         ids=["curb.csv", "kerb 8 cm"])
+@pytest.mark.parametrize("make_route", [pytest.param(lambda: read_route(ROUTES / "curb.csv"), marks=pytest.mark.slow),
+                                        _kerb_route], ids=["curb.csv", "kerb 8 cm"])
 def test_a_kerb_is_crossed_in_the_upper_band_as_fast_as_offline(make_route, atv_resonant):
     """The resonant atv with 50 m of sensing and class B assumed drives within 10 % of the
     offline plan's time (band "all", the defaults), where the first band alone took 1.54
@@ -48,7 +48,8 @@ def test_a_kerb_is_crossed_in_the_upper_band_as_fast_as_offline(make_route, atv_
         assert driven.max_jerk_mps3 <= atv_resonant.max_jerk_mps3 * (1 + 1e-9)
 
 
-@pytest.mark.parametrize("unseen", ["worst", pytest.param("B", marks=pytest.mark.slow(seconds=4))])
+@pytest.mark.slow(seconds=4)
+@pytest.mark.parametrize("unseen", ["worst", "B"])
 @pytest.mark.parametrize("rough_from_m", [166.0, KERB_AT_M + 52.0])
 def test_rough_ground_unseen_when_committing_stays_within_the_limit(rough_from_m, unseen, atv_resonant):
     """Class H ground 11 m after the kerb's feature (unseen when the upper band is chosen,
