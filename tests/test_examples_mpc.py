@@ -102,7 +102,7 @@ def _hidden_route(folder: Path) -> Path:
     return path
 
 
-@pytest.mark.slow
+@pytest.mark.slow(seconds=110)  # the module's example runs, about 110 s in all on one core: started first
 @pytest.mark.mpc
 @needs_mpc_extra
 @pytest.mark.parametrize("vehicle, cruise", [("atv", "12"), ("atv-resonant", "8")])

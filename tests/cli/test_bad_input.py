@@ -371,8 +371,8 @@ def outcomes(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFa
         return {key: future.result() for key, future in futures.items()}
 
 
-@pytest.mark.parametrize("case", [pytest.param(c, id=c.id, marks=() if c.id in API_CASES else pytest.mark.slow)
-                                  for c in CASES])
+@pytest.mark.parametrize("case", [pytest.param(c, id=c.id, marks=() if c.id in API_CASES else pytest.mark.slow(seconds=40))
+                                  for c in CASES])  # the outcomes' fixture: about 40 s on one core, started early
 def test_bad_input_is_one_line_exit_2_and_writes_nothing(case: Case, outcomes: dict[str, Outcome]) -> None:
     outcome = outcomes[case.id]
     assert_one_clean_line(outcome.done, case.argv[0], case.fragments)
