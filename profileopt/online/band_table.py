@@ -57,12 +57,18 @@ class FirstBandTable:
     top_mps : numpy.ndarray, shape (M,)
         Entry i: the largest V (m/s) with every speed in [0, V] admissible for every RI in
         [r_(i-1), r_i] (r_(-1) = 0); 0 where no band starts at rest.
+    highest_lo_mps, highest_hi_mps : numpy.ndarray, shape (M,)
+        Entry i: the edges (m/s) of the highest band admissible for every RI in
+        [r_(i-1), r_i]: the first, [0, v1], where it is the only one; NaN where there is none
+        (the selector's upper band, :mod:`.selector`).
     """
 
     vehicle: "Vehicle"
     model: str
     ri_grid: np.ndarray
     top_mps: np.ndarray
+    highest_lo_mps: np.ndarray
+    highest_hi_mps: np.ndarray
 
     def first_of_sets(self, values: ArrayLike, first: ArrayLike, stop: ArrayLike) -> np.ndarray:
         """The first band's top of each set of RIs (m/s): never above the exact one.
@@ -118,6 +124,11 @@ def first_band_table(vehicle: "Vehicle", model: str) -> FirstBandTable:
     below = np.concatenate([[0.0], grid[:-1]])
     bands = speed_bands(grid, vehicle, model=model, ri_min=below)
     top = bands.first()
-    top.setflags(write=False)
-    grid.setflags(write=False)
-    return FirstBandTable(vehicle=vehicle, model=model, ri_grid=grid, top_mps=top)
+    rows, last = np.arange(grid.size), np.maximum(bands.count - 1, 0)
+    some = bands.count >= 1
+    highest_lo = np.where(some, bands.lower_mps[rows, last], np.nan)
+    highest_hi = np.where(some, bands.upper_mps[rows, last], np.nan)
+    for array in (top, grid, highest_lo, highest_hi):
+        array.setflags(write=False)
+    return FirstBandTable(vehicle=vehicle, model=model, ri_grid=grid, top_mps=top, highest_lo_mps=highest_lo,
+                          highest_hi_mps=highest_hi)

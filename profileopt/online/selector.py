@@ -81,7 +81,6 @@ simulates the driven profile and reports every roughness window.
 from __future__ import annotations
 
 import dataclasses
-import functools
 import math
 import time
 from typing import TYPE_CHECKING, Iterator
@@ -306,32 +305,6 @@ def _piece_values(knots: np.ndarray, where: np.ndarray, values: np.ndarray) -> n
     return values[np.clip(np.searchsorted(where, mid, side="right") - 1, 0, values.size - 1)]
 
 
-@functools.lru_cache(maxsize=16)
-def _upper_band_table(vehicle: "Vehicle", model: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The force's highest band for the RI ranges of the first band's table
-    (:func:`~.band_table.first_band_table`), built once per process and vehicle (about 0.1 s).
-
-    Returns
-    -------
-    grid : numpy.ndarray, shape (M,)
-        The table's RIs r_0 .. r_(M-1) (dimensionless).
-    lo, hi : numpy.ndarray, shape (M,)
-        Entry i: the edges (m/s) of the highest band admissible for every RI in
-        [r_(i-1), r_i] (:func:`~profileopt.physics.speeds.speed_bands` with ``ri_min``): the
-        first, [0, v1], where it is the only one (smooth ground, which any speed up to v1
-        keeps); NaN where there is none.
-    """
-    grid = first_band_table(vehicle, model).ri_grid
-    bands = speed_bands(grid, vehicle, model=model, ri_min=np.concatenate([[0.0], grid[:-1]]))
-    last = np.maximum(bands.count - 1, 0)
-    some = bands.count >= 1
-    lo = np.where(some, bands.lower_mps[np.arange(grid.size), last], np.nan)
-    hi = np.where(some, bands.upper_mps[np.arange(grid.size), last], np.nan)
-    for array in (lo, hi):
-        array.setflags(write=False)
-    return grid, lo, hi
-
-
 def _features(upper_lo: np.ndarray, top: np.ndarray, final: np.ndarray) -> list[tuple[int, int]]:
     """The *features* of a horizon (module docstring, "The upper band"): maximal runs
     [i0, i1) of pieces of final segments with an upper band whose lower edge is above the
@@ -466,7 +439,6 @@ class SpeedSelector:
         self._power = next((limit for limit in self.limits if limit.name == "power"), None)
         self._force = next((limit for limit in self.limits if isinstance(limit, ForceLimit)), None)
         self._band_table = first_band_table(vehicle, model)
-        _upper_band_table(vehicle, model)  # built now (about 0.1 s), not in a cycle
         #: Whether new stretches where a step's cap binds are driven in the exact simulation
         #: before their speeds are final (the transmitted force's models: SBEM:TF).
         self._gated = gate_applies(model)
@@ -671,9 +643,9 @@ class SpeedSelector:
         shape (N,) each, NaN where there is none.
 
         Segment i meets the roughness windows ``ri[window_first[i]:window_stop[i]]``. Each
-        window's highest band comes from :func:`_upper_band_table` (for the RI range holding
-        the window's RI: admissible for every RI of the range; on smooth ground the first,
-        [0, v1]); the segment's band is their intersection [largest lo, least hi], capped by
+        window's highest band comes from the band table
+        (:attr:`.band_table.FirstBandTable.highest_lo_mps`, for the RI range holding the
+        window's RI: admissible for every RI of the range; on smooth ground the first, [0, v1]); the segment's band is their intersection [largest lo, least hi], capped by
         ``other_cap`` (every other cap and the top speed), when that is not empty and starts
         above ``top`` (the first band's top as the selector has it): an upper band. It is
         admissible for every window, so for the segment, and never wider than the exact bands
@@ -700,7 +672,8 @@ class SpeedSelector:
         lo, hi : numpy.ndarray, shape (N,)
             The band's edges (m/s), NaN where there is none.
         """
-        grid, band_lo, band_hi = _upper_band_table(self.vehicle, self.model)
+        table = self._band_table
+        grid, band_lo, band_hi = table.ri_grid, table.highest_lo_mps, table.highest_hi_mps
         at = np.searchsorted(grid, ri, side="left")  # the range (r_(at-1), r_at] holding each RI
         beyond = at >= grid.size  # rougher than the table: no upper band (the first band, as before)
         at = np.minimum(at, grid.size - 1)

@@ -11,6 +11,7 @@ from conftest import ROUTES
 
 from profileopt.errors import InputError
 from profileopt.io.routes import read_route
+from profileopt.online.band_table import first_band_table
 from profileopt.online.selector import SpeedSelector, unseen_speed_mps
 from profileopt.physics.speeds import allowable_speed, speed_bands_of_sets
 from profileopt.planning import plan
@@ -25,10 +26,14 @@ def _level(vehicle):
 
 
 class _ExactFirstBand:
-    """The exact first band of sets of RIs, where the selector uses its table."""
+    """The exact first band of sets of RIs, where the selector uses its table (the table's
+    highest bands, for the upper band, as they are)."""
 
     def __init__(self, vehicle):
         self.vehicle = vehicle
+        table = first_band_table(vehicle, "sbem_tf")
+        self.ri_grid, self.highest_lo_mps, self.highest_hi_mps = (table.ri_grid, table.highest_lo_mps,
+                                                                  table.highest_hi_mps)
 
     def first_of_sets(self, values, first, stop):
         return speed_bands_of_sets(values, first, stop, self.vehicle)[0].first()
