@@ -13,8 +13,9 @@ Running (``[tool.pytest.ini_options]`` in pyproject.toml):
 * ``python -m pytest -q`` runs the whole suite, on as many worker processes as the machine
   has cores (pytest-xdist, ``-n auto`` in ``addopts``; ``-n 0`` runs in this process, for a
   debugger or a single test);
-* ``python -m pytest -m "not slow" -q`` leaves out the long tests: under a minute on 2 cores
-  (the whole suite: 7 to 9 minutes; the safety study alone takes about 5 of them on one worker);
+* ``python -m pytest -m "not slow" -q`` leaves out the long tests: one to two minutes on 2 cores
+  (the whole suite: 5 to 9 minutes; the safety study's two modules take about a minute and a half
+  each on one worker);
 * markers, registered with ``--strict-markers``: ``slow``, ``geo`` (needs the ``geo``
   extra), ``mpc`` (do-mpc and rockit), ``cc`` (compiles generated C); ``-m "not geo"`` and
   so on leave a group out.
@@ -44,9 +45,11 @@ import os
 # the tests, whose two workers already use both cores (before CasADi is first loaded)
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
+import importlib.util
 import math
 import re
 import sys
+import types
 from pathlib import Path
 
 import numpy as np
@@ -111,6 +114,19 @@ def markdown_section(page: str, title: str) -> str:
     if start is None:
         raise AssertionError(f"no heading starting {title!r} in {page}: has the text moved to another page?")
     return "".join(lines[start:])
+
+
+def load_script(path: Path, name: str) -> types.ModuleType:
+    """Import a script of the repository (an example, a benchmark) as module ``name``, once:
+    it is registered in ``sys.modules`` under that name (its dataclasses and pickling look
+    their module up there), and a second call returns the same module."""
+    if name in sys.modules:
+        return sys.modules[name]
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
 
 
 #: the environment entries that make a child's terminal wide: argparse then wraps no help
