@@ -57,7 +57,9 @@ band), so on the feature and a lead-in before it the envelope brakes at a lower 
 d_f^2 / (2 J) + d_f dt is half the band's narrowest width; at the feature's end, where the
 braking for what follows begins, the lag is d^2 / (8 J) + d dt
 (:meth:`SpeedSelector._tracking_lag_mps`). The lead-in is long enough for the vehicle to come
-off the approach's harder braking and catch up with the shallower curve. The choice is made
+off the approach's harder braking, entering the feature behind the curve by what that costs
+(when the band is wide enough), or to come off it and catch up
+(:meth:`SpeedSelector._upper_band_lead_in`). The choice is made
 only in a cycle whose command keeps the jerk bound under the new envelope. It is sticky once
 the vehicle is on the lead-in; before that, a choice whose (b) fails is taken back when the
 vehicle can keep the jerk bound under the first band. (b) keeps holding while the terrain
@@ -66,8 +68,10 @@ vehicle can be (above); if it is worse, the emergency path brakes as for any sur
 speed below a chosen band at a cycle's start is said (:attr:`Command.note`). On
 ``examples/routes/curb.csv`` (resonant atv, 50 m of sensing, class B assumed) it drives
 74.8 s, 1.089 times the offline plan's 68.6 s, where the first band alone took 105.4 s
-(1.535); the exact simulation finds no window over the limit (at most 0.95 of it). The upper
-band's caps are not driven in the simulation gate (below); the drive's simulation judges.
+(1.535); the exact simulation finds no window over the limit (at most 0.95 of it). Where the
+step limit sees a ramp, the upper band is driven in the simulation gate (below) at both its
+edges and dropped where it goes over the limit (a block: the landing off its trailing edge);
+speeds between the edges are not simulated, the drive's simulation judges.
 
 The offline planner's simulation gate (:mod:`profileopt.planning.gate`), in part: where a step's
 cap binds on a new stretch (its bound assumes the suspension at rest), the stretch is driven
@@ -246,6 +250,9 @@ class _Grown:
         #: The deceleration (m/s^2) the envelope assumes on the segment when it is in a chosen
         #: feature or its lead-in, so that the vehicle tracks it closely (inf: the segment's own).
         self.envelope_decel = np.empty(0)
+        #: How far (m/s) the vehicle may enter a chosen feature below the envelope, for the
+        #: short lead-in (:meth:`SpeedSelector._upper_band_lead_in`); 0 elsewhere.
+        self.entry_lag = np.empty(0)
 
     @property
     def end(self) -> int:
@@ -264,6 +271,7 @@ class _Grown:
         self.upper_hi = np.concatenate([self.upper_hi, np.full(n, np.nan) if upper_hi is None else upper_hi])
         self.chosen = np.concatenate([self.chosen, np.zeros(n, dtype=bool)])
         self.envelope_decel = np.concatenate([self.envelope_decel, np.full(n, np.inf)])
+        self.entry_lag = np.concatenate([self.entry_lag, np.zeros(n)])
 
     def forget_before(self, index: int) -> None:
         drop = min(max(index - self.offset, 0), self.top.size)
@@ -272,6 +280,7 @@ class _Grown:
             self.grade_hi, self.power_binds = self.grade_hi[drop:], self.power_binds[drop:]
             self.upper_lo, self.upper_hi = self.upper_lo[drop:], self.upper_hi[drop:]
             self.chosen, self.envelope_decel = self.chosen[drop:], self.envelope_decel[drop:]
+            self.entry_lag = self.entry_lag[drop:]
             self.offset += drop
 
 
@@ -631,6 +640,15 @@ class SpeedSelector:
         if self._force is not None and np.any(needs):
             window_first, window_stop = seg.window_ranges()
             upper_lo, upper_hi = self._upper_band(seg.windows.ri, window_first, window_stop, other_cap, top, needs)
+            rough = np.isfinite(upper_lo) & np.isfinite(step_cap)
+            if self._gated and np.any(rough[new]):
+                # where the step limit sees a ramp, the upper band too is driven in the gate's
+                # simulation, at each of its edges; over the limit: the first band there
+                for band_edge in (upper_hi, upper_lo):
+                    yield
+                    if not self._upper_band_passes(route, bounds, top, upper_lo, band_edge, new):
+                        upper_lo[new], upper_hi[new] = np.nan, np.nan
+                        break
         # the forward pass keeps the power limit step by step (slow) only where it can bind
         binds = self._power is not None and self._power.nlp_rows(context, cap, decel, accel) is not None
         self._segments.append(top[new], decel[new], accel[new], path.grade_hi_rad[new],
@@ -710,6 +728,25 @@ class SpeedSelector:
             lowered[meets] = np.minimum(lowered[meets], cap_mps)
         return lowered if np.any(lowered < top) else None
 
+    def _upper_band_passes(self, route: "Route", bounds: np.ndarray, top: np.ndarray, upper_lo: np.ndarray,
+                           band_edge: np.ndarray, new: slice) -> bool:
+        """Whether the exact quarter car (as in :meth:`_gate_round`) keeps the limit over the new
+        segments driven at ``band_edge`` (m/s, shape (N,): an edge of the upper band) where they
+        have an upper band, and at their caps ``top`` elsewhere; at a boundary between the two,
+        the band's edge (the vehicle keeps to the band up to the feature's ends)."""
+        banded = np.isfinite(upper_lo)
+        seg_speed = np.where(banded, band_edge, top)
+        speed = np.sqrt(_boundary_b(seg_speed * seg_speed, end_b=math.inf))
+        left = np.concatenate([[False], banded])
+        right = np.concatenate([banded, [False]])
+        edge_left = np.concatenate([[np.nan], band_edge])
+        edge_right = np.concatenate([band_edge, [np.nan]])
+        speed = np.where(left & right, np.fmin(edge_left, edge_right),
+                         np.where(left, edge_left, np.where(right, edge_right, speed)))
+        check = check_speeds(route, bounds, speed, self.vehicle, window_m=self.roughness_window_m,
+                             judged_m=(float(bounds[new.start]), float(bounds[new.stop])))
+        return check.passes
+
     def _check_passed(self, bounds: np.ndarray, top: np.ndarray) -> None:
         """Whether the vehicle already drove faster than the caps of segments just computed
         (terrain worse than assumed, measured too late): then the next command says so."""
@@ -781,7 +818,7 @@ class SpeedSelector:
         # per piece: its segment (global; -1 in the unseen tail), the upper band, the choice
         piece_seg = rows + segs.offset
         upper_lo, upper_hi = segs.upper_lo[rows], segs.upper_hi[rows]
-        chosen, env_decel = segs.chosen[rows], segs.envelope_decel[rows]
+        chosen, env_decel, entry_lag = segs.chosen[rows], segs.envelope_decel[rows], segs.entry_lag[rows]
         edge = float(where[-1])
         finished = finished and k0 + MAX_HORIZON_SEGMENTS >= segs.end
         if not finished:  # the unseen terrain: [0, v_unseen], long enough to stop from it
@@ -805,13 +842,14 @@ class SpeedSelector:
             piece_seg = np.append(piece_seg, [-1, -1])
             upper_lo, upper_hi = np.append(upper_lo, [np.nan] * 2), np.append(upper_hi, [np.nan] * 2)
             chosen, env_decel = np.append(chosen, [False, False]), np.append(env_decel, [np.inf] * 2)
+            entry_lag = np.append(entry_lag, [0.0, 0.0])
             end_b = self.vend_mps ** 2 if ends else 0.0
         else:
             end_b = self.vend_mps ** 2
         if where[1:].size and where[1] - where[0] <= 1e-9:  # at a boundary: drop the empty first piece
             where, top, decel, accel, grade_hi = where[1:], top[1:], decel[1:], accel[1:], grade_hi[1:]
             piece_seg, upper_lo, upper_hi = piece_seg[1:], upper_lo[1:], upper_hi[1:]
-            chosen, env_decel = chosen[1:], env_decel[1:]
+            chosen, env_decel, entry_lag = chosen[1:], env_decel[1:], entry_lag[1:]
         if top.size == 0:
             return self._finish(pos, v0, 0.0, np.array([pos]), np.array([v0]), edge, t0, emergency=False, note="")
         # a command holds one acceleration for a cycle, which may cross segment boundaries: each
@@ -835,7 +873,7 @@ class SpeedSelector:
                     stored_braking = braking_profile(_boundary_b(np.where(chosen, upper_hi, top) ** 2, end_b=end_b),
                                                      length, np.minimum(decel, env_decel))
                 if self._upper_band_holds(stored_braking, upper_lo, upper_hi, decel, float(env_decel[i0]), None,
-                                          i0, i1):
+                                          i0, i1, entry_lag_mps=float(entry_lag[i0])):
                     continue
                 # not committed yet, and (b) no longer holds (what came into view after it is
                 # worse than assumed): back to the first band, if the vehicle can (below)
@@ -846,10 +884,10 @@ class SpeedSelector:
             lead = self._upper_band_lead_in(where, top, decel, upper_lo, upper_hi, trial_chosen, trial_decel,
                                             final, end_b, v0, i0, i1)
             if lead is not None:
-                j0, d_lead = lead
+                j0, d_lead, lag_in = lead
                 trial_chosen[i0:i1] = True
                 trial_decel[j0:i1] = np.minimum(trial_decel[j0:i1], d_lead)
-                opened.append((i0, i1))
+                opened.append((i0, i1, lag_in))
         max_accel = float(accel[0])
         if self._power is not None and v0 > 0:
             faster = v0 + max(max_accel, 0.0) * self.cycle_s  # the power bound at the cycle's highest speed
@@ -888,14 +926,16 @@ class SpeedSelector:
         # jerk bound if it must (Command.emergency), and a speed below the band at a cycle's
         # start is said (the note of ``below``): the vehicle then crosses speeds between the
         # bands, over the limit by the force model, as the offline plan would on that terrain.
-        for i0, i1 in opened:
+        for i0, i1, lag_in in opened:
             rows_now = piece_seg[i0:i1] - segs.offset
             segs.chosen[rows_now] = True
+            segs.entry_lag[rows_now] = lag_in
             lead_rows = piece_seg[:i1][(piece_seg[:i1] >= 0) & np.isfinite(trial_decel[:i1])] - segs.offset
             segs.envelope_decel[lead_rows] = np.minimum(segs.envelope_decel[lead_rows],
                                                         trial_decel[:i1][np.isfinite(trial_decel[:i1])])
         for k, i0, i1 in closed:
             segs.chosen[piece_seg[i0:i1] - segs.offset] = False
+            segs.entry_lag[piece_seg[i0:i1] - segs.offset] = 0.0
             segs.envelope_decel[piece_seg[k:i1] - segs.offset] = np.inf
         below = ""
         if trial_chosen[0] and v0 < upper_lo[0] * (1 - 1e-6):
@@ -970,27 +1010,33 @@ class SpeedSelector:
 
     def _upper_band_lead_in(self, where: np.ndarray, top: np.ndarray, decel: np.ndarray, upper_lo: np.ndarray,
                             upper_hi: np.ndarray, chosen: np.ndarray, envelope_decel: np.ndarray, final: np.ndarray,
-                            end_b: float, v0: float, i0: int, i1: int) -> tuple[int, float] | None:
+                            end_b: float, v0: float, i0: int, i1: int) -> tuple[int, float, float] | None:
         """Whether the upper band may be chosen for the feature of pieces [i0, i1) of the horizon
-        (module docstring, "The upper band"), and if so the first piece of its lead-in and the
-        deceleration (m/s^2) the envelope assumes on the lead-in and the feature; None: the
-        first band.
+        (module docstring, "The upper band"), and if so the first piece of its lead-in, the
+        deceleration (m/s^2) the envelope assumes on the lead-in and the feature, and how far
+        (m/s) below the envelope the vehicle may enter the feature; None: the first band.
 
         Required: (a) the feature ends before the planning edge (``final`` pieces after it) and
         the vehicle is not yet on its lead-in; (b) the envelope with the feature capped at its
         upper band (the pieces before it unchanged, the unseen tail as assumed) is at least the
         band's lower edge at every boundary from the vehicle to the feature, and that plus the
-        tracking lag (:meth:`_tracking_lag_mps`) at the feature's boundaries: the lag of the
-        envelope's deceleration inside it, of the horizon's hardest at its end, where braking
-        for what follows starts; (c) the vehicle is already that fast.
+        tracking lag (:meth:`_tracking_lag_mps`) and the entry lag (below) at the feature's
+        boundaries: the lag of the envelope's deceleration inside it, of the horizon's hardest
+        at its end, where braking for what follows starts; (c) the vehicle is already that fast.
 
         The envelope brakes on the feature and its lead-in at d_f, chosen so that the lag is
         half the band's narrowest width, no harder than the bounds: inside the feature the
-        vehicle tracks the caps without falling out of the band. The lead-in, before it, lets
-        the vehicle come off the harder braking of the approach (from D to d_f at the jerk
-        bound: it falls (D - d_f)^2 / (2 J) behind) and catch up (2 sqrt(that / J) at the
-        jerk bound) before the feature: its length is what that time takes at the envelope's
-        speed there."""
+        vehicle tracks the caps without falling out of the band. The lead-in, before it, lets a
+        vehicle on the approach's harder braking D come off it to d_f at the jerk bound J,
+        falling (D - d_f)^2 / (2 J) + (D - d_f) dt behind the envelope (the second term: a
+        cycle's wait). Two lengths are tried, the short first: (1) only that ramp, (D - d_f) / J
+        and a cycle, and the vehicle enters the feature that far behind (the *entry lag*, added
+        to what (b) asks inside the feature); (2) that ramp and the time to catch up again, 2
+        sqrt(lag / J) at the jerk bound, with no entry lag. A lead-in is the time it takes at
+        the envelope's speed there. The short one costs least before the feature: a vehicle
+        already braking for the feature's first band (a kerb seen late with the worst terrain
+        assumed beyond it) lies under its envelope, and under the long one's only if it
+        lags that braking by more than the long lead-in's slower braking gives away."""
         if i0 == 0 or i1 >= final.size or not final[i1]:  # inside it already, or (a)
             return None
         width = float(np.min(np.diff(self._feature_floor(upper_lo, upper_hi, i0, i1), axis=0)))
@@ -998,26 +1044,30 @@ class SpeedSelector:
             return None
         hardest = float(np.max(decel))
         d_f = min(self._decel_for_lag(0.5 * width), hardest)
-        # the lead-in: T to come off the approach's braking and catch up; L = T v, v^2 = h + 2 d_f L
-        jerk = self.max_jerk_mps3
-        behind = 0.0 if not math.isfinite(jerk) else (hardest - d_f) ** 2 / (2.0 * jerk)
-        recover_s = 0.0 if not math.isfinite(jerk) else (hardest - d_f) / jerk + 2.0 * math.sqrt(behind / jerk)
-        recover_s += self.cycle_s
-        h = float(np.max(upper_hi[i0:i1])) ** 2
-        lead_m = recover_s * recover_s * d_f + math.sqrt(recover_s ** 4 * d_f * d_f + recover_s * recover_s * h)
-        start_m = float(where[i0]) - lead_m
-        if start_m < where[0]:
-            return None  # (a) the vehicle is on the lead-in already: too late to change its braking
-        j0 = int(np.searchsorted(where, start_m, side="right")) - 1
+        jerk, dt = self.max_jerk_mps3, self.cycle_s
+        if math.isfinite(jerk) and hardest > d_f:
+            behind = (hardest - d_f) ** 2 / (2.0 * jerk)
+            ramp_s = (hardest - d_f) / jerk + dt
+            leads = [(ramp_s, behind + (hardest - d_f) * dt), (ramp_s + 2.0 * math.sqrt(behind / jerk), 0.0)]
+        else:
+            leads = [(dt, 0.0)]
         trial_top = np.where(chosen, upper_hi, top)
         trial_top[i0:i1] = upper_hi[i0:i1]
-        trial_decel = envelope_decel.copy()
-        trial_decel[j0:i1] = np.minimum(trial_decel[j0:i1], d_f)
-        braking = braking_profile(_boundary_b(trial_top * trial_top, end_b=end_b), np.diff(where),
-                                  np.minimum(decel, trial_decel))
-        if not self._upper_band_holds(braking, upper_lo, upper_hi, decel, d_f, v0, i0, i1):
-            return None
-        return j0, d_f
+        upper = _boundary_b(trial_top * trial_top, end_b=end_b)
+        h = float(upper[i0])  # the most b the envelope has where the feature starts
+        for lead_s, entry_lag in leads:
+            # the lead-in's length L: T at the envelope's speed v there, v^2 <= h + 2 d_f L
+            lead_m = lead_s * lead_s * d_f + math.sqrt(lead_s ** 4 * d_f * d_f + lead_s * lead_s * h)
+            start_m = float(where[i0]) - lead_m
+            if start_m < where[0]:
+                return None  # (a) the vehicle is on the lead-in already: too late to change its braking
+            j0 = int(np.searchsorted(where, start_m, side="right")) - 1
+            trial_decel = envelope_decel.copy()
+            trial_decel[j0:i1] = np.minimum(trial_decel[j0:i1], d_f)
+            braking = braking_profile(upper, np.diff(where), np.minimum(decel, trial_decel))
+            if self._upper_band_holds(braking, upper_lo, upper_hi, decel, d_f, v0, i0, i1, entry_lag_mps=entry_lag):
+                return j0, d_f, entry_lag
+        return None
 
     @staticmethod
     def _feature_floor(upper_lo: np.ndarray, upper_hi: np.ndarray, i0: int, i1: int) -> np.ndarray:
@@ -1030,14 +1080,15 @@ class SpeedSelector:
         return np.sqrt(np.stack([lower_b, upper_b]))
 
     def _upper_band_holds(self, braking: np.ndarray, upper_lo: np.ndarray, upper_hi: np.ndarray, decel: np.ndarray,
-                          d_f: float, v0: float | None, i0: int, i1: int) -> bool:
+                          d_f: float, v0: float | None, i0: int, i1: int, *, entry_lag_mps: float) -> bool:
         """Conditions (b) and (c) of :meth:`_upper_band_lead_in` for the feature [i0, i1) under the
         envelope's braking profile ``braking`` (m^2/s^2 at the boundaries, the feature capped at
         its upper band and braking at ``d_f`` m/s^2 on it and its lead-in); (b) alone when
         ``v0`` is None (a choice already made: the vehicle's speed was checked then, and the
-        tracking keeps it since)."""
+        tracking keeps it since). ``entry_lag_mps``: how far below the envelope the vehicle may
+        enter the feature (m/s), from its lead-in."""
         floor = self._feature_floor(upper_lo, upper_hi, i0, i1)[0]
-        margin_in = self._tracking_lag_mps(d_f)
+        margin_in = self._tracking_lag_mps(d_f) + entry_lag_mps
         margin_end = max(margin_in, self._tracking_lag_mps(float(np.max(decel[i1:])), ramp_in=True))
         speed = np.sqrt(np.maximum(braking[:i1 + 1], 0.0))
         need = np.concatenate([np.full(i0, floor[0]), floor[:-1] + margin_in, [floor[-1] + margin_end]])
