@@ -174,7 +174,8 @@ def _human(summary: dict, args: argparse.Namespace) -> str:
         f"{summary['jerk_bound_mps3']:.3g} m/s^3)",
     ]
     if summary["emergency_cycles"]:
-        lines.append(f"emergency braking in {summary['emergency_cycles']} cycles: the terrain was worse than "
+        count = summary["emergency_cycles"]
+        lines.append(f"emergency braking in {count} cycle{'' if count == 1 else 's'}: the terrain was worse than "
                      "assumed where it came into view")
     for note in summary["notes"]:
         lines.append(f"note: {note}")

@@ -32,6 +32,8 @@ from .selector import (
     DEFAULT_SENSOR_RANGE_M,
     DEFAULT_UNSEEN,
     DEFAULT_UNSEEN_DESCENT,
+    CYCLE_WHY,
+    MAX_CYCLE_S,
     SpeedSelector,
 )
 
@@ -39,11 +41,13 @@ if TYPE_CHECKING:
     from ..core.route import Route
     from ..core.vehicle import Vehicle
 
-__all__ = ["Drive", "drive", "write_drive", "DRIVE_COLUMNS", "MAX_CYCLES", "END_TOLERANCE_M"]
+__all__ = ["Drive", "drive", "write_drive", "DRIVE_COLUMNS", "MAX_CYCLES", "END_TOLERANCE_M", "MAX_SENSOR_NOISE_M"]
 
 #: How close to the route's end (m) a vehicle at rest has arrived (it creeps the last
 #: centimetres within the jerk bound).
 END_TOLERANCE_M = 0.01
+#: The largest sensor noise (m) a drive takes: a standard deviation of the sensed elevations.
+MAX_SENSOR_NOISE_M = 1.0
 #: The most cycles one drive may take: a bound on time and memory (a 100 km route at 1 m/s and
 #: 0.1 s is a million).
 MAX_CYCLES = 2_000_000
@@ -155,12 +159,12 @@ def drive(route: "Route", vehicle: "Vehicle", *, sensor_range_m: float = DEFAULT
         The assumption for unmeasured terrain (:func:`~.selector.unseen_speed_mps`).
     model : str, default ``"sbem_tf"``
     cycle_s : float, default 0.1
-        Control cycle (s).
+        Control cycle (s), at most :data:`~.selector.MAX_CYCLE_S` (1 s).
     segment_length_m, roughness_window_m, path_tolerance_m
         As :class:`~.selector.SpeedSelector`'s.
     sensor_noise_m : float, default 0
-        Standard deviation of Gaussian noise added to each sensed elevation (m), >= 0; the
-        simulation drives the true route.
+        Standard deviation of Gaussian noise added to each sensed elevation (m), from 0 to
+        :data:`MAX_SENSOR_NOISE_M` (1 m); the simulation drives the true route.
     sensor_spacing_m : float, optional
         Sense every this many metres (m) along the path (linear interpolation of the route);
         None: the route's own samples.
@@ -185,8 +189,10 @@ def drive(route: "Route", vehicle: "Vehicle", *, sensor_range_m: float = DEFAULT
     if route.assumed_roughness is not None:
         raise InputError(f"{route.source}: its roughness is assumed ({route.assumed_roughness.label}), not measured, "
                          "so there is nothing for a sensor to see; drive a route of measured elevations")
-    if not (math.isfinite(sensor_noise_m) and sensor_noise_m >= 0):
-        raise InputError(f"sensor_noise_m = {sensor_noise_m!r}: must be a finite number >= 0 (m)")
+    if not (math.isfinite(sensor_noise_m) and 0 <= sensor_noise_m <= MAX_SENSOR_NOISE_M):
+        raise InputError(f"sensor_noise_m = {sensor_noise_m!r}: must be a finite number from 0 to "
+                         f"{MAX_SENSOR_NOISE_M:g} m (a ranging sensor's noise is centimetres; more buries the "
+                         "roughness a wheel feels)")
     s_true, z_true = route.s_m, route.z_m
     if sensor_spacing_m is not None:
         if not (math.isfinite(sensor_spacing_m) and sensor_spacing_m > 0):
@@ -206,8 +212,8 @@ def drive(route: "Route", vehicle: "Vehicle", *, sensor_range_m: float = DEFAULT
         xy = (np.interp(s_sense, s_true, route.x_m), np.interp(s_sense, s_true, route.y_m))
     limit = None if route.speed_limit_mps is None else np.interp(s_sense, s_true, route.speed_limit_mps)
     if isinstance(cycle_s, bool) or not isinstance(cycle_s, (int, float)) or not (math.isfinite(cycle_s)
-                                                                                  and cycle_s > 0):
-        raise InputError(f"cycle_s = {cycle_s!r}: must be a finite number > 0 (s)")
+                                                                                  and 0 < cycle_s <= MAX_CYCLE_S):
+        raise InputError(f"cycle_s = {cycle_s!r}: must be a number > 0 and at most {MAX_CYCLE_S:g} s ({CYCLE_WHY})")
     if route.length_m / (vehicle.max_speed_mps * cycle_s) > MAX_CYCLES:
         raise InputError(f"cycle_s = {cycle_s!r}: driving {route.length_m:g} m would take more than {MAX_CYCLES} "
                          f"cycles even at the top speed; use a cycle of at least "
@@ -252,7 +258,8 @@ def drive(route: "Route", vehicle: "Vehicle", *, sensor_range_m: float = DEFAULT
             stuck += 1
             if stuck > max(100, int(10.0 / cycle_s)):
                 raise InfeasibleError(
-                    f"{route.source}: the vehicle stopped at {pos:.6g} m and no command moved it on for 10 s: a climb "
+                    f"{route.source}: the vehicle stopped at {pos:.6g} m and no command moved it on for "
+                    f"{stuck * cycle_s:.3g} s: a climb "
                     "steeper than its drive can hold, a descent too steep to brake on, or a cap of 0 m/s ahead; "
                     "'profileopt plan' on the route names the reason")
         else:

@@ -121,13 +121,22 @@ if TYPE_CHECKING:
     from ..core.route import Route
     from ..core.vehicle import Vehicle
 
-__all__ = ["SpeedSelector", "Command", "unseen_speed_mps", "DEFAULT_SENSOR_RANGE_M",
-           "DEFAULT_CYCLE_S", "DEFAULT_ONLINE_SEGMENT_LENGTH_M", "DEFAULT_UNSEEN", "DEFAULT_UNSEEN_DESCENT"]
+__all__ = ["SpeedSelector", "Command", "unseen_speed_mps", "DEFAULT_SENSOR_RANGE_M", "DEFAULT_CYCLE_S", "MAX_CYCLE_S",
+           "CYCLE_WHY", "DEFAULT_ONLINE_SEGMENT_LENGTH_M", "DEFAULT_UNSEEN", "DEFAULT_UNSEEN_DESCENT"]
 
 #: Sensing range (m) when none is given: what a vehicle LiDAR resolves at wheel scale.
 DEFAULT_SENSOR_RANGE_M = 50.0
 #: Control cycle (s) when none is given.
 DEFAULT_CYCLE_S = 0.1
+#: The longest control cycle (s) the selector takes. Each command holds one acceleration for a
+#: whole cycle, so a longer cycle is a coarser control: at the top speed the vehicle covers
+#: max_speed_mps * cycle_s between two looks at the terrain, and near a stop (the route's end)
+#: no command of that length brings it the last metres (with 2 s cycles the drive of
+#: ``examples/routes/curb.csv`` stopped 0.19 m short of its end; with 20 s at 82 m).
+MAX_CYCLE_S = 1.0
+#: Why :data:`MAX_CYCLE_S`, for the messages that refuse a longer cycle.
+CYCLE_WHY = ("each command holds one acceleration for a whole cycle; a speed controller runs every "
+             "0.02-0.5 s, and with longer cycles the vehicle cannot stop where it must")
 #: Segment length (m) of the online selector: fine enough that a step's or a window's cap holds
 #: only a metre of route, coarse enough that a 100 m horizon is a hundred segments.
 DEFAULT_ONLINE_SEGMENT_LENGTH_M = 1.0
@@ -363,7 +372,8 @@ class SpeedSelector:
     vend_mps : float, default 0
         Speed at ``end_m`` (m/s).
     cycle_s : float, default :data:`DEFAULT_CYCLE_S` (0.1)
-        The control cycle (s): each command holds one acceleration for a cycle.
+        The control cycle (s): each command holds one acceleration for a cycle; at most
+        :data:`MAX_CYCLE_S` (1 s).
     max_jerk_mps3 : float, optional
         Jerk bound (m/s^3): the command's acceleration changes by at most this times
         ``cycle_s`` per cycle (:mod:`.tracking`); None: the vehicle's; inf: none.
@@ -395,6 +405,8 @@ class SpeedSelector:
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not (math.isfinite(value)
                                                                                         and value > 0):
                 raise InputError(f"{name} = {value!r}: must be a finite number > 0")
+        if cycle_s > MAX_CYCLE_S:
+            raise InputError(f"cycle_s = {cycle_s!r}: must be at most {MAX_CYCLE_S:g} s ({CYCLE_WHY})")
         if segment_length_m < MIN_ONLINE_SEGMENT_LENGTH_M or sensor_range_m / segment_length_m > MAX_HORIZON_SEGMENTS:
             raise InputError(f"segment_length_m = {segment_length_m!r}: must be at least "
                              f"{MIN_ONLINE_SEGMENT_LENGTH_M:g} m (the widest gap between measured samples) and at "

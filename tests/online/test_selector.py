@@ -99,6 +99,7 @@ def test_nothing_measured_means_the_unseen_speed_and_no_faster(atv):
     ({"unseen": "Q"}, "ISO 8608 class"),
     ({"unseen": "fast"}, "'worst', an ISO 8608 class"),
     ({"cycle_s": 0.0}, "cycle_s"),
+    ({"cycle_s": 2.0}, "cycle_s = 2.0: must be at most 1 s"),
     ({"max_jerk_mps3": -1.0}, "max_jerk_mps3"),
     ({"end_m": -5.0}, "end_m"),
     ({"unseen_descent": 2.0}, "unseen_descent"),
