@@ -46,6 +46,9 @@ __all__ = ["Drive", "drive", "write_drive", "DRIVE_COLUMNS", "MAX_CYCLES", "END_
 #: How close to the route's end (m) a vehicle at rest has arrived (it creeps the last
 #: centimetres within the jerk bound).
 END_TOLERANCE_M = 0.01
+#: A speed (m/s) at or below which the vehicle counts as at rest at the route's end (the
+#: commands' arithmetic leaves residues of 1e-12 m/s).
+REST_MPS = 1e-9
 #: The largest sensor noise (m) a drive takes: a standard deviation of the sensed elevations.
 MAX_SENSOR_NOISE_M = 1.0
 #: The most cycles one drive may take: a bound on time and memory (a 100 km route at 1 m/s and
@@ -232,7 +235,7 @@ def drive(route: "Route", vehicle: "Vehicle", *, sensor_range_m: float = DEFAULT
     end = float(s_true[-1])
     notes: list[str] = []
     for _ in range(MAX_CYCLES):
-        if pos >= end - END_TOLERANCE_M and v <= 0:
+        if pos >= end - END_TOLERANCE_M and v <= REST_MPS:
             break
         t0 = time.perf_counter()
         upto = int(np.searchsorted(s_sense, pos + sensor_range_m, side="right"))

@@ -130,13 +130,13 @@ DEFAULT_SENSOR_RANGE_M = 50.0
 DEFAULT_CYCLE_S = 0.1
 #: The longest control cycle (s) the selector takes. Each command holds one acceleration for a
 #: whole cycle, so a longer cycle is a coarser control: at the top speed the vehicle covers
-#: max_speed_mps * cycle_s between two looks at the terrain, and near a stop (the route's end)
-#: no command of that length brings it the last metres (with 2 s cycles the drive of
-#: ``examples/routes/curb.csv`` stopped 0.19 m short of its end; with 20 s at 82 m).
+#: max_speed_mps * cycle_s between two looks at the terrain (20 m at 1 s for the bundled
+#: vehicles, 40 % of the default sensing range). The bundled courses drive with cycles up to 1 s
+#: (tests/online/test_drive.py).
 MAX_CYCLE_S = 1.0
 #: Why :data:`MAX_CYCLE_S`, for the messages that refuse a longer cycle.
-CYCLE_WHY = ("each command holds one acceleration for a whole cycle; a speed controller runs every "
-             "0.02-0.5 s, and with longer cycles the vehicle cannot stop where it must")
+CYCLE_WHY = ("each command holds one acceleration for a whole cycle, over which the vehicle may cover "
+             "20 m; a speed controller runs every 0.02-0.5 s")
 #: Segment length (m) of the online selector: fine enough that a step's or a window's cap holds
 #: only a metre of route, coarse enough that a 100 m horizon is a hundred segments.
 DEFAULT_ONLINE_SEGMENT_LENGTH_M = 1.0

@@ -241,6 +241,17 @@ def jerk_limited_step(position_m: float, speed_mps: float, accel_mps2: float, *,
         ok &= _safe(where_m, envelope_b, s1, v1, a1, decel, jerk_mps3)
         if np.any(ok):
             k = int(np.argmax(ok))
+            if k > 0 and s1[k] <= s + 1e-12:
+                # the best candidate leaves the vehicle where it is (at rest under a crawl's cap or
+                # just before a stop, with a cycle long enough that the next larger candidate
+                # overshoots): look between the two, so that it still creeps on
+                fine = np.linspace(cand[k - 1], cand[k], CANDIDATES)[1:-1]
+                f1, w1, b1 = cycle_end(s, v, fine, cycle_s)
+                good = _under(where_m, envelope_b, np.full(fine.size, s), f1, np.full(fine.size, v * v), w1 * w1)
+                good &= _safe(where_m, envelope_b, f1, w1, b1, decel, jerk_mps3)
+                if np.any(good):
+                    j = int(np.argmax(good))
+                    return TrackingStep(float(fine[j]), float(b1[j]), float(f1[j]), float(w1[j]), True)
             return TrackingStep(float(cand[k]), float(a1[k]), float(s1[k]), float(v1[k]), True)
     # nothing within the jerk bound: brake harder, as little as the envelope needs
     cand = np.linspace(min(lo, hi), -d_now, CANDIDATES)

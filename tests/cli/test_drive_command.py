@@ -61,7 +61,7 @@ def test_the_human_summary_names_the_numbers(capsys) -> None:
     (["--model", "dynamic"], "invalid choice"),
     (["--unseen-descent", "3"], "--unseen-descent"),
     # before: with 2 s cycles the drive stopped 0.19 m short of the end, "no command moved it on
-    # for 10 s" (after 200 s); with 20 s at 82 m
+    # for 10 s" (after 200 s); with 20 s at 82 m: a command held that long is too coarse a control
     (["--cycle", "2"], "--cycle = 2.0: must be a number > 0 and at most 1 s"),
     # before: "sensor: sample 0: z = 125730 m is beyond +-10000 m; elevations are in metres"
     (["--sensor-noise", "1e6"], "--sensor-noise = 1000000.0: must be a finite number from 0 to 1 m"),
