@@ -656,9 +656,9 @@ class SpeedSelector:
             if self._gated and np.any(rough[new]):
                 # where the step limit sees a ramp, the upper band too is driven in the gate's
                 # simulation, at each of its edges; over the limit: the first band there
-                for band_edge in (upper_hi, upper_lo):
+                for band_edge, join in ((upper_hi, np.fmin), (upper_lo, np.fmax)):
                     yield
-                    if not self._upper_band_passes(route, bounds, top, upper_lo, band_edge, new):
+                    if not self._upper_band_passes(route, bounds, top, upper_lo, band_edge, join, new):
                         upper_lo[new], upper_hi[new] = np.nan, np.nan
                         break
         # the forward pass keeps the power limit step by step (slow) only where it can bind
@@ -741,11 +741,14 @@ class SpeedSelector:
         return lowered if np.any(lowered < top) else None
 
     def _upper_band_passes(self, route: "Route", bounds: np.ndarray, top: np.ndarray, upper_lo: np.ndarray,
-                           band_edge: np.ndarray, new: slice) -> bool:
+                           band_edge: np.ndarray, join: np.ufunc, new: slice) -> bool:
         """Whether the exact quarter car (as in :meth:`_gate_round`) keeps the limit over the new
         segments driven at ``band_edge`` (m/s, shape (N,): an edge of the upper band) where they
-        have an upper band, and at their caps ``top`` elsewhere; at a boundary between the two,
-        the band's edge (the vehicle keeps to the band up to the feature's ends)."""
+        have an upper band, and at their caps ``top`` elsewhere; at a boundary between two
+        segments with a band, ``join`` of their edges (``numpy.fmin`` for the top edge,
+        ``numpy.fmax`` for the bottom one: the speed there that keeps both bands), and between
+        one and a segment without, the band's edge (the vehicle keeps to the band up to the
+        feature's ends)."""
         banded = np.isfinite(upper_lo)
         seg_speed = np.where(banded, band_edge, top)
         speed = np.sqrt(_boundary_b(seg_speed * seg_speed, end_b=math.inf))
@@ -753,7 +756,7 @@ class SpeedSelector:
         right = np.concatenate([banded, [False]])
         edge_left = np.concatenate([[np.nan], band_edge])
         edge_right = np.concatenate([band_edge, [np.nan]])
-        speed = np.where(left & right, np.fmin(edge_left, edge_right),
+        speed = np.where(left & right, join(edge_left, edge_right),
                          np.where(left, edge_left, np.where(right, edge_right, speed)))
         check = check_speeds(route, bounds, speed, self.vehicle, window_m=self.roughness_window_m,
                              judged_m=(float(bounds[new.start]), float(bounds[new.stop])))
