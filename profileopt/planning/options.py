@@ -95,7 +95,10 @@ class SolverOptions:
         Options of ``casadi.nlpsol`` for IPOPT (keys as CasADi spells them, ``"ipopt.tol"``).
         FATROP and the banded method take their iteration limit from ``"ipopt.max_iter"``
         and their tolerance from ``"ipopt.tol"`` or :data:`BACKEND_TOL`, whichever is
-        larger (the banded method's test bounds the duality gap itself).
+        larger (the banded method's test bounds the duality gap itself). An option IPOPT
+        does not know, a value out of its range, or one its build cannot honour (HSL's
+        solvers, which CasADi's IPOPT lacks) is an :class:`~profileopt.errors.InputError`
+        when the plan solves.
     nlp_solver : {"ipopt", "fatrop", "banded"}, default "ipopt"
         The back end that solves the NLP (:mod:`profileopt.planning.nlp.backends`):
         ``"ipopt"``, IPOPT with MUMPS; ``"fatrop"``, FATROP on the NLP's stage form;

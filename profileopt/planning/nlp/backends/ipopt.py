@@ -11,12 +11,14 @@ from __future__ import annotations
 import ctypes
 import functools
 import os
+import re
 import time
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
+from ....errors import InputError
 from ...options import SolverOptions
 from ..problem import NlpResult, cached_nlp
 from .base import NlpInstance
@@ -50,7 +52,18 @@ class IpoptBackend:
         NlpResult
         """
         t = time.perf_counter()
-        solver = cached_nlp(problem.n, problem.with_jerk, options.ipopt_key(), problem.families)
+        try:
+            solver = cached_nlp(problem.n, problem.with_jerk, options.ipopt_key(), problem.families)
+        except RuntimeError as exc:  # IPOPT checks its options when the solver is made
+            text = str(exc)
+            unknown = re.search(r"No such IPOPT option: (\S+)", text)
+            if unknown:
+                raise InputError(f"SolverOptions.ipopt: IPOPT has no option {unknown.group(1)!r}; check its "
+                                 "spelling against IPOPT's list of options") from None
+            if "Invalid options were detected" in text:
+                raise InputError("SolverOptions.ipopt: IPOPT refused a value of its options as out of range "
+                                 "(it printed which, and the range, above)") from None
+            raise
         one_blas_thread()  # once IPOPT's plugin, and with it CasADi's OpenBLAS, is loaded
         timings["build"] = timings.get("build", 0.0) + time.perf_counter() - t
         t = time.perf_counter()
@@ -79,6 +92,10 @@ def solve_ipopt(solver: ca.Function, problem: NlpInstance) -> NlpResult:
     result = solver(x0=problem.x0, lbx=problem.lbx, ubx=problem.ubx, lbg=problem.lbg, ubg=problem.ubg,
                     p=problem.parameters())
     stats = solver.stats()
+    if stats.get("return_status") == "Invalid_Option":  # valid by name and range, not in this build
+        raise InputError("SolverOptions.ipopt: IPOPT stopped at once with Invalid_Option: an option this build "
+                         "of IPOPT cannot honour (CasADi's has no HSL, so no ma27/ma57 linear solvers and no "
+                         "nlp_scaling_method equilibration-based); leave it out")
     success = bool(stats.get("success", False)) or _converged_but_stalled(stats)
     status = "optimal" if success else str(stats.get("return_status", "failed"))
     return NlpResult(np.asarray(result["x"]).ravel(), np.asarray(result["lam_g"]).ravel(), success, status,
