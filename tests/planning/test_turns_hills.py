@@ -263,8 +263,9 @@ def test_a_bad_path_tolerance_is_one_line(tmp_path, atv):
 def test_a_vehicle_file_without_the_keys_plans_exactly_as_before(route_name, vehicle_name):
     # tests/expected/before-turns/ holds the profiles the planner wrote before turns and hills
     # (commit 87d3afb, IPOPT; rewritten, with the vehicle's optional keys off, when the
-    # roughness windows became exact at any offset, issue 29, and when IPOPT's tol became
-    # 1e-13, issue 28): the same vehicle without the optional keys must give them bit for bit
+    # roughness windows became exact at any offset, issue 29, when IPOPT's tol became 1e-13,
+    # and when IPOPT's variables got a scale per boundary, issue 28: speeds moved by at most
+    # 4e-7 m/s): the same vehicle without the optional keys must give them bit for bit
     # with IPOPT, and the banded back end the same optimum within its tolerance
     from profileopt.io import read_route
     from profileopt.planning import SolverOptions

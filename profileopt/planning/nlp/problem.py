@@ -236,7 +236,7 @@ class NlpParts:
     hess_diagonals: tuple[ca.MX, ca.MX, ca.MX]
 
 
-def nlp_parts(n: int, with_jerk: bool, families: tuple[str, ...]) -> "NlpParts":
+def nlp_parts(n: int, with_jerk: bool, families: tuple[str, ...], *, scaled: bool = False) -> "NlpParts":
     """The symbolic pieces of the planner's NLP, placed but not yet assembled into matrices.
 
     :func:`build_nlp` assembles them into IPOPT's sparse Jacobian and Hessian;
@@ -250,6 +250,11 @@ def nlp_parts(n: int, with_jerk: bool, families: tuple[str, ...]) -> "NlpParts":
         Whether g holds the jerk rows (only when N >= 2).
     families : tuple of str
         Row families (:data:`~profileopt.physics.rows.ROW_FAMILIES`), in this order.
+    scaled : bool, default False
+        True: the variables are x_j = y_j / sigma_j with a scale sigma_j > 0 per boundary,
+        given as N+1 more parameters after the tail; the stages see y = sigma x and their
+        derivatives are carried over by the chain rule (gradient times sigma_j, Jacobian
+        column times sigma_j, Hessian entry (j, k) times sigma_j sigma_k). False: x = y.
 
     Returns
     -------
@@ -267,9 +272,12 @@ def nlp_parts(n: int, with_jerk: bool, families: tuple[str, ...]) -> "NlpParts":
     n_data = sum(len(ROW_FAMILIES[f].data) for f in families)
 
     x = ca.MX.sym("y", nx)
-    p = ca.MX.sym("p", n + n * n_data + len(PARAMETERS))
+    tail_at = n + n * n_data
+    p = ca.MX.sym("p", tail_at + len(PARAMETERS) + (nx if scaled else 0))
     lam_f = ca.MX.sym("lam_f")
-    q = [p[n + n * n_data + k] for k in range(len(PARAMETERS))]
+    q = [p[tail_at + k] for k in range(len(PARAMETERS))]
+    sigma = p[tail_at + len(PARAMETERS):] if scaled else None
+    y = sigma * x if scaled else x  # what the stages see
     data_cols: dict[str, list[ca.MX]] = {}
     start = n
     for family in families:  # each data column of each family: N entries of p
@@ -277,11 +285,11 @@ def nlp_parts(n: int, with_jerk: bool, families: tuple[str, ...]) -> "NlpParts":
         data_cols[family] = [p[start + k * n:start + (k + 1) * n] for k in range(len(names))]
         start += n * len(names)
     # (family, row, stage inputs) of every family row, in the order of g
-    fam_rows = [(family, k, [[x[:n], x[1:]], [p[:n]], data_cols[family]])
+    fam_rows = [(family, k, [[y[:n], y[1:]], [p[:n]], data_cols[family]])
                 for family in families for k in range(ROW_FAMILIES[family].count)]
     # stage inputs: one column per scalar input, one entry per stage
-    seg = [[x[:n], x[1:]], [p[:n]]]
-    bnd = [[x[:m], x[1:n], x[2:]], [p[:m], p[1:n]]] if m else None
+    seg = [[y[:n], y[1:]], [p[:n]]]
+    bnd = [[y[:m], y[1:n], y[2:]], [p[:m], p[1:n]]] if m else None
 
     def stages(kind: str, what: str, extra: list | None = None, shared: list | None = None,
                inputs: list | None = None) -> list[list[ca.MX]]:
@@ -347,12 +355,19 @@ def nlp_parts(n: int, with_jerk: bool, families: tuple[str, ...]) -> "NlpParts":
         by_offset.setdefault(c - r, []).append(_shifted(v, r, nx - (c - r) - r - count))
     hess_diagonals = tuple(sum(by_offset[offset]) if offset in by_offset else ca.MX.zeros(nx - offset, 1)
                            for offset in range(3))
-    name = f"profileopt_n{n}_{'jerk' if with_jerk else 'nojerk'}" + "".join(f"_{f}" for f in families)
+    if scaled:  # d/dx = sigma d/dy
+        grad = grad * sigma
+        jac_blocks = [tuple(column * sigma[r:r + column.size1()] for r, column in enumerate(block))
+                      for block in jac_blocks]
+        hess_diagonals = tuple(diagonal * sigma[:nx - offset] * sigma[offset:]
+                               for offset, diagonal in enumerate(hess_diagonals))
+    name = (f"profileopt_n{n}_{'jerk' if with_jerk else 'nojerk'}" + "".join(f"_{f}" for f in families)
+            + ("_scaled" if scaled else ""))
     return NlpParts(name, x, p, lam_f, lam_g, f, g, f_d, grad, ca.vertcat(*g_d), tuple(jac_blocks), hess_diagonals)
 
 
 def build_nlp(n: int, with_jerk: bool, ipopt_options: Mapping[str, Any] = DEFAULT_IPOPT_OPTIONS,
-              families: tuple[str, ...] = ()) -> ca.Function:
+              families: tuple[str, ...] = (), *, scaled: bool = False) -> ca.Function:
     """The IPOPT solver of the planner's NLP for N = n segments, in y = b / b_ref (b = v^2).
 
     Parameters
@@ -366,6 +381,9 @@ def build_nlp(n: int, with_jerk: bool, ipopt_options: Mapping[str, Any] = DEFAUL
         Options of ``casadi.nlpsol`` for IPOPT.
     families : tuple of str, default ()
         Row families (:data:`~profileopt.physics.rows.ROW_FAMILIES`) to add, in this order.
+    scaled : bool, default False
+        True: the variables are y_j / sigma_j, with the N+1 scales sigma_j > 0 after the
+        parameters below (:func:`nlp_parts`).
 
     Returns
     -------
@@ -389,7 +407,7 @@ def build_nlp(n: int, with_jerk: bool, ipopt_options: Mapping[str, Any] = DEFAUL
     derivatives placed on the diagonals of the banded structure (Hessian bandwidth 2), so
     IPOPT receives exactly the derivatives of the whole problem.
     """
-    parts = nlp_parts(n, with_jerk, families)
+    parts = nlp_parts(n, with_jerk, families, scaled=scaled)
     x, p, nx = parts.x, parts.p, parts.x.size1()
     jac = ca.vertcat(*(sum(diagonal_matrix(block[r], block[r].size1(), nx, r) for r in range(len(block)))
                        for block in parts.jac_blocks))
@@ -417,7 +435,7 @@ def _column(v: ca.MX | None, count: int) -> ca.MX:
 
 @functools.lru_cache(maxsize=8)
 def cached_nlp(n: int, with_jerk: bool, ipopt_key: tuple = SolverOptions().ipopt_key(),
-               families: tuple[str, ...] = ()) -> ca.Function:
+               families: tuple[str, ...] = (), scaled: bool = False) -> ca.Function:
     """:func:`build_nlp` for N = n segments, built once per size and options and cached.
 
     Variables y = b / b_ref (b = v^2) at the N+1 boundaries; parameters: segment lengths /
@@ -435,13 +453,15 @@ def cached_nlp(n: int, with_jerk: bool, ipopt_key: tuple = SolverOptions().ipopt
         The IPOPT options as :meth:`SolverOptions.ipopt_key` gives them.
     families : tuple of str, default ()
         Row families (:data:`~profileopt.physics.rows.ROW_FAMILIES`).
+    scaled : bool, default False
+        A scale per boundary (:func:`build_nlp`).
 
     Returns
     -------
     casadi.Function
         The IPOPT solver.
     """
-    return build_nlp(n, with_jerk and n >= 2, dict(ipopt_key), families)
+    return build_nlp(n, with_jerk and n >= 2, dict(ipopt_key), families, scaled=scaled)
 
 
 @dataclasses.dataclass(frozen=True)

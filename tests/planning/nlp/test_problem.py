@@ -23,12 +23,14 @@ from profileopt.planning.options import DEFAULT_IPOPT_OPTIONS
 EPS_MPS = 1e-3  # the speed that keeps sqrt(b) smooth at rest (NOTES: planner NLP)
 
 
-def reference_nlp(n: int, with_jerk: bool) -> dict:
-    """The NLP as one SX expression: x, p, f, g (see the module docstring)."""
-    y = ca.SX.sym("y", n + 1)
-    p = ca.SX.sym("p", n + 6)
+def reference_nlp(n: int, with_jerk: bool, scaled: bool = False) -> dict:
+    """The NLP as one SX expression: x, p, f, g (see the module docstring); with ``scaled``
+    the variables are x = y / sigma, the N+1 scales sigma after the other parameters."""
+    x = ca.SX.sym("x", n + 1)
+    p = ca.SX.sym("p", n + 6 + (n + 1 if scaled else 0))
     ds_scaled = p[:n]
     b_ref, l_ref, a_ref, t_ref, weight, inv_jerk = (p[n + k] for k in range(6))
+    y = p[n + 6:] * x if scaled else x
     ds = l_ref * ds_scaled
     b = b_ref * y
     v = ca.sqrt(b + EPS_MPS**2)
@@ -42,11 +44,11 @@ def reference_nlp(n: int, with_jerk: bool) -> dict:
         smooth = ca.sum1(v[1:-1] * da**2 / dsm)
         if with_jerk:
             g.append(v[1:-1] * da / dsm * inv_jerk)
-    return {"x": y, "p": p, "f": (travel + weight * smooth) / t_ref, "g": ca.vertcat(*g)}
+    return {"x": x, "p": p, "f": (travel + weight * smooth) / t_ref, "g": ca.vertcat(*g)}
 
 
-def reference_functions(n: int, with_jerk: bool) -> ca.Function:
-    nlp = reference_nlp(n, with_jerk)
+def reference_functions(n: int, with_jerk: bool, scaled: bool = False) -> ca.Function:
+    nlp = reference_nlp(n, with_jerk, scaled)
     x, p, f, g = nlp["x"], nlp["p"], nlp["f"], nlp["g"]
     lam_f, lam_g = ca.SX.sym("lam_f"), ca.SX.sym("lam_g", g.size1())
     hess = ca.hessian(lam_f * f + ca.dot(lam_g, g), x)[0]
@@ -66,18 +68,24 @@ def dense(m) -> np.ndarray:
     return np.array(ca.DM(m).full())
 
 
+@pytest.mark.parametrize("scaled", [False, True])
 @pytest.mark.parametrize("n, with_jerk", [(1, True), (2, True), (2, False), (5, True), (5, False), (37, True),
                                           (130, True)])
-def test_functions_ipopt_calls_equal_the_reference_derivatives(n: int, with_jerk: bool) -> None:
-    solver = _nlp.build_nlp(n, with_jerk)
-    ref = reference_functions(n, with_jerk)
+def test_functions_ipopt_calls_equal_the_reference_derivatives(n: int, with_jerk: bool, scaled: bool) -> None:
+    """With ``scaled`` (a scale per boundary, the IPOPT back end's form) the stage derivatives
+    are carried over by the chain rule; the reference differentiates y = sigma x itself."""
+    solver = _nlp.build_nlp(n, with_jerk, scaled=scaled)
+    ref = reference_functions(n, with_jerk, scaled)
     ng = ref.size1_out(1)
-    assert solver.size1_out("g") == ng and solver.size1_out("x") == n + 1 and solver.size1_in("p") == n + 6
+    assert solver.size1_out("g") == ng and solver.size1_out("x") == n + 1
+    assert solver.size1_in("p") == n + 6 + (n + 1 if scaled else 0)
     grad_f, jac_g, hess_l = (solver.get_function(name) for name in ("nlp_grad_f", "nlp_jac_g", "nlp_hess_l"))
     f_fun, g_fun = solver.get_function("nlp_f"), solver.get_function("nlp_g")
     rng = np.random.default_rng(n * 2 + with_jerk)
     for _ in range(5):
         x, p, lam_f, lam_g = random_point(n, ng, rng)
+        if scaled:  # scales over four decades, as a crawl's boundaries beside the top speed's
+            p = np.concatenate([p, 10.0 ** rng.uniform(-4, 0, n + 1)])
         f_ref, g_ref, grad_ref, jac_ref, hess_ref = (dense(o) for o in ref(x, p, lam_f, lam_g))
         f1, grad = grad_f(x, p)
         g1, jac = jac_g(x, p)
