@@ -93,9 +93,8 @@ class FirstBandTable:
         stop = np.asarray(stop, dtype=np.intp)
         if not first.size:
             return np.empty(0)
-        at = np.searchsorted(self.ri_grid, values, side="left")  # the range (r_(at-1), r_at] holding each
-        beyond = at >= self.ri_grid.size
-        per_window = self.top_mps[np.minimum(at, self.ri_grid.size - 1)]
+        at, beyond = self._rows(values)
+        per_window = self.top_mps[at]
         per_window[beyond] = -1.0  # marks the sets to find exactly
         tops, _ = range_extremes(per_window, first, stop)
         exact = tops < 0.0
@@ -103,6 +102,41 @@ class FirstBandTable:
             bands, _ = speed_bands_of_sets(values, first[exact], stop[exact], self.vehicle, model=self.model)
             tops[exact] = bands.first()
         return tops
+
+    def highest_of_sets(self, values: ArrayLike, first: ArrayLike, stop: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """The highest band admissible for every RI of each set (m/s): the intersection of the
+        table's highest bands of the ranges holding its RIs, never wider than the exact one.
+
+        Parameters
+        ----------
+        values : array_like, shape (K,)
+            RIs (dimensionless), >= 0.
+        first, stop : array_like of int, shape (N,)
+            Set i is ``values[first[i]:stop[i]]``, non-empty.
+
+        Returns
+        -------
+        lo, hi : numpy.ndarray, shape (N,)
+            The band's edges (m/s): the largest lower edge and the least upper edge of its RIs'
+            ranges; lo = inf and hi = -inf where an RI is rougher than the table or its range has
+            no band (so that no band is taken there).
+        """
+        values = np.atleast_1d(np.asarray(values, dtype=float))
+        at, beyond = self._rows(values)
+        lo_w = np.where(beyond | np.isnan(self.highest_lo_mps[at]), np.inf, self.highest_lo_mps[at])
+        hi_w = np.where(beyond | np.isnan(self.highest_hi_mps[at]), -np.inf, self.highest_hi_mps[at])
+        first = np.asarray(first, dtype=np.intp)
+        stop = np.asarray(stop, dtype=np.intp)
+        _, lo = range_extremes(lo_w, first, stop)
+        hi, _ = range_extremes(hi_w, first, stop)
+        return lo, hi
+
+    def _rows(self, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The table's row of the range (r_(at-1), r_at] holding each RI, and whether the RI is
+        rougher than the table (its row then the last)."""
+        at = np.searchsorted(self.ri_grid, values, side="left")
+        beyond = at >= self.ri_grid.size
+        return np.minimum(at, self.ri_grid.size - 1), beyond
 
 
 @functools.lru_cache(maxsize=16)

@@ -112,7 +112,6 @@ from ..planning.gate import MAX_GATE_ROUNDS, check_speeds, gate_applies, gate_ca
 from ..planning.limits import ForceLimit, PlanContext, default_limits
 from ..terrain.assumed import unseen_roughness
 from ..terrain.geometry import route_geometry
-from ..terrain.roughness import range_extremes
 from .band_table import first_band_table
 from .sensed import SensedTerrain
 from .tracking import MIN_BRAKING_MPS2, braking_margin_m, cycle_end, jerk_limited_step
@@ -674,8 +673,9 @@ class SpeedSelector:
 
         Segment i meets the roughness windows ``ri[window_first[i]:window_stop[i]]``. Each
         window's highest band comes from the band table
-        (:attr:`.band_table.FirstBandTable.highest_lo_mps`, for the RI range holding the
-        window's RI: admissible for every RI of the range; on smooth ground the first, [0, v1]); the segment's band is their intersection [largest lo, least hi], capped by
+        (:meth:`.band_table.FirstBandTable.highest_of_sets`, for the RI range holding the
+        window's RI: admissible for every RI of the range; on smooth ground the first, [0, v1]);
+        the segment's band is their intersection [largest lo, least hi], capped by
         ``other_cap`` (every other cap and the top speed), when that is not empty and starts
         above ``top`` (the first band's top as the selector has it): an upper band. It is
         admissible for every window, so for the segment, and never wider than the exact bands
@@ -702,16 +702,9 @@ class SpeedSelector:
         lo, hi : numpy.ndarray, shape (N,)
             The band's edges (m/s), NaN where there is none.
         """
-        table = self._band_table
-        grid, band_lo, band_hi = table.ri_grid, table.highest_lo_mps, table.highest_hi_mps
-        at = np.searchsorted(grid, ri, side="left")  # the range (r_(at-1), r_at] holding each RI
-        beyond = at >= grid.size  # rougher than the table: no upper band (the first band, as before)
-        at = np.minimum(at, grid.size - 1)
-        lo_w = np.where(beyond | np.isnan(band_lo[at]), np.inf, band_lo[at])
-        hi_w = np.where(beyond | np.isnan(band_hi[at]), -np.inf, band_hi[at])
         rows = np.flatnonzero(needs)
-        _, lo = range_extremes(lo_w, window_first[rows], window_stop[rows])
-        hi, _ = range_extremes(hi_w, window_first[rows], window_stop[rows])
+        # rougher than the table: no upper band there (the first band, as before)
+        lo, hi = self._band_table.highest_of_sets(ri, window_first[rows], window_stop[rows])
         hi = np.minimum(hi, other_cap[rows])
         ok = np.isfinite(lo) & (hi > lo) & (lo > top[rows])
         upper_lo, upper_hi = np.full(top.size, np.nan), np.full(top.size, np.nan)

@@ -234,11 +234,16 @@ def jerk_limited_step(position_m: float, speed_mps: float, accel_mps2: float, *,
     lo = min(max(a - step, -d_now), hi)  # a bound that falls faster than the jerk allows: the bound
     if not np.isfinite(step):
         lo, hi = -d_now, max_accel_mps2
-    if hi >= lo:
-        cand = np.linspace(hi, lo, CANDIDATES)
+    def tried(cand: np.ndarray, jerk: float) -> tuple[np.ndarray, ...]:
+        """The cycle's end (s, v, a after) under each candidate acceleration, and whether it
+        stays under the envelope and in a safe state (braking with ``jerk`` afterwards)."""
         s1, v1, a1 = cycle_end(s, v, cand, cycle_s)
         ok = _under(where_m, envelope_b, np.full(cand.size, s), s1, np.full(cand.size, v * v), v1 * v1)
-        ok &= _safe(where_m, envelope_b, s1, v1, a1, decel, jerk_mps3)
+        return s1, v1, a1, ok & _safe(where_m, envelope_b, s1, v1, a1, decel, jerk)
+
+    if hi >= lo:
+        cand = np.linspace(hi, lo, CANDIDATES)
+        s1, v1, a1, ok = tried(cand, jerk_mps3)
         if np.any(ok):
             k = int(np.argmax(ok))
             if k > 0 and s1[k] <= s + 1e-12:
@@ -246,17 +251,13 @@ def jerk_limited_step(position_m: float, speed_mps: float, accel_mps2: float, *,
                 # just before a stop, with a cycle long enough that the next larger candidate
                 # overshoots): look between the two, so that it still creeps on
                 fine = np.linspace(cand[k - 1], cand[k], CANDIDATES)[1:-1]
-                f1, w1, b1 = cycle_end(s, v, fine, cycle_s)
-                good = _under(where_m, envelope_b, np.full(fine.size, s), f1, np.full(fine.size, v * v), w1 * w1)
-                good &= _safe(where_m, envelope_b, f1, w1, b1, decel, jerk_mps3)
+                f1, w1, b1, good = tried(fine, jerk_mps3)
                 if np.any(good):
                     j = int(np.argmax(good))
                     return TrackingStep(float(fine[j]), float(b1[j]), float(f1[j]), float(w1[j]), True)
             return TrackingStep(float(cand[k]), float(a1[k]), float(s1[k]), float(v1[k]), True)
     # nothing within the jerk bound: brake harder, as little as the envelope needs
     cand = np.linspace(min(lo, hi), -d_now, CANDIDATES)
-    s1, v1, a1 = cycle_end(s, v, cand, cycle_s)
-    ok = _under(where_m, envelope_b, np.full(cand.size, s), s1, np.full(cand.size, v * v), v1 * v1)
-    ok &= _safe(where_m, envelope_b, s1, v1, a1, decel, np.inf)
+    s1, v1, a1, ok = tried(cand, np.inf)
     k = int(np.argmax(ok)) if np.any(ok) else cand.size - 1
     return TrackingStep(float(cand[k]), float(a1[k]), float(s1[k]), float(v1[k]), False)

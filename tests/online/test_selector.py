@@ -31,9 +31,7 @@ class _ExactFirstBand:
 
     def __init__(self, vehicle):
         self.vehicle = vehicle
-        table = first_band_table(vehicle, "sbem_tf")
-        self.ri_grid, self.highest_lo_mps, self.highest_hi_mps = (table.ri_grid, table.highest_lo_mps,
-                                                                  table.highest_hi_mps)
+        self.highest_of_sets = first_band_table(vehicle, "sbem_tf").highest_of_sets
 
     def first_of_sets(self, values, first, stop):
         return speed_bands_of_sets(values, first, stop, self.vehicle)[0].first()
