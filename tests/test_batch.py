@@ -199,12 +199,14 @@ def test_a_batch_stopped_by_sigterm_resumes_where_it_stopped(folder: Path) -> No
     first = summary(folder / "out")
     assert 2 <= len(first) < len(names) and all(row["status"] == "ok" for row in first.values())
     assert not list((folder / "out").glob(".po-*"))  # no half-written file
+    _same_as_parquet(folder / "out", first)  # written once, as the batch stopped
     stamps = {name: (folder / "out" / f"{name}.csv").stat().st_mtime_ns for name in first}
     done = subprocess.run([*PROFILEOPT, "batch", *(f"{n}.csv" for n in names), "-o", "out", "--workers", "1"],
                           cwd=folder, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert {name: (folder / "out" / f"{name}.csv").stat().st_mtime_ns for name in first} == stamps
     assert len(summary(folder / "out")) == len(names)
+    _same_as_parquet(folder / "out", summary(folder / "out"))
 
 
 @pytest.mark.slow
