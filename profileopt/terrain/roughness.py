@@ -394,9 +394,18 @@ def _check_window_samples(s: np.ndarray, width: float, tol: float, source: str) 
     thin = np.flatnonzero(stop - first < MIN_SAMPLES_PER_WINDOW)
     if thin.size:
         k = thin[np.lexsort((stop[thin], first[thin], start[thin]))[0]]
+        # a gap: the widest step between the samples around the window, if it is several times
+        # the route's usual spacing (a route sampled finely elsewhere)
+        lo, hi = max(int(first[k]) - 1, 0), min(int(stop[k]), s.size - 1)
+        steps = np.diff(s[lo:hi + 1])
+        gap = ""
+        if steps.size and steps.max() > 4.0 * float(np.median(np.diff(s))):
+            j = lo + int(np.argmax(steps))
+            gap = f" (the samples jump from {s[j]:g} to {s[j + 1]:g} m: a gap of {s[j + 1] - s[j]:.3g} m)"
         raise InputError(
             f"{source}: the roughness window from {start[k]:g} to {start[k] + width:g} m holds {stop[k] - first[k]} "
-            f"samples; measuring roughness needs at least {MIN_SAMPLES_PER_WINDOW}: sample the route every "
+            f"samples{gap}; measuring roughness needs at least {MIN_SAMPLES_PER_WINDOW}: "
+            f"{'fill the gap or ' if gap else ''}sample the route every "
             f"{width / MIN_SAMPLES_PER_WINDOW:.3g} m or closer, or raise roughness_window_m"
         )
 

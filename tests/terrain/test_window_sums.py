@@ -154,6 +154,20 @@ def test_a_window_too_sparse_is_one_line_naming_the_spacing() -> None:
         roughness_windows(s, np.zeros_like(s), 0.1, window_m=5.0)
 
 
+def test_a_gap_in_fine_samples_is_named_as_a_gap() -> None:
+    # every 0.05 m but for 10 m missing after 49.95 m: the window is thin because of the gap,
+    # not the spacing, and the line says where it is
+    s = np.concatenate([np.arange(0.0, 49.97, 0.05), np.arange(60.0, 100.0 + 1e-9, 0.05)])
+    with pytest.raises(InputError, match=r"holds 7 samples \(the samples jump from 49.95 to 60 m: a gap of 10 m\); "
+                                         r"measuring roughness needs at least 8: fill the gap or sample"):
+        roughness_windows(s, np.zeros_like(s), 0.1, window_m=5.0)
+    # evenly sparse: no gap named
+    sparse = np.arange(0.0, 50.0 + 1e-9, 1.0)
+    with pytest.raises(InputError) as refused:
+        roughness_windows(sparse, np.zeros_like(sparse), 0.1, window_m=5.0)
+    assert "gap" not in str(refused.value)
+
+
 def test_transmissibility_peak_ratio_is_the_peak() -> None:
     for zeta in (0.05, 0.1, 0.3, 0.5, 0.7):
         r = np.linspace(0.01, 3.0, 300001)
