@@ -19,8 +19,8 @@ What a batch writes, into its output folder:
 
 With pyarrow installed (the ``parquet`` extra), ``summary.parquet`` holds the same table
 with typed columns, written with the last ``summary.csv`` when the batch ends (also when it
-is stopped by SIGTERM or Ctrl-C; not after a crash of the process itself): a Parquet file
-per route cost the batch's own process 0.02 s a route, beside the workers.
+is stopped by SIGTERM or Ctrl-C; after a crash of the process itself, by the next run): a
+Parquet file per route cost the batch's own process 0.02 s a route, beside the workers.
 
 A row that fails does not stop the others. Run again, a batch plans only the rows whose
 profile is missing, or failed, or whose inputs changed: ``input_sha256`` hashes the
@@ -295,10 +295,23 @@ def _plan_rows(rows: Sequence[BatchRow], out: Path, workers: int | None, schedul
 
     try:
         _plan_todo(todo, out, workers, scheduler, client, protected, finished)
-    finally:  # the end, or SIGTERM / Ctrl-C: the CSV again and the Parquet table beside it
-        if planned and _has_pyarrow():
+    finally:  # the end, or SIGTERM / Ctrl-C: the CSV again and the Parquet table beside it (also
+        # when an earlier batch was killed between its last CSV and its Parquet table)
+        if _has_pyarrow() and (planned or _parquet_behind(out)):
             _write_summary(out / SUMMARY_FILE, [done[r.id] for r in rows if r.id in done], summary_set, parquet=True)
     return [done[row.id] for row in rows]
+
+
+def _parquet_behind(out: Path) -> bool:
+    """Whether ``summary.parquet`` is missing or older than ``summary.csv`` in ``out``."""
+    try:
+        csv_ns = (out / SUMMARY_FILE).stat().st_mtime_ns
+    except OSError:
+        return False
+    try:
+        return (out / SUMMARY_PARQUET).stat().st_mtime_ns < csv_ns
+    except OSError:
+        return True
 
 
 def _plan_todo(todo: list[tuple[BatchRow, str]], out: Path, workers: int | None, scheduler: str | None,

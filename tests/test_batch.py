@@ -158,6 +158,22 @@ def _same_as_parquet(out: Path, table: dict[str, dict[str, str]]) -> None:
         assert row["segments"] == (int(csv_row["segments"]) if csv_row["segments"] else None)
 
 
+def test_a_parquet_summary_behind_the_csv_is_written_again(folder: Path) -> None:
+    """summary.parquet is written once, as a batch ends: one killed between its last
+    summary.csv and the Parquet table leaves it missing (or older), and the next run, with
+    nothing left to plan, writes it."""
+    pytest.importorskip("pyarrow")
+    short_route(folder, "kerb.csv", 60.0)
+    rows = [BatchRow("kerb", str(folder / "kerb.csv"), (("vehicle", "atv"),))]
+    out = folder / "out"
+    plan_many(rows, out, workers=1)
+    (out / "summary.parquet").unlink()  # as if killed after the CSV
+    stamp = (out / "kerb.csv").stat().st_mtime_ns
+    plan_many(rows, out, workers=1)
+    assert (out / "kerb.csv").stat().st_mtime_ns == stamp  # nothing planned again
+    _same_as_parquet(out, summary(out))
+
+
 def _plan_json(route: Path) -> str:
     done = subprocess.run([*PROFILEOPT, "plan", str(route), "--json", "-q"], capture_output=True, text=True,
                           check=True, timeout=120)
