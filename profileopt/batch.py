@@ -515,15 +515,16 @@ def _write_summary(path: Path, rows: Iterable[dict[str, Any]], outputs: Any, *, 
     the folder checked at the start, and only if neither is now one of the batch's inputs."""
     from .io.atomic import atomic_write
 
-    rows = list(rows)
+    text = io.StringIO()
+    writer = csv.DictWriter(text, fieldnames=SUMMARY_COLUMNS, lineterminator="\n")
+    writer.writeheader()
+    for row in rows:
+        writer.writerow({key: "" if row.get(key) is None else row.get(key) for key in SUMMARY_COLUMNS})
     with outputs:
         with atomic_write(path) as handle:
-            writer = csv.DictWriter(handle, fieldnames=SUMMARY_COLUMNS, lineterminator="\n")
-            writer.writeheader()
-            for row in rows:
-                writer.writerow({key: "" if row.get(key) is None else row.get(key) for key in SUMMARY_COLUMNS})
+            handle.write(text.getvalue())
         if parquet:
-            _write_parquet(path.with_name(SUMMARY_PARQUET), rows)
+            _write_parquet(path.with_name(SUMMARY_PARQUET), text.getvalue())
 
 
 def _has_pyarrow() -> bool:
@@ -585,17 +586,23 @@ _NUMBERS = {"travel_time_s": "float64", "distance_m": "float64", "mean_speed_mps
             "force_ratio": "float64"}
 
 
-def _write_parquet(path: Path, rows: list[dict[str, Any]]) -> None:
-    """The summary as Parquet (typed columns; empty cells null), atomically; nothing without pyarrow."""
+def _write_parquet(path: Path, summary_csv: str) -> None:
+    """The summary as Parquet (typed columns; empty cells null), atomically; nothing without
+    pyarrow. Read from the summary's CSV text by pyarrow's own CSV reader, with every column's
+    type given: building the columns from Python lists (``pyarrow.array``) imports pandas
+    where it is installed, 0.2 s of every batch."""
     try:
         import pyarrow as pa
+        import pyarrow.csv as pa_csv
         import pyarrow.parquet as pq
     except ImportError:
         return
     from .io.atomic import atomic_path
 
-    columns = {key: pa.array([row.get(key) if row.get(key) not in ("", None) else None for row in rows],
-                             type=getattr(pa, _NUMBERS.get(key, "string"))())
-               for key in SUMMARY_COLUMNS}
+    types = {key: getattr(pa, _NUMBERS.get(key, "string"))() for key in SUMMARY_COLUMNS}
+    table = pa_csv.read_csv(pa.BufferReader(summary_csv.encode("utf-8")),
+                            parse_options=pa_csv.ParseOptions(newlines_in_values=True),
+                            convert_options=pa_csv.ConvertOptions(column_types=types, null_values=[""],
+                                                                  strings_can_be_null=True))
     with atomic_path(path) as tmp:
-        pq.write_table(pa.table(columns), tmp)
+        pq.write_table(table, tmp)

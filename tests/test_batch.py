@@ -174,6 +174,18 @@ def test_a_parquet_summary_behind_the_csv_is_written_again(folder: Path) -> None
     _same_as_parquet(out, summary(out))
 
 
+def test_the_parquet_summary_keeps_text_that_looks_like_a_null(folder: Path) -> None:
+    """An id "NA" (a valid id) and an error line with commas and quotes stay text in
+    summary.parquet, not nulls or split cells."""
+    pytest.importorskip("pyarrow")
+    rows = [BatchRow("NA", str(folder / 'no, "such".csv'), (("vehicle", "atv"),))]
+    out = folder / "out"
+    plan_many(rows, out, workers=1)
+    table = summary(out)
+    assert list(table) == ["NA"] and 'no, "such".csv' in table["NA"]["error"]
+    _same_as_parquet(out, table)
+
+
 def _plan_json(route: Path) -> str:
     done = subprocess.run([*PROFILEOPT, "plan", str(route), "--json", "-q"], capture_output=True, text=True,
                           check=True, timeout=120)
