@@ -111,7 +111,7 @@ from ..physics.motion import plans_on_grades, power_accel_mps2, tyre_accel_mps2
 from ..physics.speeds import speed_bands
 from ..physics.steps import MAX_RAMP_M, TREND_HALF_WIDTH_M
 from ..planning.bands import DrivePower, boundary_bounds, braking_profile, greatest_profile
-from ..planning.gate import GATE_MARGIN, MAX_GATE_ROUNDS, check_speeds, gate_applies, gate_caps
+from ..planning.gate import GATE_MARGIN, MAX_GATE_ROUNDS, GateCheck, check_speeds, gate_applies, gate_caps
 from ..planning.limits import ForceLimit, PlanContext, default_limits
 from ..terrain.assumed import unseen_roughness
 from ..terrain.geometry import route_geometry
@@ -752,9 +752,7 @@ class SpeedSelector:
         offline planner's gate lowers them (:func:`profileopt.planning.gate.gate_caps`). None: it
         holds."""
         speed = np.sqrt(_boundary_b(top * top, end_b=math.inf))
-        check = check_speeds(route, bounds, speed, self.vehicle, window_m=self.roughness_window_m,
-                             force_margin=GATE_FORCE_MARGIN,
-                             judged_m=(float(bounds[new.start]), float(bounds[new.stop])))
+        check = self._simulate(route, bounds, speed, new)
         if check.passes:
             return None
         caps = gate_caps(check, self.vehicle, round_number)
@@ -765,6 +763,13 @@ class SpeedSelector:
             meets[new.stop:] = False
             lowered[meets] = np.minimum(lowered[meets], cap_mps)
         return lowered if np.any(lowered < top) else None
+
+    def _simulate(self, route: "Route", bounds: np.ndarray, speed_mps: np.ndarray, new: slice) -> GateCheck:
+        """The gate's run: the exact quarter car over the measured stretch at the boundary speeds
+        ``speed_mps`` (m/s, shape (N+1,)), from rest at its start, judged over the new segments
+        against the limit less :data:`GATE_FORCE_MARGIN`."""
+        return check_speeds(route, bounds, speed_mps, self.vehicle, window_m=self.roughness_window_m,
+                            force_margin=GATE_FORCE_MARGIN, judged_m=(float(bounds[new.start]), float(bounds[new.stop])))
 
     def _upper_band_worst(self, route: "Route", bounds: np.ndarray, top: np.ndarray, upper_lo: np.ndarray,
                           band_edge: np.ndarray, join: np.ufunc, new: slice) -> float:
@@ -785,10 +790,7 @@ class SpeedSelector:
         edge_right = np.concatenate([band_edge, [np.nan]])
         speed = np.where(left & right, join(edge_left, edge_right),
                          np.where(left, edge_left, np.where(right, edge_right, speed)))
-        check = check_speeds(route, bounds, speed, self.vehicle, window_m=self.roughness_window_m,
-                             force_margin=GATE_FORCE_MARGIN,
-                             judged_m=(float(bounds[new.start]), float(bounds[new.stop])))
-        return check.worst_ratio
+        return self._simulate(route, bounds, speed, new).worst_ratio
 
     def _check_passed(self, bounds: np.ndarray, top: np.ndarray) -> None:
         """Whether the vehicle already drove faster than the caps of segments just computed
