@@ -23,9 +23,9 @@ so w jumps by minus the jumps of y and u* and w' by minus the jump of y'
 -k w - c w' + 2 m g.
 
 :func:`respond` runs the recursion w-_{j+1} = Phi(h_j) w+_j, w+_j = w-_j + J_j exactly, in
-compiled code: on the knots that lie on a uniform grid it is a linear time-invariant
-filter (:func:`two_pole_filter`, what :func:`scipy.signal.lfilter` computes), each other
-knot's jump being carried to the next grid point by Phi; the knots between two grid points are then filled in, one rank at a time.
+array operations: on the knots that lie on a uniform grid it is a linear time-invariant
+recursion with one Phi (:func:`grid_recursion`), each other knot's jump being carried to the
+next grid point by Phi; the knots between two grid points are then filled in, one rank at a time.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ import math
 
 import numpy as np
 
-__all__ = ["transition", "knot_jumps", "KnotResponse", "respond", "two_pole_filter", "hermite_extremum"]
+__all__ = ["transition", "knot_jumps", "KnotResponse", "respond", "grid_recursion", "hermite_extremum"]
 
 
 def transition(h_s: np.ndarray, natural_frequency_radps: float, damping_ratio: float
@@ -169,14 +169,11 @@ def respond(time_s: np.ndarray, jumps: np.ndarray, grid: np.ndarray, natural_fre
     drive = jumps[on_grid].copy()
     np.add.at(drive[:, 0], nxt, p11 * jumps[off, 0] + p12 * jumps[off, 1])
     np.add.at(drive[:, 1], nxt, p21 * jumps[off, 0] + p22 * jumps[off, 1])
-    # W_k = Phi(dt) W_{k-1} + D_k: W = (I - Phi z^-1)^-1 D, the adjugate over the determinant
+    # W_k = Phi(dt) W_{k-1} + D_k
     f11, f12, f21, f22 = (float(v[0]) for v in transition(np.array([dt]), natural_frequency_radps, damping_ratio))
-    den = [1.0, -(f11 + f22), f11 * f22 - f12 * f21]
     after = np.empty((n, 2))
     before = np.empty((n, 2))
-    d0, d1 = drive[:, 0], drive[:, 1]
-    after[on_grid, 0] = two_pole_filter([1.0, -f22], den, d0) + two_pole_filter([0.0, f12], den, d1)
-    after[on_grid, 1] = two_pole_filter([0.0, f21], den, d0) + two_pole_filter([1.0, -f11], den, d1)
+    after[on_grid] = grid_recursion((f11, f12, f21, f22), drive)
     before[on_grid] = after[on_grid] - jumps[on_grid]
     # the knots between grid points, rank by rank (rank 1: right after a grid point)
     rank = off - on_grid[nxt - 1]
@@ -194,41 +191,63 @@ def respond(time_s: np.ndarray, jumps: np.ndarray, grid: np.ndarray, natural_fre
     return KnotResponse(before=before, after=after)
 
 
-def two_pole_filter(numerator: "list[float]", denominator: "list[float]", x: np.ndarray) -> np.ndarray:
-    """The output of a two-pole filter from rest, as ``scipy.signal.lfilter(numerator,
-    denominator, x)`` gives it: ``d0 y[n] + d1 y[n-1] + d2 y[n-2] = n0 x[n] + n1 x[n-1]``.
+def grid_recursion(phi: "tuple[float, float, float, float]", drive: np.ndarray) -> np.ndarray:
+    """W_k = Phi W_{k-1} + D_k from rest (W_{-1} = 0), for a constant 2 x 2 Phi, in blocks.
 
-    Solved as the lower-triangular banded system it is, by forward substitution (LAPACK
-    ``dtbtrs``, through ``scipy.linalg``, which a plan has imported already):
-    ``scipy.signal`` costs 1.5 s to import, the better part of a short plan. It agrees with
-    ``lfilter`` to about 1e-14 of the output's size (a different order of the same sums).
+    The K steps are cut into about sqrt(K) blocks of about sqrt(K) steps. Each block is first run
+    from rest, all blocks at once (one array operation per step of a block); then the state at
+    each block's end is carried to the next block's start by Phi^L (a scalar recursion over the
+    blocks) and added to that block's steps as Phi^(j+1) times the carried state. The result
+    is the sequential recursion's, summed in another order (to about 1e-13 of its size on a
+    lightly damped quarter car: see the test against ``scipy.signal.lfilter``), in O(K)
+    operations and O(sqrt(K)) Python steps; it needs no SciPy, whose linear algebra took
+    0.24 s to import, a fifth of a 10 km plan.
 
     Parameters
     ----------
-    numerator : sequence of float, length 2
-        (n0, n1).
-    denominator : sequence of float, length 3
-        (d0, d1, d2), d0 != 0.
-    x : numpy.ndarray, shape (K,)
-        The input.
+    phi : tuple of 4 float
+        (Phi11, Phi12, Phi21, Phi22), the transition over one step (:func:`transition`).
+    drive : numpy.ndarray, shape (K, 2)
+        D_k (any units, the same as W).
 
     Returns
     -------
-    numpy.ndarray, shape (K,)
+    numpy.ndarray, shape (K, 2)
+        W_k.
     """
-    from scipy.linalg import lapack
-
-    x = np.asarray(x, dtype=float)
-    rhs = numerator[0] * x
-    rhs[1:] += numerator[1] * x[:-1]
-    band = np.zeros((3, x.size))  # LAPACK's band storage of the lower triangle: row k is diagonal -k
-    band[0] = denominator[0]
-    band[1, :-1] = denominator[1]
-    band[2, :-2] = denominator[2]
-    y, info = lapack.dtbtrs(band, rhs[:, None], uplo="L")
-    if info != 0:  # pragma: no cover - d0 != 0 always for a transition matrix
-        raise ArithmeticError(f"two_pole_filter: LAPACK dtbtrs returned info = {info}")
-    return y[:, 0]
+    f11, f12, f21, f22 = (float(v) for v in phi)
+    d = np.asarray(drive, dtype=float)
+    k_steps = d.shape[0]
+    length = max(1, math.isqrt(k_steps))  # steps per block
+    blocks = -(-k_steps // length)
+    padded = np.zeros((blocks * length, 2))
+    padded[:k_steps] = d
+    d0 = padded[:, 0].reshape(blocks, length)
+    d1 = padded[:, 1].reshape(blocks, length)
+    w0, w1 = np.empty((blocks, length)), np.empty((blocks, length))  # each block from rest
+    w0[:, 0], w1[:, 0] = d0[:, 0], d1[:, 0]
+    for j in range(1, length):
+        w0[:, j] = f11 * w0[:, j - 1] + f12 * w1[:, j - 1] + d0[:, j]
+        w1[:, j] = f21 * w0[:, j - 1] + f22 * w1[:, j - 1] + d1[:, j]
+    # P_j = Phi^(j+1), j = 0 .. length-1
+    p11, p12, p21, p22 = (np.empty(length) for _ in range(4))
+    p11[0], p12[0], p21[0], p22[0] = f11, f12, f21, f22
+    for j in range(1, length):
+        p11[j] = f11 * p11[j - 1] + f12 * p21[j - 1]
+        p12[j] = f11 * p12[j - 1] + f12 * p22[j - 1]
+        p21[j] = f21 * p11[j - 1] + f22 * p21[j - 1]
+        p22[j] = f21 * p12[j - 1] + f22 * p22[j - 1]
+    # the state at each block's start: C_b = Phi^L C_{b-1} + (block b-1's end from rest)
+    g11, g12, g21, g22 = float(p11[-1]), float(p12[-1]), float(p21[-1]), float(p22[-1])
+    ends0, ends1 = w0[:, -1].tolist(), w1[:, -1].tolist()
+    c0, c1 = np.zeros(blocks), np.zeros(blocks)
+    x0 = x1 = 0.0
+    for b in range(1, blocks):
+        x0, x1 = g11 * x0 + g12 * x1 + ends0[b - 1], g21 * x0 + g22 * x1 + ends1[b - 1]
+        c0[b], c1[b] = x0, x1
+    w0 += p11[None, :] * c0[:, None] + p12[None, :] * c1[:, None]
+    w1 += p21[None, :] * c0[:, None] + p22[None, :] * c1[:, None]
+    return np.stack([w0.reshape(-1)[:k_steps], w1.reshape(-1)[:k_steps]], axis=1)
 
 
 def hermite_extremum(h_s: np.ndarray, value_start: np.ndarray, value_end: np.ndarray,
