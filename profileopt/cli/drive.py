@@ -11,12 +11,16 @@ import argparse
 import json
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..defaults import DEFAULT_MODEL, DEFAULT_ROUGHNESS_WINDOW_M, MODEL_KEYS
 from ..errors import InputError
 from .memory import MAX_MEMORY_GB, MAX_MEMORY_HELP
 from .paths import vehicle_input
 from .track import number_argument
+
+if TYPE_CHECKING:
+    import numpy as np
 
 #: Defaults of the online selector, repeated here so that ``--help`` needs no numerical
 #: package; tests/cli/test_drive_command.py checks they equal :mod:`profileopt.online.selector`'s.
@@ -106,6 +110,9 @@ def run(args: argparse.Namespace) -> int:
     if not args.quiet:
         for note in route.notes:
             print(f"note: {printable(note)}", file=sys.stderr)
+        blind = _never_measured(route.s_m, args.sensor_spacing)
+        if blind:
+            print(f"note: {blind}", file=sys.stderr)
     unseen = args.unseen
     if unseen.strip().lower() == "route":
         from ..core.segments import route_roughness_windows
@@ -183,3 +190,35 @@ def _human(summary: dict, args: argparse.Namespace) -> str:
         if name is not None and name != "-":
             lines.append(f"wrote {name}")
     return "\n".join(lines)
+
+
+def _never_measured(s_m: np.ndarray, sensor_spacing_m: float | None) -> str:
+    """Why no terrain of the drive can count as measured, said before the drive; '' if some can.
+
+    Terrain counts as measured only where the sensed samples are at most
+    :data:`~profileopt.defaults.MAX_ROUGHNESS_SPACING_M` apart (the drive's end note counts the
+    metres that never were); a sensor spacing wider than that, or a route whose samples all are,
+    leaves the whole route to the unseen assumption, which a user should know before waiting.
+
+    Parameters
+    ----------
+    s_m : numpy.ndarray, shape (K,)
+        The route's stations (m).
+    sensor_spacing_m : float or None
+        ``--sensor-spacing`` (m); None: the route's own samples are sensed.
+    """
+    import numpy as np
+
+    from ..defaults import MAX_ROUGHNESS_SPACING_M as finest
+
+    if sensor_spacing_m is not None:
+        if not sensor_spacing_m > finest * (1 + 1e-9):
+            return ""
+        cause = f"--sensor-spacing {sensor_spacing_m:g} m is wider than"
+    else:
+        gaps = np.diff(s_m)
+        if gaps.size == 0 or not np.all(gaps > finest * (1 + 1e-9)):
+            return ""
+        cause = f"the route's samples are {float(np.min(gaps)):.3g} m apart or more, wider than"
+    return (f"{cause} the {finest:g} m at which sensed terrain counts as measured: the whole route will be driven "
+            f"as unseen terrain (--unseen); sense at most {finest:g} m apart to drive on what the sensor sees")

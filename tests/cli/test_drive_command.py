@@ -9,6 +9,7 @@ import pytest
 
 from profileopt import cli
 from profileopt.cli import drive as drive_command
+from profileopt.errors import InputError
 from profileopt.online.drive import DRIVE_COLUMNS
 from profileopt.online import selector
 
@@ -97,3 +98,45 @@ def test_the_help_defaults_are_the_selectors() -> None:
     assert drive_command.SEGMENT_LENGTH_M == selector.DEFAULT_ONLINE_SEGMENT_LENGTH_M
     assert drive_command.UNSEEN == selector.DEFAULT_UNSEEN
     assert drive_command.UNSEEN_DESCENT == selector.DEFAULT_UNSEEN_DESCENT
+
+
+@pytest.mark.parametrize("argv, said", [
+    (["--sensor-spacing", "0.2"], "--sensor-spacing 0.2 m is wider than the 0.1 m"),
+    (["--sensor-spacing", "0.1"], None),  # at the finest spacing terrain is measured
+    ([], None),  # the bundled route's own samples (0.05 m)
+])
+def test_a_sensor_too_coarse_to_measure_is_said_before_the_drive(argv, said, monkeypatch, capsys) -> None:
+    """Terrain counts as measured only where sensed samples are at most 0.1 m apart: a wider
+    --sensor-spacing leaves the whole route to the unseen assumption (issue 31's sweep: 5.75-82
+    times the offline time, said only at the end). The line comes before the drive (here
+    stopped at its start, so the test needs no drive)."""
+    import profileopt.online
+
+    def stop(*args, **kwargs):
+        raise InputError("stopped at the drive")
+
+    monkeypatch.setattr(profileopt.online, "drive", stop)
+    assert cli.main(["drive", str(ROUTES / "curb.csv"), *argv]) == 2
+    err = capsys.readouterr().err
+    assert "stopped at the drive" in err
+    if said is None:
+        assert "driven as unseen terrain" not in err
+    else:
+        line = next(line for line in err.splitlines() if said in line)
+        assert line.startswith("note: ") and "the whole route will be driven as unseen terrain" in line
+
+
+def test_a_route_sampled_too_coarsely_to_measure_is_said_before_the_drive(tmp_path, monkeypatch, capsys) -> None:
+    """The route's own samples 0.25 m apart: nothing of it can count as measured."""
+    import profileopt.online
+
+    def stop(*args, **kwargs):
+        raise InputError("stopped at the drive")
+
+    route = tmp_path / "coarse.csv"
+    s = np.arange(0.0, 100.01, 0.25)
+    route.write_text("s_m,z_m\n" + "".join(f"{x:g},{0.01 * np.sin(x):.6f}\n" for x in s))
+    monkeypatch.setattr(profileopt.online, "drive", stop)
+    assert cli.main(["drive", str(route), "--sensor-range", "50"]) == 2
+    line = next(line for line in capsys.readouterr().err.splitlines() if "driven as unseen terrain" in line)
+    assert "the route's samples are 0.25 m apart or more" in line
