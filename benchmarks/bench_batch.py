@@ -38,6 +38,9 @@ import tempfile
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # the benchmarks' shared helper
+from installed import compile_package  # noqa: E402
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -75,6 +78,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--separate", action="store_true", help="also time one 'profileopt plan' per route")
     args = parser.parse_args(argv)
+    print(compile_package(), file=sys.stderr)
     command = [sys.executable, "-m", "profileopt"]
     env_note = "OPENBLAS_NUM_THREADS=1" if os.environ.get("OPENBLAS_NUM_THREADS") == "1" else ""
     with tempfile.TemporaryDirectory() as tmp:

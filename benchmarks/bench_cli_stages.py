@@ -32,6 +32,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import bench_plan  # noqa: E402  (the benchmark's route and vehicle)
+from installed import compile_package  # noqa: E402
 
 from profileopt.io import read_route  # noqa: E402
 from profileopt.io.profiles import write_profile  # noqa: E402
@@ -53,6 +54,7 @@ def main() -> int:
     parser.add_argument("--repeats", type=int, default=5, help="timed runs of each stage (default 5)")
     parser.add_argument("--segments", type=int, default=10_000, help="5 m segments (default 10,000)")
     args = parser.parse_args()
+    print(compile_package(), file=sys.stderr)
     with tempfile.TemporaryDirectory(prefix="bench_cli_") as tmp:
         work = Path(tmp)
         route_path = work / "route.csv"

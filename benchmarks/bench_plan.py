@@ -91,6 +91,9 @@ import time
 from pathlib import Path
 from typing import Callable
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # the benchmarks' shared helper
+from installed import compile_package  # noqa: E402
+
 import numpy as np
 
 import profileopt
@@ -912,6 +915,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--pairs", type=int, default=SCALING_PAIRS,
                         help=f"alternating 10,000/100,000 pairs for the scaling ratio (default {SCALING_PAIRS})")
     args = parser.parse_args(argv)
+    print(compile_package(), file=sys.stderr)
     sizes = [int(x) for item in args.sizes for x in item.split(",") if x]
     if args.repeats < 1 or any(n < 2 for n in sizes):
         parser.error("--repeats must be >= 1 and every size >= 2")

@@ -15,6 +15,10 @@ import statistics
 import subprocess
 import sys
 import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # the benchmarks' shared helper
+from installed import compile_package  # noqa: E402
 
 
 def main() -> int:
@@ -22,6 +26,7 @@ def main() -> int:
                                      formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("--repeats", type=int, default=15, help="timed runs of each command")
     args = parser.parse_args()
+    print(compile_package(), file=sys.stderr)
     exe = shutil.which("profileopt")
     command = [exe] if exe else [sys.executable, "-m", "profileopt"]
     print("| command | median (s) | min-max (s) | target |")

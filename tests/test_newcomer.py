@@ -236,6 +236,7 @@ def test_bench_plan_does_not_overwrite_the_committed_results_by_default(tmp_path
     (tmp_path / "benchmarks").mkdir()
     monkeypatch.setattr(bench, "REPO", tmp_path)
     monkeypatch.setattr(bench, "bench_size", lambda *args, **kwargs: [])
+    monkeypatch.setattr(bench, "compile_package", lambda: "bytecode not compiled in the test")
     monkeypatch.chdir(tmp_path)
     assert bench.main(["--sizes", "2", "--repeats", "1", "--no-cli"]) == 0
     assert list((tmp_path / "benchmarks").iterdir()) == []
