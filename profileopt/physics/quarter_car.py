@@ -275,9 +275,12 @@ def hermite_extremum(h_s: np.ndarray, value_start: np.ndarray, value_end: np.nda
         derivative keeps its sign.
     """
     h = np.asarray(h_s, dtype=float)
-    f0, f1 = np.asarray(value_start, dtype=float), np.asarray(value_end, dtype=float)
-    d0, d1 = h * np.asarray(rate_start, dtype=float), h * np.asarray(rate_end, dtype=float)
-    turns = d0 * d1 < 0
+    rate_start, rate_end = np.asarray(rate_start, dtype=float), np.asarray(rate_end, dtype=float)
+    turns = np.flatnonzero((h * rate_start) * (h * rate_end) < 0)  # only these intervals are solved
+    out = np.full(h.shape, np.nan)
+    h = h[turns]
+    f0, f1 = np.asarray(value_start, dtype=float)[turns], np.asarray(value_end, dtype=float)[turns]
+    d0, d1 = h * rate_start[turns], h * rate_end[turns]
     # p'(x) on x in [0, 1]: qa x^2 + qb x + qc, with p'(0) = d0, p'(1) = d1 of opposite signs
     qa = 6.0 * (f0 - f1) + 3.0 * (d0 + d1)
     qb = -6.0 * (f0 - f1) - 4.0 * d0 - 2.0 * d1
@@ -289,4 +292,5 @@ def hermite_extremum(h_s: np.ndarray, value_start: np.ndarray, value_end: np.nda
         root2 = np.where(big != 0, qc / big, -qc / np.where(qb != 0, qb, np.nan))
     x = np.where((root1 > 0) & (root1 < 1), root1, root2)
     x = np.where(np.isfinite(x), np.clip(x, 0.0, 1.0), 0.5)
-    return np.where(turns, x * h, np.nan)
+    out[turns] = x * h
+    return out

@@ -474,7 +474,11 @@ class _Knots:
         duration = np.diff(times)
         short = np.flatnonzero(duration < 4.0 * times[-1] / steps)
         quarters = (times[short, None] + duration[short, None] * np.array([0.25, 0.5, 0.75])[None, :]).ravel()
-        t = np.union1d(np.union1d(kt, grid_t), quarters)
+        # the sorted union of three sorted arrays: a stable sort (a merge of sorted runs) and
+        # the repeats dropped, what np.union1d gives by sorting afresh
+        t = np.concatenate([kt, grid_t, quarters])
+        t.sort(kind="stable")
+        t = t[np.concatenate([[True], t[1:] != t[:-1]])]
         is_knot = np.zeros(t.size, dtype=bool)
         where_knot = np.searchsorted(t, kt)
         is_knot[where_knot] = True
