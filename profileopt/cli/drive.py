@@ -212,8 +212,8 @@ def _never_measured(s_m: np.ndarray, sensor_spacing_m: float | None) -> str:
     from ..defaults import MAX_ROUGHNESS_SPACING_M as finest
 
     if sensor_spacing_m is not None:
-        if not sensor_spacing_m > finest * (1 + 1e-9):
-            return ""
+        if not (np.isfinite(sensor_spacing_m) and sensor_spacing_m > finest * (1 + 1e-9)):
+            return ""  # measurable, or a bad value that the drive refuses in one line
         cause = f"--sensor-spacing {sensor_spacing_m:g} m is wider than"
     else:
         gaps = np.diff(s_m)

@@ -103,6 +103,7 @@ def test_the_help_defaults_are_the_selectors() -> None:
 @pytest.mark.parametrize("argv, said", [
     (["--sensor-spacing", "0.2"], "--sensor-spacing 0.2 m is wider than the 0.1 m"),
     (["--sensor-spacing", "0.1"], None),  # at the finest spacing terrain is measured
+    (["--sensor-spacing", "inf"], None),  # refused by the drive in one line, with no note before it
     ([], None),  # the bundled route's own samples (0.05 m)
 ])
 def test_a_sensor_too_coarse_to_measure_is_said_before_the_drive(argv, said, monkeypatch, capsys) -> None:
