@@ -198,8 +198,9 @@ def grid_recursion(phi: "tuple[float, float, float, float]", drive: np.ndarray) 
     from rest, all blocks at once (one array operation per step of a block); then the state at
     each block's end is carried to the next block's start by Phi^L (a scalar recursion over the
     blocks) and added to that block's steps as Phi^(j+1) times the carried state. The result
-    is the sequential recursion's, summed in another order (to about 1e-13 of its size on a
-    lightly damped quarter car: see the test against ``scipy.signal.lfilter``), in O(K)
+    is the sequential recursion's, summed in another order (within 3e-14 of its size against
+    ``scipy.signal.lfilter``, up to 2 million steps, damping ratios 0.02-1.5; the test asks
+    1e-12), in O(K)
     operations and O(sqrt(K)) Python steps; it needs no SciPy, whose linear algebra took
     0.24 s to import, a fifth of a 10 km plan.
 
