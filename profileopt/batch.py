@@ -286,19 +286,22 @@ def _plan_rows(rows: Sequence[BatchRow], out: Path, workers: int | None, schedul
 
     planned: list[str] = []  # the rows planned in this run
 
+    def write_summary(*, parquet: bool) -> None:
+        _write_summary(out / SUMMARY_FILE, [done[r.id] for r in rows if r.id in done], summary_set, parquet=parquet)
+
     def finished(row: BatchRow, digest: str, result: dict[str, Any]) -> None:
         done[row.id] = {"id": row.id, **result, "route": row.route,
                         "profile": f"{row.id}.csv" if result["status"] == "ok" else "", "input_sha256": digest}
         planned.append(row.id)
         progress.step(f"{row.id}: {done[row.id]['status']}")
-        _write_summary(out / SUMMARY_FILE, [done[r.id] for r in rows if r.id in done], summary_set, parquet=False)
+        write_summary(parquet=False)
 
     try:
         _plan_todo(todo, out, workers, scheduler, client, protected, finished)
     finally:  # the end, or SIGTERM / Ctrl-C: the CSV again and the Parquet table beside it (also
         # when an earlier batch was killed between its last CSV and its Parquet table)
         if _has_pyarrow() and (planned or _parquet_behind(out)):
-            _write_summary(out / SUMMARY_FILE, [done[r.id] for r in rows if r.id in done], summary_set, parquet=True)
+            write_summary(parquet=True)
     return [done[row.id] for row in rows]
 
 
