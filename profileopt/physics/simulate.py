@@ -108,6 +108,8 @@ STEPS_PER_PERIOD = 200
 MAX_ARC_STEP_RAD = 0.02
 #: Upper bound on the number of time steps (memory: about 15 arrays of this length).
 MAX_STEPS = 20_000_000
+#: Knots whose forces are computed at once (the temporaries of one chunk fit in a cache).
+CHUNK_KNOTS = 1 << 16
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -494,90 +496,122 @@ class _Knots:
         return cls(t=t, s=s_t, v=v_t, grid=grid, piece=(p_before, p_after), seg=(g_before, g_after),
                    profile=(b, v, times, accel))
 
-    def inputs(self, path: WheelPath, trend: tuple) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-        """y, y', y'' (from both sides) and the excitation's y~, y~', y~'' at the knots."""
+    def inputs(self, path: WheelPath, trend: tuple, lo: int, hi: int) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """y, y', y'' (from both sides) and the excitation's y~, y~', y~'' at knots lo to hi - 1."""
         accel = self.profile[3]
         s0, level, slope = trend
+        s, v = self.s[lo:hi], self.v[lo:hi]
         out: dict[str, list] = {"y": [], "dy": [], "d2y": [], "yt": [], "dyt": [], "d2yt": []}
         for side in (0, 1):
-            y, ys, yss = path.evaluate(self.s, self.piece[side])
-            seg = self.seg[side]
+            y, ys, yss = path.evaluate(s, self.piece[side][lo:hi])
+            seg = self.seg[side][lo:hi]
             a = accel[seg]
             out["y"].append(y)
-            out["dy"].append(ys * self.v)
-            out["d2y"].append(yss * self.v * self.v + ys * a)
-            out["yt"].append(y - (level[seg] + slope[seg] * (self.s - s0[seg])))
-            out["dyt"].append((ys - slope[seg]) * self.v)
-            out["d2yt"].append(yss * self.v * self.v + (ys - slope[seg]) * a)
+            out["dy"].append(ys * v)
+            out["d2y"].append(yss * v * v + ys * a)
+            out["yt"].append(y - (level[seg] + slope[seg] * (s - s0[seg])))
+            out["dyt"].append((ys - slope[seg]) * v)
+            out["d2yt"].append(yss * v * v + (ys - slope[seg]) * a)
         return {key: (value[0], value[1]) for key, value in out.items()}
 
     def drive(self, path: WheelPath, vehicle: "Vehicle", trend: tuple) -> dict[str, np.ndarray]:
-        """Run the quarter car over the knots; rows of the time series and segment peaks."""
+        """Run the quarter car over the knots; rows of the time series and segment peaks.
+
+        The response is one recursion over all knots; everything else is elementwise, so it is
+        done :data:`CHUNK_KNOTS` knots at a time (the same values as all at once: each row
+        depends only on its knot and the next), which keeps the temporaries small.
+        """
         wn, zeta = vehicle.natural_frequency_radps, vehicle.damping_ratio
         m, k, c = vehicle.quarter_mass_kg, vehicle.spring_n_per_m, vehicle.damping_ns_per_m
         n = self.t.size
         h = np.diff(self.t)
-        q = self.inputs(path, trend)
-        y = q["y"][1]  # continuous: either side
-        g, u_star, jumps = knot_jumps(h, y, q["dy"][0], q["dy"][1], wn)
+        # the base input, continuous (either side), and its slope from both sides
+        y, dy_before, dy_after = np.empty(n), np.empty(n), np.empty(n)
+        for lo in range(0, n, CHUNK_KNOTS):
+            hi = min(lo + CHUNK_KNOTS, n)
+            s, v = self.s[lo:hi], self.v[lo:hi]
+            dy_before[lo:hi] = path.evaluate(s, self.piece[0][lo:hi])[1] * v
+            y[lo:hi], slope_after, _ = path.evaluate(s, self.piece[1][lo:hi])
+            dy_after[lo:hi] = slope_after * v  # as in inputs()
+        g, u_star, jumps = knot_jumps(h, y, dy_before, dy_after, wn)
         state = respond(self.t, jumps, self.grid, wn, zeta)
+        del jumps
         g_side = (np.concatenate([[0.0], g]), np.append(g, g[-1] if g.size else 0.0))
         u_side = (np.concatenate([[u_star[0]], u_star[:-1]]), u_star)
-
-        def forces(w, side):
-            """F_T, its rate, and F, its rate, on one side of every knot."""
-            ft = -k * w[:, 0] - c * w[:, 1] + 2.0 * m * g_side[side]
-            ddw = -wn * wn * w[:, 0] - 2.0 * zeta * wn * w[:, 1]
-            fe = k * q["yt"][side] + c * q["dyt"][side]
-            return ft, -k * w[:, 1] - c * ddw, fe, k * q["dyt"][side] + c * q["d2yt"][side]
-
-        before, after = forces(state.before, 0), forces(state.after, 1)
-        # turning points inside the intervals, of either force
-        extra_j, extra_tau = [], []
-        for col in (0, 2):
-            tau = hermite_extremum(h, after[col][:-1], before[col][1:], after[col + 1][:-1], before[col + 1][1:])
-            hit = np.flatnonzero(np.isfinite(tau))
-            extra_j.append(hit)
-            extra_tau.append(tau[hit])
-        j = np.concatenate(extra_j)
-        tau = np.concatenate(extra_tau)
         b, v, times, _ = self.profile
-        seg = self.seg[1][j]
-        te = self.t[j] + tau
-        se, ve = _motion_in_segment(te, seg, b, v, times)
-        p11, p12, p21, p22 = transition(tau, wn, zeta)
-        w0 = state.after[j]
-        w = np.stack([p11 * w0[:, 0] + p12 * w0[:, 1], p21 * w0[:, 0] + p22 * w0[:, 1]], axis=1)
-        ye, yse, _ = path.evaluate(se, self.piece[1][j])
         s0, level, slope = trend
-        ft_e = -k * w[:, 0] - c * w[:, 1] + 2.0 * m * g[j]
-        fe_e = k * (ye - (level[seg] + slope[seg] * (se - s0[seg]))) + c * (yse - slope[seg]) * ve
-        mass_e = ye + w[:, 0] + u_star[j]
-
-        # rows: the left side at kinks and at the end, the right side elsewhere, turning points
-        jump = np.abs(q["dy"][1] - q["dy"][0]) > 1e-12 * (1.0 + np.abs(q["dy"][1]))
-        left = np.flatnonzero(jump | (np.arange(n) == n - 1))
-        left = left[left > 0]
-        right = np.arange(n - 1)
-        mass = (y + state.before[:, 0] + u_side[0], y + state.after[:, 0] + u_side[1])
-        rows = {
-            "time_s": (self.t[left], self.t[right], te),
-            "s_m": (self.s[left], self.s[right], se),
-            "speed_mps": (self.v[left], self.v[right], ve),
-            "base_m": (y[left], y[right], ye),
-            "mass_m": (mass[0][left], mass[1][right], mass_e),
-            "transmitted_n": (before[0][left], after[0][right], ft_e),
-            "excitation_n": (before[2][left], after[2][right], fe_e),
-        }
-        key = np.concatenate([2.0 * left, 2.0 * right + 1.0, 2.0 * j + 1.0 + 0.5 * tau / h[j]])  # left, right, inside
-        order = np.argsort(key, kind="stable")
-        out = {name: np.concatenate(parts)[order] for name, parts in rows.items()}
-        # per-segment peaks: left values belong to the segment before, right and inside to the one after
+        names = ("time_s", "s_m", "speed_mps", "base_m", "mass_m", "transmitted_n", "excitation_n")
+        parts: dict[str, list] = {name: [] for name in names}
         n_seg = b.size - 1
-        for name, col in (("transmitted_peak_n", 0), ("excitation_peak_n", 2)):
-            peak = np.zeros(n_seg)
-            np.maximum.at(peak, self.seg[0][1:], np.abs(before[col][1:]))
-            np.maximum.at(peak, self.seg[1][:-1], np.abs(after[col][:-1]))
-            np.maximum.at(peak, seg, np.abs(ft_e if col == 0 else fe_e))
-            out[name] = peak
+        peaks = (np.zeros(n_seg), np.zeros(n_seg))
+        for lo in range(0, n, CHUNK_KNOTS):
+            hi = min(lo + CHUNK_KNOTS, n)  # the chunk's knots
+            end = min(hi + 1, n)  # and the next knot, where its last interval ends
+            q = self.inputs(path, trend, lo, end)
+            st_before, st_after = state.before[lo:end], state.after[lo:end]
+
+            def forces(w, side):
+                """F_T, its rate, and F, its rate, on one side of knots lo to end - 1."""
+                ft = -k * w[:, 0] - c * w[:, 1] + 2.0 * m * g_side[side][lo:end]
+                ddw = -wn * wn * w[:, 0] - 2.0 * zeta * wn * w[:, 1]
+                fe = k * q["yt"][side] + c * q["dyt"][side]
+                return ft, -k * w[:, 1] - c * ddw, fe, k * q["dyt"][side] + c * q["d2yt"][side]
+
+            before, after = forces(st_before, 0), forces(st_after, 1)
+            # turning points inside the chunk's intervals (lo to end - 2), of either force
+            hk = h[lo:end - 1]
+            extra_j, extra_tau = [], []
+            for col in (0, 2):
+                tau = hermite_extremum(hk, after[col][:-1], before[col][1:], after[col + 1][:-1], before[col + 1][1:])
+                hit = np.flatnonzero(np.isfinite(tau))
+                extra_j.append(hit)
+                extra_tau.append(tau[hit])
+            jl = np.concatenate(extra_j)  # local to the chunk
+            tau = np.concatenate(extra_tau)
+            j = jl + lo
+            seg = self.seg[1][j]
+            te = self.t[j] + tau
+            se, ve = _motion_in_segment(te, seg, b, v, times)
+            p11, p12, p21, p22 = transition(tau, wn, zeta)
+            w0 = st_after[jl]
+            w = np.stack([p11 * w0[:, 0] + p12 * w0[:, 1], p21 * w0[:, 0] + p22 * w0[:, 1]], axis=1)
+            ye, yse, _ = path.evaluate(se, self.piece[1][j])
+            ft_e = -k * w[:, 0] - c * w[:, 1] + 2.0 * m * g[j]
+            fe_e = k * (ye - (level[seg] + slope[seg] * (se - s0[seg]))) + c * (yse - slope[seg]) * ve
+            mass_e = ye + w[:, 0] + u_star[j]
+
+            # rows: the left side at kinks and at the end, the right side elsewhere, turning points
+            dy = q["dy"]
+            count = hi - lo
+            jump = np.abs(dy[1][:count] - dy[0][:count]) > 1e-12 * (1.0 + np.abs(dy[1][:count]))
+            index = np.arange(lo, hi)
+            left = np.flatnonzero(jump | (index == n - 1))
+            left = left[left + lo > 0]  # local
+            right = np.arange(min(hi, n - 1) - lo)  # local
+            yc = y[lo:end]
+            mass = (yc + st_before[:, 0] + u_side[0][lo:end], yc + st_after[:, 0] + u_side[1][lo:end])
+            rows = {
+                "time_s": (self.t[lo:end], te),
+                "s_m": (self.s[lo:end], se),
+                "speed_mps": (self.v[lo:end], ve),
+                "base_m": (yc, ye),
+                "mass_m": ((mass[0], mass[1]), mass_e),
+                "transmitted_n": ((before[0], after[0]), ft_e),
+                "excitation_n": ((before[2], after[2]), fe_e),
+            }
+            # left, right, inside: the order of the knots' times (2 j for the left side of knot
+            # j, 2 j + 1 for its right side, between 2 j + 1 and 2 j + 2 inside its interval)
+            key = np.concatenate([2.0 * (left + lo), 2.0 * (right + lo) + 1.0, 2.0 * j + 1.0 + 0.5 * tau / h[j]])
+            order = np.argsort(key, kind="stable")
+            for name, (at_knots, inside) in rows.items():
+                sides = at_knots if isinstance(at_knots, tuple) else (at_knots, at_knots)
+                parts[name].append(np.concatenate([sides[0][left], sides[1][right], inside])[order])
+            # per-segment peaks: left values belong to the segment before, right and inside to the one after
+            for peak, col in zip(peaks, (0, 2)):
+                first = 1 if lo == 0 else 0  # knot 0 has no left side
+                np.maximum.at(peak, self.seg[0][lo + first:hi], np.abs(before[col][first:count]))
+                np.maximum.at(peak, self.seg[1][lo:min(hi, n - 1)], np.abs(after[col][:right.size]))
+                np.maximum.at(peak, seg, np.abs(ft_e if col == 0 else fe_e))
+        out = {name: np.concatenate(chunks) for name, chunks in parts.items()}
+        out["transmitted_peak_n"], out["excitation_peak_n"] = peaks
         return out
