@@ -457,3 +457,30 @@ def test_constant_grade_at_constant_speed_gives_zero_force() -> None:
     run = simulate_quarter_car(s, 40.0 + 0.08 * s, b, np.full(b.size, 6.0), ATV)
     assert np.max(np.abs(run.transmitted_n)) < 1e-6  # the mass rides up the grade with the wheel
     assert np.max(np.abs(run.excitation_n)) < 1e-6  # the trend line is the datum
+
+
+@pytest.mark.parametrize("chunk", [2, 7, 500])
+def test_the_run_is_the_same_computed_in_chunks_of_any_size(monkeypatch, chunk: int) -> None:
+    """Every row and every peak equal, bit for bit, whether the forces are computed for all
+    knots at once or a few at a time (chunk edges cut between a knot's left and right rows,
+    inside an interval with a turning point, and at the last knot)."""
+    import profileopt.physics.simulate as simulate
+
+    rng = np.random.default_rng(7)
+    s = np.arange(0.0, 40.0, 0.05)
+    z = 0.02 * rng.standard_normal(s.size)
+    z[(s > 12) & (s < 14)] += 0.08  # a block: kinks where the wheel meets and leaves it
+    boundaries = np.linspace(0.0, s[-1], 41)
+    speeds = np.concatenate([[0.3], rng.uniform(1.0, 6.0, boundaries.size - 1)])
+
+    def run():
+        return simulate_quarter_car(s, z, boundaries, speeds, RESONANT)
+
+    monkeypatch.setattr(simulate, "CHUNK_KNOTS", 1 << 40)
+    whole = run()
+    monkeypatch.setattr(simulate, "CHUNK_KNOTS", chunk)
+    chunked = run()
+    assert whole.time_s.size > 20 * chunk  # many chunks
+    for name in ("time_s", "s_m", "speed_mps", "base_m", "mass_m", "transmitted_n", "excitation_n",
+                 "transmitted_peak_n", "excitation_peak_n"):
+        assert np.array_equal(getattr(whole, name), getattr(chunked, name)), name
