@@ -166,15 +166,17 @@ def respond(time_s: np.ndarray, jumps: np.ndarray, grid: np.ndarray, natural_fre
     off = np.flatnonzero(~grid)
     nxt = np.searchsorted(on_grid, off)  # index of the next grid point
     p11, p12, p21, p22 = transition(t[on_grid[nxt]] - t[off], natural_frequency_radps, damping_ratio)
-    drive = jumps[on_grid].copy()
+    on_grid_jumps = jumps[on_grid]
+    drive = on_grid_jumps.copy()
     np.add.at(drive[:, 0], nxt, p11 * jumps[off, 0] + p12 * jumps[off, 1])
     np.add.at(drive[:, 1], nxt, p21 * jumps[off, 0] + p22 * jumps[off, 1])
     # W_k = Phi(dt) W_{k-1} + D_k
     f11, f12, f21, f22 = (float(v[0]) for v in transition(np.array([dt]), natural_frequency_radps, damping_ratio))
     after = np.empty((n, 2))
     before = np.empty((n, 2))
-    after[on_grid] = grid_recursion((f11, f12, f21, f22), drive)
-    before[on_grid] = after[on_grid] - jumps[on_grid]
+    on_grid_after = grid_recursion((f11, f12, f21, f22), drive)
+    after[on_grid] = on_grid_after
+    before[on_grid] = on_grid_after - on_grid_jumps
     # the knots between grid points, rank by rank (rank 1: right after a grid point)
     rank = off - on_grid[nxt - 1]
     order = np.argsort(rank, kind="stable")
@@ -185,9 +187,9 @@ def respond(time_s: np.ndarray, jumps: np.ndarray, grid: np.ndarray, natural_fre
         start += count
         q11, q12, q21, q22 = transition(t[rows] - t[rows - 1], natural_frequency_radps, damping_ratio)
         prev = after[rows - 1]
-        before[rows, 0] = q11 * prev[:, 0] + q12 * prev[:, 1]
-        before[rows, 1] = q21 * prev[:, 0] + q22 * prev[:, 1]
-        after[rows] = before[rows] + jumps[rows]
+        arrived = np.stack([q11 * prev[:, 0] + q12 * prev[:, 1], q21 * prev[:, 0] + q22 * prev[:, 1]], axis=1)
+        before[rows] = arrived
+        after[rows] = arrived + jumps[rows]
     return KnotResponse(before=before, after=after)
 
 
