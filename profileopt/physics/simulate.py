@@ -234,14 +234,14 @@ def position_at_time(
         Position (m) and speed (m/s), clipped to the segment (rounding never leaves it).
     """
     t = np.asarray(time_s, dtype=float)
-    return _motion_in_segment(t, segment_index(t, times_s), np.asarray(boundaries_m, dtype=float),
-                              np.asarray(speed_mps, dtype=float), np.asarray(times_s, dtype=float))
+    b, v = np.asarray(boundaries_m, dtype=float), np.asarray(speed_mps, dtype=float)
+    return _motion_in_segment(t, segment_index(t, times_s), b, v, np.asarray(times_s, dtype=float),
+                              segment_accel_mps2(v[:-1] ** 2, v[1:] ** 2, np.diff(b)))
 
 
-def _motion_in_segment(t: np.ndarray, seg: np.ndarray, b: np.ndarray, v: np.ndarray, times: np.ndarray
-                       ) -> tuple[np.ndarray, np.ndarray]:
-    """Position and speed at times t, each inside the given segment."""
-    accel = segment_accel_mps2(v[:-1] ** 2, v[1:] ** 2, np.diff(b))
+def _motion_in_segment(t: np.ndarray, seg: np.ndarray, b: np.ndarray, v: np.ndarray, times: np.ndarray,
+                       accel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Position and speed at times t, each inside the given segment (accel: each segment's, m/s^2)."""
     tau = np.maximum(t - times[seg], 0.0)
     s = b[seg] + v[seg] * tau + 0.5 * accel[seg] * tau * tau
     speed = np.maximum(v[seg] + accel[seg] * tau, 0.0)
@@ -491,7 +491,10 @@ class _Knots:
         p_after, g_after = piece_after[last_knot], seg_after[last_knot]
         p_before, g_before = p_after.copy(), g_after.copy()
         p_before[where_knot], g_before[where_knot] = piece_before, seg_before
-        s_t, v_t = _motion_in_segment(t, g_after, b, v, times)
+        s_t, v_t = np.empty(t.size), np.empty(t.size)
+        for lo in range(0, t.size, CHUNK_KNOTS):  # elementwise: in chunks, as drive()
+            hi = min(lo + CHUNK_KNOTS, t.size)
+            s_t[lo:hi], v_t[lo:hi] = _motion_in_segment(t[lo:hi], g_after[lo:hi], b, v, times, accel)
         s_t[where_knot], v_t[where_knot] = ks, kv
         return cls(t=t, s=s_t, v=v_t, grid=grid, piece=(p_before, p_after), seg=(g_before, g_after),
                    profile=(b, v, times, accel))
@@ -538,7 +541,7 @@ class _Knots:
         del jumps
         g_side = (np.concatenate([[0.0], g]), np.append(g, g[-1] if g.size else 0.0))
         u_side = (np.concatenate([[u_star[0]], u_star[:-1]]), u_star)
-        b, v, times, _ = self.profile
+        b, v, times, accel = self.profile
         s0, level, slope = trend
         names = ("time_s", "s_m", "speed_mps", "base_m", "mass_m", "transmitted_n", "excitation_n")
         parts: dict[str, list] = {name: [] for name in names}
@@ -571,7 +574,7 @@ class _Knots:
             j = jl + lo
             seg = self.seg[1][j]
             te = self.t[j] + tau
-            se, ve = _motion_in_segment(te, seg, b, v, times)
+            se, ve = _motion_in_segment(te, seg, b, v, times, accel)
             p11, p12, p21, p22 = transition(tau, wn, zeta)
             w0 = st_after[jl]
             w = np.stack([p11 * w0[:, 0] + p12 * w0[:, 1], p21 * w0[:, 0] + p22 * w0[:, 1]], axis=1)
