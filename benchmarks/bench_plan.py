@@ -108,6 +108,7 @@ from profileopt import Profile
 from profileopt.core.segments import segment_route
 from profileopt.planning import DEFAULT_SMOOTHING, SolverOptions, greatest_profile, plan
 from profileopt.physics.steps import step_speed_cap_mps
+from profileopt.cli.app import keep_arrays_on_the_heap
 from profileopt.planning.refine import at_force_cap, refine_segments
 from profileopt.physics.speeds import speed_bands
 from profileopt.terrain.synthetic import iso8608_sections
@@ -115,8 +116,10 @@ from profileopt.terrain.synthetic import iso8608_sections
 REPO = Path(__file__).resolve().parent.parent
 
 # As `profileopt plan` does (profileopt.cli.app): CasADi's OpenBLAS, loaded with the first
-# IPOPT solver, on one thread, so the in-process rows time what the command runs.
+# IPOPT solver, on one thread, and freed arrays kept on the heap for reuse, so the in-process
+# rows time what the command runs.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+keep_arrays_on_the_heap()
 
 #: Segment length (m) of every plan, the command's default.
 SEGMENT_LENGTH_M = 5.0

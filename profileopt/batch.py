@@ -391,11 +391,11 @@ def plan_row(argv: Sequence[str], inputs: Iterable[str | os.PathLike] = ()) -> d
         ratio, binding shares and notes; or ``"failed"`` with ``error``, one line.
     """
     from .cli import plan as command
-    from .cli.app import keep_arrays_on_the_heap
+    from .cli.app import WORKER_MMAP_THRESHOLD_BYTES, keep_arrays_on_the_heap
     from .cli.messages import flags_for_parameters
     from .errors import PlanningError
 
-    keep_arrays_on_the_heap()  # Dask's workers are started with MALLOC_TRIM_THRESHOLD_=65536
+    keep_arrays_on_the_heap(WORKER_MMAP_THRESHOLD_BYTES)  # Dask's workers are started with MALLOC_TRIM_THRESHOLD_=65536
     parser = _plan_parser()
     try:
         args = parser.parse_args(list(argv))

@@ -30,9 +30,12 @@ from ..errors import InputError
 from .messages import flags_for_parameters
 from .registry import COMMANDS, load_command
 
-#: glibc's ceiling for its own dynamic mmap threshold on 64-bit (``DEFAULT_MMAP_THRESHOLD_MAX``),
-#: in bytes: the threshold a process that frees large arrays reaches by itself, in time.
-MMAP_THRESHOLD_BYTES = 32 * 1024 * 1024
+#: The command's mmap threshold (bytes): arrays and solver workspaces up to 1 GiB are taken from
+#: the heap and reused once freed (:func:`keep_arrays_on_the_heap`).
+MMAP_THRESHOLD_BYTES = 1024 * 1024 * 1024
+#: A batch worker's (bytes): glibc's ceiling for its own dynamic threshold on 64-bit
+#: (``DEFAULT_MMAP_THRESHOLD_MAX``); a long-lived worker returns freed memory above twice it.
+WORKER_MMAP_THRESHOLD_BYTES = 32 * 1024 * 1024
 
 __all__ = ["main", "build_parser"]
 
@@ -198,20 +201,30 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 @functools.cache
-def keep_arrays_on_the_heap() -> None:
-    """Let glibc keep freed arrays of up to 32 MiB for reuse in this process (once per process).
+def keep_arrays_on_the_heap(mmap_threshold_bytes: int = MMAP_THRESHOLD_BYTES) -> None:
+    """Let glibc keep freed arrays of up to ``mmap_threshold_bytes`` for reuse in this process.
 
     A plan allocates and frees arrays of a few MB over and over (one per segment, window or
-    sample). glibc maps every allocation above its mmap threshold afresh from the kernel,
+    sample), and IPOPT's linear solver a workspace of hundreds of MB at every iteration on a
+    long route. glibc maps every allocation above its mmap threshold afresh from the kernel,
     page-faults it in and unmaps it when freed; its threshold starts at 128 kB and only rises
-    as large blocks are freed. Set at once to the ceiling that dynamic rule reaches (mmap above
-    :data:`MMAP_THRESHOLD_BYTES`, trim above twice that), a 3 km plan on the command line took
-    3.5 s against 4.1 s (medians of 3, the same bytes written). Where a malloc threshold was set
-    in the environment the dynamic rule is off altogether: Dask's nanny starts its workers with
-    ``MALLOC_TRIM_THRESHOLD_=65536`` (``distributed.nanny.pre-spawn-environ``), and a plan took
-    2-3 times the CPU in such a worker (``docs/guide/batch.md``), so
-    :func:`profileopt.batch.plan_row` calls this too. Nothing is done off Linux or without
-    glibc's ``mallopt``; no number planned depends on it.
+    as large blocks are freed, to 32 MiB at most. With the threshold at 32 MiB (trim above
+    twice it) a 3 km plan on the command line took 3.5 s against 4.1 s (medians of 3, the same
+    bytes written); at 1 GiB (the default, :data:`MMAP_THRESHOLD_BYTES`) a plan of 100,000
+    segments took 37.3 s against 43.0 s (5.9 s in the kernel against 10.8; two runs each, the
+    same bytes written; peak memory 3.75 GB against 3.62), and one of 10,000 the same time.
+    Where a malloc threshold was set in the environment the dynamic rule is off altogether:
+    Dask's nanny starts its workers with ``MALLOC_TRIM_THRESHOLD_=65536``
+    (``distributed.nanny.pre-spawn-environ``), and a plan took 2-3 times the CPU in such a
+    worker (``docs/guide/batch.md``), so :func:`profileopt.batch.plan_row` calls this too, with
+    :data:`WORKER_MMAP_THRESHOLD_BYTES` (a long-lived worker should give memory back). Nothing
+    is done off Linux or without glibc's ``mallopt``; no number planned depends on it.
+
+    Parameters
+    ----------
+    mmap_threshold_bytes : int, default :data:`MMAP_THRESHOLD_BYTES`
+        Allocations above it are mapped from the kernel (bytes, below 2**31); freed memory at
+        the top of the heap is returned above twice it (2**31 - 1 at most).
     """
     if not sys.platform.startswith("linux"):
         return
@@ -222,8 +235,9 @@ def keep_arrays_on_the_heap() -> None:
     except (OSError, AttributeError):
         return
     m_trim_threshold, m_mmap_threshold = -1, -3  # <malloc.h>
-    mallopt(m_mmap_threshold, MMAP_THRESHOLD_BYTES)
-    mallopt(m_trim_threshold, 2 * MMAP_THRESHOLD_BYTES)
+    mallopt.argtypes = (ctypes.c_int, ctypes.c_int)
+    mallopt(m_mmap_threshold, int(mmap_threshold_bytes))
+    mallopt(m_trim_threshold, min(2 * int(mmap_threshold_bytes), 2**31 - 1))  # an int in C
 
 
 def _internal_error(args: argparse.Namespace, exc: BaseException) -> int:

@@ -210,3 +210,47 @@ def test_running_out_of_memory_is_one_line_exit_2(monkeypatch: pytest.MonkeyPatc
     assert cli.main(["plan", str(ROUTES / "curb.csv")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("profileopt plan: error: ran out of memory; nothing was written")
+
+
+_REUSE_SCRIPT = """
+import ctypes, resource, sys
+from profileopt.cli.app import keep_arrays_on_the_heap
+if sys.argv[1] != "default":
+    keep_arrays_on_the_heap(int(sys.argv[1]))
+libc = ctypes.CDLL(None)
+libc.malloc.restype, libc.malloc.argtypes = ctypes.c_void_p, (ctypes.c_size_t,)
+libc.free.argtypes = (ctypes.c_void_p,)
+size = 100 * 2**20
+
+def faults_to_fill_a_fresh_block():
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+    block = libc.malloc(size)
+    ctypes.memset(block, 1, size)
+    libc.free(block)
+    return resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before
+
+print(faults_to_fill_a_fresh_block(), faults_to_fill_a_fresh_block())
+"""
+
+
+@pytest.mark.skipif(not os.uname().sysname == "Linux" or os.confstr("CS_GNU_LIBC_VERSION") is None,
+                    reason="glibc's mallopt")
+def test_the_command_keeps_a_freed_100_mb_block_for_reuse_and_a_worker_does_not() -> None:
+    """At the command's threshold (1 GiB) a freed 100 MB block (an IPOPT workspace at 100,000
+    segments) is filled again without a page fault; at a worker's (32 MiB, glibc's own ceiling)
+    it is mapped afresh and faulted in again, as with no setting at all."""
+    import sys
+
+    from profileopt.cli.app import MMAP_THRESHOLD_BYTES, WORKER_MMAP_THRESHOLD_BYTES
+
+    def faults(threshold: str) -> tuple[int, int]:
+        done = subprocess.run([sys.executable, "-c", _REUSE_SCRIPT, threshold], capture_output=True, text=True,
+                              timeout=120, check=True)
+        first, second = (int(word) for word in done.stdout.split())
+        return first, second
+
+    first, second = faults(str(MMAP_THRESHOLD_BYTES))
+    assert first > 0 and second <= 0.05 * first, (first, second)
+    for threshold in (str(WORKER_MMAP_THRESHOLD_BYTES), "default"):
+        first, second = faults(threshold)
+        assert second > 0.5 * first > 0, (threshold, first, second)
