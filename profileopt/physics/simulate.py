@@ -487,7 +487,7 @@ class _Knots:
         grid = np.zeros(t.size, dtype=bool)
         grid[np.searchsorted(t, grid_t)] = True
         # between knots the path piece and the profile segment are those after the last knot
-        last_knot = np.maximum.accumulate(np.where(is_knot, np.cumsum(is_knot) - 1, -1))
+        last_knot = np.cumsum(is_knot) - 1  # the first time, 0, is a knot: the start
         p_after, g_after = piece_after[last_knot], seg_after[last_knot]
         p_before, g_before = p_after.copy(), g_after.copy()
         p_before[where_knot], g_before[where_knot] = piece_before, seg_before
