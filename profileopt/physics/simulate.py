@@ -532,10 +532,10 @@ class _Knots:
         y, dy_before, dy_after = np.empty(n), np.empty(n), np.empty(n)
         for lo in range(0, n, CHUNK_KNOTS):
             hi = min(lo + CHUNK_KNOTS, n)
-            s, v = self.s[lo:hi], self.v[lo:hi]
-            dy_before[lo:hi] = path.evaluate(s, self.piece[0][lo:hi])[1] * v
-            y[lo:hi], slope_after, _ = path.evaluate(s, self.piece[1][lo:hi])
-            dy_after[lo:hi] = slope_after * v  # as in inputs()
+            at_m, speed = self.s[lo:hi], self.v[lo:hi]
+            dy_before[lo:hi] = path.evaluate(at_m, self.piece[0][lo:hi])[1] * speed
+            y[lo:hi], slope_after, _ = path.evaluate(at_m, self.piece[1][lo:hi])
+            dy_after[lo:hi] = slope_after * speed  # as in inputs()
         g, u_star, jumps = knot_jumps(h, y, dy_before, dy_after, wn)
         state = respond(self.t, jumps, self.grid, wn, zeta)
         del jumps
