@@ -539,8 +539,16 @@ class _Knots:
         g, u_star, jumps = knot_jumps(h, y, dy_before, dy_after, wn)
         state = respond(self.t, jumps, self.grid, wn, zeta)
         del jumps
-        g_side = (np.concatenate([[0.0], g]), np.append(g, g[-1] if g.size else 0.0))
-        u_side = (np.concatenate([[u_star[0]], u_star[:-1]]), u_star)
+        g_last = g[-1] if g.size else 0.0
+
+        def interval_terms(lo: int, end: int) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
+            """g and u* of the interval before and after each of knots lo to end - 1 (before the
+            first: g = 0 and its own u*; after the last: the last interval's g)."""
+            g_before = g[lo - 1:end - 1] if lo > 0 else np.concatenate([[0.0], g[:end - 1]])
+            g_after = g[lo:end] if end < n else np.append(g[lo:], g_last)
+            u_before = u_star[lo - 1:end - 1] if lo > 0 else np.concatenate([u_star[:1], u_star[:end - 1]])
+            return (g_before, g_after), (u_before, u_star[lo:end])
+
         b, v, times, accel = self.profile
         s0, level, slope = trend
         names = ("time_s", "s_m", "speed_mps", "base_m", "mass_m", "transmitted_n", "excitation_n")
@@ -552,10 +560,11 @@ class _Knots:
             end = min(hi + 1, n)  # and the next knot, where its last interval ends
             q = self.inputs(path, trend, lo, end)
             st_before, st_after = state.before[lo:end], state.after[lo:end]
+            g_side, u_side = interval_terms(lo, end)
 
             def forces(w, side):
                 """F_T, its rate, and F, its rate, on one side of knots lo to end - 1."""
-                ft = -k * w[:, 0] - c * w[:, 1] + 2.0 * m * g_side[side][lo:end]
+                ft = -k * w[:, 0] - c * w[:, 1] + 2.0 * m * g_side[side]
                 ddw = -wn * wn * w[:, 0] - 2.0 * zeta * wn * w[:, 1]
                 fe = k * q["yt"][side] + c * q["dyt"][side]
                 return ft, -k * w[:, 1] - c * ddw, fe, k * q["dyt"][side] + c * q["d2yt"][side]
@@ -592,7 +601,7 @@ class _Knots:
             left = left[left + lo > 0]  # local
             right = np.arange(min(hi, n - 1) - lo)  # local
             yc = y[lo:end]
-            mass = (yc + st_before[:, 0] + u_side[0][lo:end], yc + st_after[:, 0] + u_side[1][lo:end])
+            mass = (yc + st_before[:, 0] + u_side[0], yc + st_after[:, 0] + u_side[1])
             rows = {
                 "time_s": (self.t[lo:end], te),
                 "s_m": (self.s[lo:end], se),
@@ -615,6 +624,6 @@ class _Knots:
                 np.maximum.at(peak, self.seg[0][lo + first:hi], np.abs(before[col][first:count]))
                 np.maximum.at(peak, self.seg[1][lo:min(hi, n - 1)], np.abs(after[col][:right.size]))
                 np.maximum.at(peak, seg, np.abs(ft_e if col == 0 else fe_e))
-        out = {name: np.concatenate(chunks) for name, chunks in parts.items()}
+        out = {name: np.concatenate(parts.pop(name)) for name in names}  # each column's chunks freed in turn
         out["transmitted_peak_n"], out["excitation_peak_n"] = peaks
         return out
