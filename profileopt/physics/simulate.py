@@ -538,7 +538,7 @@ class _Knots:
             dy_after[lo:hi] = slope_after * speed  # as in inputs()
         g, u_star, jumps = knot_jumps(h, y, dy_before, dy_after, wn)
         state = respond(self.t, jumps, self.grid, wn, zeta)
-        del jumps
+        del jumps, dy_before, dy_after  # the rows take y and the slopes from inputs()
         g_last = g[-1] if g.size else 0.0
 
         def interval_terms(lo: int, end: int) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
