@@ -927,6 +927,7 @@ def main(argv: list[str] | None = None) -> int:
 
     vehicle = level_atv()
     started = time.strftime("%Y-%m-%d %H:%M %Z")
+    commit = _commit()  # at the start: the code the run imports, whatever is committed meanwhile
     load_before = os.getloadavg()
     rows: list[Row] = []
     with tempfile.TemporaryDirectory(prefix="bench_plan_") as tmp:
@@ -944,7 +945,7 @@ def main(argv: list[str] | None = None) -> int:
 
     header = "\n".join([
         f"Run {started} on {_machine()}.",
-        f"{_versions()}; profileopt at {_commit()}.",
+        f"{_versions()}; profileopt at {commit}.",
         f"Medians of {args.repeats} cold repeats per method (min–max in brackets), interleaved; load average "
         f"{load_before[0]:.2f} before, {load_after[0]:.2f} after. Vehicle atv without the keys of turns and "
         f"hills (the peers' problem: acceleration bounds without grade), model {MODEL}, "
