@@ -537,8 +537,9 @@ class _Knots:
             y[lo:hi], slope_after, _ = path.evaluate(at_m, self.piece[1][lo:hi])
             dy_after[lo:hi] = slope_after * speed  # as in inputs()
         g, u_star, jumps = knot_jumps(h, y, dy_before, dy_after, wn)
+        del dy_before, dy_after  # the rows take the slopes from inputs(): not held through respond
         state = respond(self.t, jumps, self.grid, wn, zeta)
-        del jumps, dy_before, dy_after  # the rows take y and the slopes from inputs()
+        del jumps
         g_last = g[-1] if g.size else 0.0
 
         def interval_terms(lo: int, end: int) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
