@@ -23,6 +23,13 @@ peaks 10 to 25 % above ``plan`` (8 km: 396 MB, 16 km: 694 MB), within the estima
 over ``--max-memory`` (default :data:`MAX_MEMORY_GB`, 1.5 GB: about 600,000 samples at 0.05 m,
 30 km; 140,000 at 0.5 m, 71 km) is refused with one line naming the estimate, the route's
 samples and what would fit.
+
+The fit was measured before the exact simulation computed its forces and rows in chunks
+(:mod:`profileopt.physics.simulate`, 2026-11-28), which lowered the simulation's share: the
+8 km trail above now peaks at 254 MB (352 MB before; estimate 539 MB, 2.1 times), ``drive``
+on it at 345 MB (404 MB before), and the 100,000-segment benchmark route (1 million samples at
+0.5 m, 500 km) at 3.75 GB (estimate 9.4 GB, 2.5 times). So the estimate errs further on the
+safe side than the figures above say, until it is fitted again.
 """
 
 from __future__ import annotations
