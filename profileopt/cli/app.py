@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import functools
 import os
 import re
 import signal
@@ -200,7 +199,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
 
 
-@functools.cache
 def keep_arrays_on_the_heap(mmap_threshold_bytes: int = MMAP_THRESHOLD_BYTES) -> None:
     """Let glibc keep freed arrays of up to ``mmap_threshold_bytes`` for reuse in this process.
 
@@ -220,12 +218,23 @@ def keep_arrays_on_the_heap(mmap_threshold_bytes: int = MMAP_THRESHOLD_BYTES) ->
     :data:`WORKER_MMAP_THRESHOLD_BYTES` (a long-lived worker should give memory back). Nothing
     is done off Linux or without glibc's ``mallopt``; no number planned depends on it.
 
+    Each call sets the thresholds anew (the last call holds). glibc before 2.35 refuses an mmap
+    threshold above 32 MiB; there :data:`WORKER_MMAP_THRESHOLD_BYTES` is set instead.
+
     Parameters
     ----------
     mmap_threshold_bytes : int, default :data:`MMAP_THRESHOLD_BYTES`
-        Allocations above it are mapped from the kernel (bytes, below 2**31); freed memory at
-        the top of the heap is returned above twice it (2**31 - 1 at most).
+        Allocations above it are mapped from the kernel (bytes, in (0, 2**31)); freed memory
+        at the top of the heap is returned above twice it (2**31 - 1 at most).
+
+    Raises
+    ------
+    ValueError
+        A threshold outside (0, 2**31) bytes (a C int).
     """
+    threshold = int(mmap_threshold_bytes)
+    if not 0 < threshold < 2**31:
+        raise ValueError(f"mmap_threshold_bytes = {mmap_threshold_bytes!r}: must be in (0, 2**31) bytes (a C int)")
     if not sys.platform.startswith("linux"):
         return
     import ctypes
@@ -235,9 +244,14 @@ def keep_arrays_on_the_heap(mmap_threshold_bytes: int = MMAP_THRESHOLD_BYTES) ->
     except (OSError, AttributeError):
         return
     m_trim_threshold, m_mmap_threshold = -1, -3  # <malloc.h>
-    mallopt.argtypes = (ctypes.c_int, ctypes.c_int)
-    mallopt(m_mmap_threshold, int(mmap_threshold_bytes))
-    mallopt(m_trim_threshold, min(2 * int(mmap_threshold_bytes), 2**31 - 1))  # an int in C
+    mallopt.argtypes, mallopt.restype = (ctypes.c_int, ctypes.c_int), ctypes.c_int
+    # glibc before 2.35 refuses an mmap threshold above 32 MiB (it returns 0 and keeps its own);
+    # the trim threshold is set only with an mmap threshold that held, since setting it turns
+    # glibc's dynamic rule off
+    for value in dict.fromkeys((threshold, min(threshold, WORKER_MMAP_THRESHOLD_BYTES))):
+        if mallopt(m_mmap_threshold, value) == 1:
+            mallopt(m_trim_threshold, min(2 * value, 2**31 - 1))
+            return
 
 
 def _internal_error(args: argparse.Namespace, exc: BaseException) -> int:
