@@ -166,17 +166,19 @@ def respond(time_s: np.ndarray, jumps: np.ndarray, grid: np.ndarray, natural_fre
     off = np.flatnonzero(~grid)
     nxt = np.searchsorted(on_grid, off)  # index of the next grid point
     p11, p12, p21, p22 = transition(t[on_grid[nxt]] - t[off], natural_frequency_radps, damping_ratio)
-    on_grid_jumps = jumps[on_grid]
-    drive = on_grid_jumps.copy()
+    drive = jumps[on_grid]  # a copy (fancy indexing)
     np.add.at(drive[:, 0], nxt, p11 * jumps[off, 0] + p12 * jumps[off, 1])
     np.add.at(drive[:, 1], nxt, p21 * jumps[off, 0] + p22 * jumps[off, 1])
+    del p11, p12, p21, p22  # memory: not held through the recursion
     # W_k = Phi(dt) W_{k-1} + D_k
     f11, f12, f21, f22 = (float(v[0]) for v in transition(np.array([dt]), natural_frequency_radps, damping_ratio))
     after = np.empty((n, 2))
     before = np.empty((n, 2))
     on_grid_after = grid_recursion((f11, f12, f21, f22), drive)
+    del drive
     after[on_grid] = on_grid_after
-    before[on_grid] = on_grid_after - on_grid_jumps
+    before[on_grid] = on_grid_after - jumps[on_grid]
+    del on_grid_after
     # the knots between grid points, rank by rank (rank 1: right after a grid point)
     rank = off - on_grid[nxt - 1]
     order = np.argsort(rank, kind="stable")
@@ -248,8 +250,13 @@ def grid_recursion(phi: "tuple[float, float, float, float]", drive: np.ndarray) 
     for b in range(1, blocks):
         x0, x1 = g11 * x0 + g12 * x1 + ends0[b - 1], g21 * x0 + g22 * x1 + ends1[b - 1]
         c0[b], c1[b] = x0, x1
-    w0 += p11[None, :] * c0[:, None] + p12[None, :] * c1[:, None]
-    w1 += p21[None, :] * c0[:, None] + p22[None, :] * c1[:, None]
+    carried = np.multiply(p11[None, :], c0[:, None])  # w0 += P11 c0 + P12 c1, one temporary
+    carried += p12[None, :] * c1[:, None]
+    w0 += carried
+    np.multiply(p21[None, :], c0[:, None], out=carried)
+    carried += p22[None, :] * c1[:, None]
+    w1 += carried
+    del carried
     return np.stack([w0.reshape(-1)[:k_steps], w1.reshape(-1)[:k_steps]], axis=1)
 
 
