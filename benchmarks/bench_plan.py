@@ -94,7 +94,10 @@ from typing import Callable
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # the benchmarks' shared helper
 from installed import compile_package  # noqa: E402
 
-import numpy as np
+# As `profileopt plan` does (profileopt.cli.app.main): no huge-page advice from NumPy, read
+# when NumPy is imported, so it is set before the import.
+os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
+import numpy as np  # noqa: E402
 
 import profileopt
 from profileopt.io.profiles import write_profile

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import ast
 import importlib
+import os
 import subprocess
 import tempfile
 import sys
@@ -244,3 +245,20 @@ def test_planning_a_profile_route_imports_no_scipy() -> None:
                               capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert done.stderr.strip().splitlines()[-1] == "0 []"
+
+
+@pytest.mark.parametrize("user_value, advised", [(None, "False"), ("1", "True")])
+def test_the_command_turns_numpys_hugepage_advice_off_unless_the_user_set_it(user_value: str | None,
+                                                                             advised: str) -> None:
+    """``profileopt`` sets NUMPY_MADVISE_HUGEPAGE=0 before NumPy is imported (profileopt.cli
+    imports no NumPy; see profileopt.cli.app.main): NumPy reads it only when it is imported,
+    so the setting fails silently if NumPy comes in first. A value the user set rules."""
+    probe = ("import sys\nimport profileopt.cli\nprint('numpy' in sys.modules, file=sys.stderr)\n"
+             "try:\n    profileopt.cli.main(['--version'])\nexcept SystemExit:\n    pass\n"
+             "import numpy\nprint(numpy._core.multiarray._get_madvise_hugepage(), file=sys.stderr)\n")
+    env = {key: value for key, value in os.environ.items() if key != "NUMPY_MADVISE_HUGEPAGE"}
+    if user_value is not None:
+        env["NUMPY_MADVISE_HUGEPAGE"] = user_value
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120, env=env)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.strip().splitlines()[-2:] == ["False", advised]
