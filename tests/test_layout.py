@@ -238,8 +238,10 @@ def test_planning_a_profile_route_imports_no_scipy() -> None:
     first plan (the exact simulation's grid recursion is numpy since). SciPy stays for what
     needs it (x,y routes' curvature, tracks, point clouds)."""
     probe = ("import sys\nfrom profileopt.cli import main\n"
-             f"status = main(['plan', {str(ROOT / 'examples' / 'routes' / 'trail.csv')!r}, '-o', sys.argv[1], '--quiet'])\n"
-             "print(status, sorted(m for m in sys.modules if m == 'scipy' or m.startswith('scipy.'))[:5], file=sys.stderr)\n")
+             f"status = main(['plan', {str(ROOT / 'examples' / 'routes' / 'trail.csv')!r}, '-o', sys.argv[1], "
+             "'--quiet'])\n"
+             "print(status, sorted(m for m in sys.modules if m == 'scipy' or m.startswith('scipy.'))[:5], "
+             "file=sys.stderr)\n")
     with tempfile.TemporaryDirectory() as tmp:
         done = subprocess.run([sys.executable, "-c", probe, str(Path(tmp) / "trail-profile.csv")],
                               capture_output=True, text=True, timeout=300)

@@ -204,9 +204,8 @@ def grid_recursion(phi: "tuple[float, float, float, float]", drive: np.ndarray) 
     blocks) and added to that block's steps as Phi^(j+1) times the carried state. The result
     is the sequential recursion's, summed in another order (within 3e-14 of its size against
     ``scipy.signal.lfilter``, up to 2 million steps, damping ratios 0.02-1.5; the test asks
-    1e-12), in O(K)
-    operations and O(sqrt(K)) Python steps; it needs no SciPy, whose linear algebra took
-    0.24 s to import, a fifth of a 10 km plan.
+    1e-12), in O(K) operations and O(sqrt(K)) Python steps; it needs no SciPy, whose linear
+    algebra took 0.24 s to import, a fifth of a 10 km plan.
 
     Parameters
     ----------

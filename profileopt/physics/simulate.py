@@ -499,6 +499,13 @@ class _Knots:
         return cls(t=t, s=s_t, v=v_t, grid=grid, piece=(p_before, p_after), seg=(g_before, g_after),
                    profile=(b, v, times, accel))
 
+    def on_path(self, path: WheelPath, side: int, lo: int, hi: int
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """y (m), dy/ds, d2y/ds2 (1/m) and y' = dy/ds v (m/s) on one side (0 before, 1 after)
+        of knots lo to hi - 1."""
+        y, ys, yss = path.evaluate(self.s[lo:hi], self.piece[side][lo:hi])
+        return y, ys, yss, ys * self.v[lo:hi]
+
     def inputs(self, path: WheelPath, trend: tuple, lo: int, hi: int) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """y, y', y'' (from both sides) and the excitation's y~, y~', y~'' at knots lo to hi - 1."""
         accel = self.profile[3]
@@ -506,11 +513,11 @@ class _Knots:
         s, v = self.s[lo:hi], self.v[lo:hi]
         out: dict[str, list] = {"y": [], "dy": [], "d2y": [], "yt": [], "dyt": [], "d2yt": []}
         for side in (0, 1):
-            y, ys, yss = path.evaluate(s, self.piece[side][lo:hi])
+            y, ys, yss, dy = self.on_path(path, side, lo, hi)
             seg = self.seg[side][lo:hi]
             a = accel[seg]
             out["y"].append(y)
-            out["dy"].append(ys * v)
+            out["dy"].append(dy)
             out["d2y"].append(yss * v * v + ys * a)
             out["yt"].append(y - (level[seg] + slope[seg] * (s - s0[seg])))
             out["dyt"].append((ys - slope[seg]) * v)
@@ -532,10 +539,8 @@ class _Knots:
         y, dy_before, dy_after = np.empty(n), np.empty(n), np.empty(n)
         for lo in range(0, n, CHUNK_KNOTS):
             hi = min(lo + CHUNK_KNOTS, n)
-            at_m, speed = self.s[lo:hi], self.v[lo:hi]
-            dy_before[lo:hi] = path.evaluate(at_m, self.piece[0][lo:hi])[1] * speed
-            y[lo:hi], slope_after, _ = path.evaluate(at_m, self.piece[1][lo:hi])
-            dy_after[lo:hi] = slope_after * speed  # as in inputs()
+            dy_before[lo:hi] = self.on_path(path, 0, lo, hi)[3]
+            y[lo:hi], _, _, dy_after[lo:hi] = self.on_path(path, 1, lo, hi)
         g, u_star, jumps = knot_jumps(h, y, dy_before, dy_after, wn)
         del dy_before, dy_after  # the rows take the slopes from inputs(): not held through respond
         state = respond(self.t, jumps, self.grid, wn, zeta)
