@@ -92,26 +92,71 @@ def _power_step(b_i: float, ds: float, pm: float, gs: float) -> float:
     return b_i + 2.0 * ds * (pm / math.sqrt(b_i) - gs)
 
 
-def _forward_with_power(upper_b: np.ndarray, length_m: np.ndarray, accel_mps2: np.ndarray,
+def _forward_with_power(lower_b: np.ndarray, upper_b: np.ndarray, length_m: np.ndarray, accel_mps2: np.ndarray,
                         power: DrivePower) -> np.ndarray:
-    """The forward pass b_{i+1} <= min(upper, b_i + 2 a ds, power step), in order."""
+    """The forward pass b_{i+1} <= min(upper, b_i + 2 a ds, power step), in order.
+
+    On a segment longer than :meth:`DrivePower.longest_exact_segment_m` the exit speed that
+    the power allows can fall as the entry speed rises (entering above the steady climbing
+    speed P / (m g sin theta), the vehicle slows down all the way at the power limit), down to
+    a stall. Where entering at b_i would end below what the next boundary needs
+    (``lower_b``, and at least rest), the pass enters slower if that ends faster: at the best
+    of the entry speeds :func:`_best_entry` names, lowering b_i, and the backward pass then
+    brakes into it. So a climb that a slower entry makes is not refused. Elsewhere it enters
+    as fast as it may, which is faster over the segment itself; either way the profile keeps
+    every limit but may not be the fastest there (the planner says so).
+    """
     from ..physics.motion import STANDARD_GRAVITY_MPS2
 
     n = length_m.size
     accel = np.broadcast_to(np.asarray(accel_mps2, dtype=float), (n,))
     gs = STANDARD_GRAVITY_MPS2 * np.sin(power.grade_hi_rad)
     pm = float(power.power_per_mass_w_per_kg)
+    coarse = length_m > power.longest_exact_segment_m()
     out = np.empty(n + 1)
     b = out[0] = upper_b[0]
     for i in range(n):
-        ds = float(length_m[i])
-        nxt = min(float(upper_b[i + 1]), b + 2.0 * accel[i] * ds)
-        # the power row at the higher of the two speeds: skip the root where it holds
-        a = (nxt - b) / (2.0 * ds)
-        if (a + gs[i]) > 0.0 and (a + gs[i]) * math.sqrt(max(nxt, b, 0.0)) > pm:
-            nxt = min(nxt, _power_step(b, ds, pm, float(gs[i])))
+        ds, a_i, gs_i, top = float(length_m[i]), float(accel[i]), float(gs[i]), float(upper_b[i + 1])
+        nxt = _exit_b(b, top, ds, a_i, pm, gs_i)
+        if coarse[i] and nxt < max(float(lower_b[i + 1]), 0.0):
+            for entry in _best_entry(b, a_i, pm, gs_i):
+                exit_b = _exit_b(entry, top, ds, a_i, pm, gs_i)
+                if exit_b > nxt:
+                    out[i], nxt = entry, exit_b
         out[i + 1] = b = nxt
     return out
+
+
+def _exit_b(b: float, top: float, ds: float, accel: float, pm: float, gs: float) -> float:
+    """The largest b_{i+1} (m^2/s^2) after entering a segment of length ``ds`` (m) at b
+    (m^2/s^2): within the bound ``top``, the acceleration bound ``accel`` (m/s^2) and the
+    power limit (P/m = ``pm``, g sin(theta_hi) = ``gs``)."""
+    nxt = min(top, b + 2.0 * accel * ds)
+    # the power row at the higher of the two speeds: skip the root where it holds
+    a = (nxt - b) / (2.0 * ds)
+    if (a + gs) > 0.0 and (a + gs) * math.sqrt(max(nxt, b, 0.0)) > pm:
+        nxt = min(nxt, _power_step(b, ds, pm, gs))
+    return nxt
+
+
+def _best_entry(b: float, accel: float, pm: float, gs: float) -> tuple[float, ...]:
+    """The entry speeds below b (m^2/s^2) at which a slower entry can end a segment faster
+    than entering at b, with P/m = ``pm``, g sin(theta_hi) = ``gs`` and the acceleration
+    bound ``accel`` (m/s^2).
+
+    As a function of the entry x, the exit is min(x + 2 a ds, F(x)), with F the power step
+    (:func:`_power_step`): increasing up to the steady climbing speed x_s = (P / (m g sin
+    theta))^2, where F(x) = x; above it the vehicle slows down at the power limit and F falls,
+    then rises again. Where x + 2 a ds (increasing) and the falling F cross, at
+    (P/m / (a + g sin theta))^2, the exit has a local maximum. So the exit's greatest value
+    over [0, b] is at b, at x_s or at that crossing: the candidates returned (those below b).
+    """
+    if gs <= 0.0:
+        return ()
+    candidates = [(pm / gs) ** 2]
+    if accel + gs > 0.0:
+        candidates.append((pm / (accel + gs)) ** 2)
+    return tuple(x for x in candidates if x < b)
 
 
 def greatest_profile(
@@ -132,12 +177,15 @@ def greatest_profile(
     :meth:`DrivePower.longest_exact_segment_m` the constraint keeps the feasible set a lattice
     (b_{i+1} <= F_i(b_i) with F_i increasing), so the greatest profile still exists and is
     found by repeating the two passes until neither changes it (once in practice); on longer
-    ones the result keeps every limit but may not be the fastest (the planner says so).
+    ones the result keeps every limit but may not be the fastest (the planner says so), and
+    where entering a climb fast would stall short of ``lower_b``, it enters slower
+    (:func:`_forward_with_power`).
 
     Parameters
     ----------
     lower_b, upper_b : numpy.ndarray, shape (N+1,)
-        Bounds on b = v^2 at the boundaries (m^2/s^2); ``lower_b`` is not used here.
+        Bounds on b = v^2 at the boundaries (m^2/s^2); ``lower_b`` is used only with
+        ``power``, on segments too long for the power limit to keep the profile greatest.
     length_m : numpy.ndarray, shape (N,)
         Segment lengths (m).
     accel_mps2, decel_mps2 : float or numpy.ndarray, shape (N,)
@@ -152,14 +200,13 @@ def greatest_profile(
     numpy.ndarray, shape (N+1,)
         b (m^2/s^2).
     """
-    del lower_b  # the greatest solution does not depend on the lower bounds
     if power is None:
         up = np.concatenate([[0.0], np.cumsum(2.0 * accel_mps2 * length_m)])
         forward = up + np.minimum.accumulate(upper_b - up)
         return np.minimum(forward, braking_profile(forward, length_m, decel_mps2))
     b = np.asarray(upper_b, dtype=float)
     for _ in range(100):
-        forward = _forward_with_power(b, length_m, accel_mps2, power)
+        forward = _forward_with_power(lower_b, b, length_m, accel_mps2, power)
         backward = np.minimum(forward, braking_profile(forward, length_m, decel_mps2))
         if np.array_equal(backward, b):
             break
