@@ -98,6 +98,7 @@ __all__ = [
     "STEPS_PER_PERIOD",
     "MAX_ARC_STEP_RAD",
     "MAX_STEPS",
+    "TooLongToSimulate",
 ]
 
 #: No longer a bound on dt (the path's kinks are knots); kept for callers that read it.
@@ -110,6 +111,30 @@ MAX_ARC_STEP_RAD = 0.02
 MAX_STEPS = 20_000_000
 #: Knots whose forces are computed at once (the temporaries of one chunk fit in a cache).
 CHUNK_KNOTS = 1 << 16
+
+
+class TooLongToSimulate(InputError):
+    """A speed profile that takes more than :data:`MAX_STEPS` time steps to simulate.
+
+    Attributes
+    ----------
+    steps : int
+        The time steps it needs.
+    time_step_s : float
+        Their length (s).
+    total_s : float
+        How long the profile takes (s).
+    slowest : int
+        Its slowest segment (the index of its first boundary).
+    segment_m, speeds_mps, segment_s : tuple of float, tuple of float, float
+        That segment's ends (m), the speeds there (m/s) and the time on it (s).
+    """
+
+    def __init__(self, message: str, *, steps: int, time_step_s: float, total_s: float, slowest: int,
+                 segment_m: tuple[float, float], speeds_mps: tuple[float, float], segment_s: float) -> None:
+        super().__init__(message)
+        self.steps, self.time_step_s, self.total_s = steps, time_step_s, total_s
+        self.slowest, self.segment_m, self.speeds_mps, self.segment_s = slowest, segment_m, speeds_mps, segment_s
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -414,11 +439,14 @@ def simulate_quarter_car(
     steps = max(int(math.ceil(total / time_step_s)), 1)
     if steps > MAX_STEPS:  # memory
         slowest = int(np.argmax(np.diff(times)))
-        raise InputError(
+        segment_s = float(times[slowest + 1] - times[slowest])
+        raise TooLongToSimulate(
             f"speed profile: simulating it needs {steps:,} time steps of {time_step_s:.3g} s (at most "
             f"{MAX_STEPS:,}): it takes {total:.4g} s, the longest segment ({b[slowest]:g} to {b[slowest + 1]:g} m) "
-            f"{times[slowest + 1] - times[slowest]:.4g} s; verify a profile that keeps moving"
-        )
+            f"{segment_s:.4g} s; verify a profile that keeps moving",
+            steps=steps, time_step_s=time_step_s, total_s=total, slowest=slowest,
+            segment_m=(float(b[slowest]), float(b[slowest + 1])), speeds_mps=(float(v[slowest]), float(v[slowest + 1])),
+            segment_s=segment_s)
     dt = total / steps
     knots = _Knots.build(path, b, v, times, steps, max_arc_step_rad)
     run = knots.drive(path, vehicle, _segment_trend(s, path.evaluate(s)[0], b, detrend))

@@ -48,6 +48,7 @@ from ..defaults import (
 )
 from ..errors import InfeasibleError, InputError, PlanningError
 from ..physics.forces import DEFAULT_MODEL, get_model
+from ..physics.simulate import MAX_STEPS, TooLongToSimulate
 from ..physics.speeds import SpeedBands
 from ..progress import NO_PROGRESS, Progress
 from .bands import BandChoice, DrivePower, choose_bands, snap_to_band
@@ -267,24 +268,41 @@ def plan(
                           timings=timings, progress=progress)
 
     profile = once(limits)
-    if dynamic:  # the force is the simulated response: gate the kinematic optimum (and a second start)
-        from .dynamic import plan_dynamic
+    try:
+        if dynamic:  # the force is the simulated response: gate the kinematic optimum (and a second start)
+            from .dynamic import plan_dynamic
 
-        def sbem_tf() -> Profile:
-            return plan(route, vehicle, segment_length_m=segment_length_m, roughness_window_m=roughness_window_m,
-                        path_tolerance_m=path_tolerance_m, model="sbem_tf", smoothing=smoothing,
-                        max_jerk_mps3=max_jerk_mps3, v0_mps=v0_mps, vend_mps=vend_mps, method=method, band=band,
-                        extra_limits=extra_limits, solver_options=solver_options, refine=refine,
-                        simulation_gate=True, progress=progress)
+            def sbem_tf() -> Profile:
+                return plan(route, vehicle, segment_length_m=segment_length_m, roughness_window_m=roughness_window_m,
+                            path_tolerance_m=path_tolerance_m, model="sbem_tf", smoothing=smoothing,
+                            max_jerk_mps3=max_jerk_mps3, v0_mps=v0_mps, vend_mps=vend_mps, method=method, band=band,
+                            extra_limits=extra_limits, solver_options=solver_options, refine=refine,
+                            simulation_gate=True, progress=progress)
 
-        profile = plan_dynamic(profile, once, limits, route, vehicle, window_m=seg.roughness_window_m,
-                               timings=timings, fallback=sbem_tf, force_margin=float(force_margin),
-                               keep_contact=bool(keep_contact), progress=progress, once_steps=once_steps)
-    elif gate:  # drive it in the exact simulation; cap where it goes over
-        profile = _gate(profile, once, limits, route, vehicle, seg.roughness_window_m, timings, progress,
-                        once_steps)
+            profile = plan_dynamic(profile, once, limits, route, vehicle, window_m=seg.roughness_window_m,
+                                   timings=timings, fallback=sbem_tf, force_margin=float(force_margin),
+                                   keep_contact=bool(keep_contact), progress=progress, once_steps=once_steps)
+        elif gate:  # drive it in the exact simulation; cap where it goes over
+            profile = _gate(profile, once, limits, route, vehicle, seg.roughness_window_m, timings, progress,
+                            once_steps)
+    except TooLongToSimulate as exc:  # the gate cannot check it: say why in the plan's terms
+        raise InfeasibleError(_too_slow_message(route.source, exc)) from None
     timings["total"] = time.perf_counter() - t_start
     return dataclasses.replace(profile, timings_s=dict(timings))
+
+
+def _too_slow_message(source: str, exc: TooLongToSimulate) -> str:
+    """Why a plan too slow for the exact simulation is refused, in the plan's terms: how long
+    it takes, its slowest segment, and what to change."""
+    (a, b), (va, vb) = exc.segment_m, exc.speeds_mps
+    i = exc.slowest
+    if min(va, vb) <= 1e-3 * max(va, vb):  # from or to (almost) a standstill: 2 L / v
+        remedy = "start or end faster (v0_mps, vend_mps) or use shorter segments (segment_length_m)"
+    else:
+        remedy = "the limits allow almost no speed there: check the route's samples and the vehicle's limits"
+    return (f"{source}: the plan takes {exc.total_s:.4g} s, {exc.segment_s:.4g} s of it on segment {i} ({a:g} to "
+            f"{b:g} m, {va:.3g} to {vb:.3g} m/s): too slow for the exact simulation that checks every plan (at most "
+            f"{MAX_STEPS:,} steps of {exc.time_step_s:.3g} s); {remedy}")
 
 
 def _gate(profile: Profile, once: "Callable[[tuple[Limit, ...]], Profile]", limits: tuple[Limit, ...],

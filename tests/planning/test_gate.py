@@ -136,3 +136,24 @@ def test_covered_length_counts_overlaps_once():
     caps = StepCaps(start_m=np.array([5.0, 0.0, 1.0, 5.5]), end_m=np.array([6.0, 2.0, 3.0, 5.7]),
                     cap_mps=np.ones(4))
     assert covered_m(caps) == pytest.approx(4.0, abs=1e-12)
+
+
+def test_a_plan_too_slow_for_the_simulation_is_refused_in_one_line_naming_its_slowest_segment(tmp_path):
+    """One 50 m segment from rest to vend = 4.8e-5 m/s takes 2 L / (v0 + vend) = 100 / 4.8e-5 =
+    2.083e6 s (hand calculation), more than the simulation's MAX_STEPS steps (a random example of
+    the suite's property test, 2026-11-28, that plan() let out as the simulation's own "verify a
+    profile that keeps moving"). On 5 m segments the same ends plan (the last segment, from
+    about 3 m/s down to 4.8e-5 m/s, takes 10 / 3 s)."""
+    from profileopt.core.route import Route
+    from profileopt.terrain.synthetic import iso8608_profile
+
+    ground = iso8608_profile("A", 50.0, 0.05, seed=0)
+    route = Route(s_m=ground.s_m, z_m=ground.z_m, source="slow.csv")
+    vehicle = profileopt.load_vehicle("atv").replace(max_speed_mps=3.0, max_accel_mps2=1.0, max_decel_mps2=1.0)
+    ends = dict(smoothing=0.0, v0_mps=0.0, vend_mps=4.8e-5, refine=False)
+    with pytest.raises(profileopt.InfeasibleError) as refused:
+        profileopt.plan(route, vehicle, segment_length_m=50.0, **ends)
+    message = str(refused.value)
+    assert message.startswith("slow.csv: the plan takes 2.083e+06 s") and "segment 0 (0 to 50 m" in message
+    assert "vend_mps" in message and "segment_length_m" in message and "\n" not in message
+    assert profileopt.plan(route, vehicle, segment_length_m=5.0, **ends).travel_time_s < 100.0
