@@ -46,7 +46,7 @@ windows at speed in [lo, hi], and a vehicle there must not slow down below lo be
 rough ground ends. The selector does so for a *feature*, a run of measured segments whose
 upper band (:meth:`SpeedSelector._upper_band`, from a table built once, as the first band's)
 starts above their first band's top, only when what is measured proves it can: (a) the
-feature ends before the planning edge, and the vehicle is not yet on its *lead-in* (below);
+feature ends before the planning edge;
 (b) the envelope with the feature capped at hi (the other caps, and the unseen tail, as
 before) is at least lo at every boundary from the vehicle to the feature, and lo plus the
 *tracking lag* at the feature's boundaries; (c) the vehicle is already at lo plus that lag.
@@ -58,7 +58,8 @@ d_f^2 / (2 J) + d_f dt is half the band's narrowest width; at the feature's end,
 braking for what follows begins, the lag is d^2 / (8 J) + d dt
 (:meth:`SpeedSelector._tracking_lag_mps`). The lead-in is long enough for the vehicle to come
 off the approach's harder braking, entering the feature behind the curve by what that costs
-(when the band is wide enough), or to come off it and catch up
+(when the band is wide enough), or to come off it and catch up; when the vehicle is past its
+start already, it runs from the vehicle, judged by the vehicle's own speed and braking
 (:meth:`SpeedSelector._upper_band_lead_in`). The choice is made
 only in a cycle whose command keeps the jerk bound under the new envelope. It is sticky once
 the vehicle is on the lead-in; before that, a choice whose (b) fails is taken back when the
@@ -927,7 +928,7 @@ class SpeedSelector:
                 closed.append((k, i0, i1))
                 continue
             lead = self._upper_band_lead_in(where, top, decel, upper_lo, upper_hi, trial_chosen, trial_decel,
-                                            final, end_b, v0, i0, i1)
+                                            final, end_b, v0, a0, i0, i1)
             if lead is not None:
                 j0, d_lead, lag_in = lead
                 trial_chosen[i0:i1] = True
@@ -1061,14 +1062,14 @@ class SpeedSelector:
 
     def _upper_band_lead_in(self, where: np.ndarray, top: np.ndarray, decel: np.ndarray, upper_lo: np.ndarray,
                             upper_hi: np.ndarray, chosen: np.ndarray, envelope_decel: np.ndarray, final: np.ndarray,
-                            end_b: float, v0: float, i0: int, i1: int) -> tuple[int, float, float] | None:
+                            end_b: float, v0: float, a0: float, i0: int, i1: int) -> tuple[int, float, float] | None:
         """Whether the upper band may be chosen for the feature of pieces [i0, i1) of the horizon
         (module docstring, "The upper band"), and if so the first piece of its lead-in, the
         deceleration (m/s^2) the envelope assumes on the lead-in and the feature, and how far
         (m/s) below the envelope the vehicle may enter the feature; None: the first band.
 
-        Required: (a) the feature ends before the planning edge (``final`` pieces after it) and
-        the vehicle is not yet on its lead-in; (b) the envelope with the feature capped at its
+        Required: (a) the feature ends before the planning edge (``final`` pieces after it);
+        (b) the envelope with the feature capped at its
         upper band (the pieces before it unchanged, the unseen tail as assumed) is at least the
         band's lower edge at every boundary from the vehicle to the feature, and that plus the
         tracking lag (:meth:`_tracking_lag_mps`) and the entry lag (below) at the feature's
@@ -1087,7 +1088,19 @@ class SpeedSelector:
         the envelope's speed there. The short one costs least before the feature: a vehicle
         already braking for the feature's first band (a kerb seen late with the worst terrain
         assumed beyond it) lies under its envelope, and under the long one's only if it
-        lags that braking by more than the long lead-in's slower braking gives away."""
+        lags that braking by more than the long lead-in's slower braking gives away.
+
+        When the vehicle is past the start of a lead-in that (b) needs (the feature's end came
+        into view late, at short sensing ranges, while the vehicle brakes for the feature's
+        first band), the lead-in is the stretch from the vehicle to the feature, braking at d_f,
+        and the entry lag and (c) are those of the vehicle's own state, speed ``v0`` (m/s) and
+        acceleration ``a0`` (m/s^2), rather than of the approach's hardest braking D. The
+        tracker takes the fastest acceleration that keeps under the envelope: below it, it only
+        comes off its braking D0 = -a0 at the jerk bound J (after at most a cycle), to no less
+        than v_low = v0 - D0 dt - D0^2 / (2 J), and speeds up after; on it, it comes off D0 to
+        d_f, falling (D0 - d_f)^2 / (2 J) + (D0 - d_f) dt behind (the entry lag, as above).
+        So (b) is asked with that entry lag and (c) as v_low at least the band's lower edge at
+        every boundary of the feature."""
         if i0 == 0 or i1 >= final.size or not final[i1]:  # inside it already, or (a)
             return None
         width = float(np.min(np.diff(self._feature_floor(upper_lo, upper_hi, i0, i1), axis=0)))
@@ -1111,13 +1124,29 @@ class SpeedSelector:
             lead_m = lead_s * lead_s * d_f + math.sqrt(lead_s ** 4 * d_f * d_f + lead_s * lead_s * h)
             start_m = float(where[i0]) - lead_m
             if start_m < where[0]:
-                return None  # (a) the vehicle is on the lead-in already: too late to change its braking
+                break  # the vehicle is on this lead-in already (and on the longer one): below
             j0 = int(np.searchsorted(where, start_m, side="right")) - 1
             trial_decel = envelope_decel.copy()
             trial_decel[j0:i1] = np.minimum(trial_decel[j0:i1], d_f)
             braking = braking_profile(upper, np.diff(where), np.minimum(decel, trial_decel))
             if self._upper_band_holds(braking, upper_lo, upper_hi, decel, d_f, v0, i0, i1, entry_lag_mps=entry_lag):
                 return j0, d_f, entry_lag
+        else:
+            return None
+        # a lead-in already begun: from the vehicle, (c) asked of its own state (docstring)
+        trial_decel = envelope_decel.copy()
+        trial_decel[:i1] = np.minimum(trial_decel[:i1], d_f)
+        braking = braking_profile(upper, np.diff(where), np.minimum(decel, trial_decel))
+        braking_now = max(-a0, 0.0)
+        ramp = max(braking_now - d_f, 0.0)
+        v_low, entry_lag = v0 - braking_now * dt, ramp * dt
+        if math.isfinite(jerk):
+            v_low -= braking_now ** 2 / (2.0 * jerk)
+            entry_lag += ramp * ramp / (2.0 * jerk)
+        floor = self._feature_floor(upper_lo, upper_hi, i0, i1)[0]
+        if v_low >= float(np.max(floor)) and self._upper_band_holds(braking, upper_lo, upper_hi, decel, d_f, None,
+                                                                    i0, i1, entry_lag_mps=entry_lag):
+            return 0, d_f, entry_lag
         return None
 
     @staticmethod

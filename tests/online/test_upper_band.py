@@ -182,3 +182,22 @@ def test_a_drop_crossed_in_its_upper_band_keeps_the_limit_along_the_driven_speed
     assert driven.emergencies > 0 and driven.max_jerk_mps3 <= atv_resonant.max_jerk_mps3 * (1 + 1e-9)
     assert not [note for note in driven.notes if "harder than the jerk bound" in note], driven.notes
     assert [note for note in driven.notes if "as hard as the jerk bound allows" in note], driven.notes
+
+
+def test_a_drop_whose_end_comes_into_view_on_its_lead_in_is_crossed_in_the_upper_band(atv_resonant):
+    """An 8 cm drop at 150 m of flat class B ground (seed 11), the worst assumed beyond 20 m of
+    sensing: the ground after the drop's feature (145-155 m) is planned only when the vehicle,
+    braking for the feature's first band (0.32 m/s), is at 144 m at 2.9 m/s, past the start of
+    every lead-in the feature's upper band needs. Before, the band was then refused for good and
+    the vehicle crawled over the feature at 0.32 m/s (77.5 s, 2.74 times the offline plan's
+    28.3 s); now the lead-in runs from the vehicle, judged by its own speed and braking (it
+    cannot fall below 2.9 - 0.39 - 1.52 = 0.98 m/s coming off 3.9 m/s^2 at 5 m/s^3, above the
+    band's 0.49 m/s floor). No window over the limit in the exact simulation, no emergency."""
+    ground = iso8608_profile("B", 300.0, SPACING_M, seed=11)
+    route = Route(s_m=ground.s_m, z_m=ground.z_m + step(ground.s_m, KERB_AT_M, -0.08), source="drop 8 cm")
+    driven = drive(route, atv_resonant, sensor_range_m=20.0, unseen="worst")
+    assert driven.windows_over == 0, (driven.worst_window_ratio, driven.worst_s_m)
+    assert driven.emergencies == 0, driven.notes
+    feature = (driven.s_m > 145.5) & (driven.s_m < 155.0)
+    assert np.min(driven.speed_mps[feature]) > 0.49  # in the upper band, never down to the first (0.32 m/s)
+    assert driven.travel_time_s < 1.8 * plan(route, atv_resonant).travel_time_s
