@@ -39,7 +39,7 @@ if TYPE_CHECKING:
     from ..core.vehicle import Vehicle
 
 __all__ = ["BAND_CHOICES", "SpeedBands", "BandMemo", "speed_bands", "speed_bands_reusing", "allowable_speed",
-           "safeguarded_newton", "max_force_over_segments", "speed_bands_of_sets", "max_force_of_sets"]
+           "safeguarded_newton", "max_force_over_segments", "speed_bands_of_sets", "max_force_of_sets", "PAIR_BLOCK"]
 
 #: Which admissible band(s) of speeds: ``"first"`` the band from rest (every speed from 0 up
 #: to its upper edge is admissible), ``"largest"`` the highest band, ``"all"`` every band
@@ -421,8 +421,17 @@ def speed_bands_of_sets(values: ArrayLike, first: ArrayLike, stop: ArrayLike, ve
         return found, memo
     mine = SpeedBands(*(getattr(found, name)[n:] for name in _BAND_FIELDS))
     rows = np.flatnonzero(members.counts)
-    pair_row, member = members.row_of_pair(), members.pair_member()
-    lower, upper, count = _intersected(mine, pair_row, member, rows.size)
+    # the pairs (set, member) a block of sets at a time: a short segment meets hundreds of
+    # windows, so a refined route has millions of pairs; each set's result is its own
+    lower_parts, upper_parts, count_parts, peak_parts = [], [], [], []
+    for r0, r1 in members.blocks(PAIR_BLOCK):
+        pair_row, member = members.pairs(r0, r1)
+        lower_b, upper_b, count_b = _intersected(mine, pair_row, member, r1 - r0)
+        lower_parts.append(lower_b)
+        upper_parts.append(upper_b)
+        count_parts.append(count_b)
+        peak_parts.append(_peaks_of_pairs(mine.peaks_mps[member], pair_row, r1 - r0))
+    lower, upper, count = _stack_padded(lower_parts), _stack_padded(upper_parts), np.concatenate(count_parts)
     bands = SpeedBands(*(getattr(found, name)[:n] for name in _BAND_FIELDS))
     width = max(bands.lower_mps.shape[1], lower.shape[1])
     lower_all = _widened(bands.lower_mps, width)
@@ -430,7 +439,10 @@ def speed_bands_of_sets(values: ArrayLike, first: ArrayLike, stop: ArrayLike, ve
     lower_all[rows], upper_all[rows] = _widened(lower, width), _widened(upper, width)
     counts = bands.count.copy()
     counts[rows] = count
-    peaks = _peaks_of_pairs(mine.peaks_mps[member], pair_row, rows, bands.peaks_mps)
+    mine_peaks = _stack_padded(peak_parts)
+    peak_width = max(bands.peaks_mps.shape[1], mine_peaks.shape[1])
+    peaks = _widened(bands.peaks_mps, peak_width)
+    peaks[rows] = _widened(mine_peaks, peak_width)
     return SpeedBands(lower_mps=_trimmed(lower_all), upper_mps=_trimmed(upper_all), count=counts,
                       peaks_mps=_trimmed(peaks)), memo
 
@@ -475,13 +487,14 @@ def max_force_of_sets(values: ArrayLike, first: ArrayLike, stop: ArrayLike, spee
     if not members.window.size:
         return force
     rows = np.flatnonzero(members.counts)
-    pair_row = members.row_of_pair()  # index into rows
-    member = members.pair_member()
-    segment = rows[pair_row]
-    pair_force = _max_force_between(model, vehicle, values[members.window][member], speed[:-1][segment],
-                                    speed[1:][segment], found.peaks_mps[n:][member])
+    member_ri, member_peaks = values[members.window], found.peaks_mps[n:]
     best = np.full(rows.size, -np.inf)
-    np.maximum.at(best, pair_row, pair_force)
+    for r0, r1 in members.blocks(PAIR_BLOCK):  # as speed_bands_of_sets: a block of sets at a time
+        pair_row, member = members.pairs(r0, r1)
+        segment = rows[r0:r1][pair_row]
+        pair_force = _max_force_between(model, vehicle, member_ri[member], speed[:-1][segment], speed[1:][segment],
+                                        member_peaks[member])
+        np.maximum.at(best[r0:r1], pair_row, pair_force)
     force[rows] = np.maximum(force[rows], best)
     return force
 
@@ -497,17 +510,25 @@ class _Members:
     counts: np.ndarray
     offset: np.ndarray
 
-    def row_of_pair(self) -> np.ndarray:
-        """For each (set, member) pair of the sets that have members, its set's rank among them."""
-        have = self.counts[self.counts > 0]
-        return np.repeat(np.arange(have.size), have)
+    def blocks(self, max_pairs: int) -> list[tuple[int, int]]:
+        """Consecutive ranges [r0, r1) of the sets that have members (ranks among them), each
+        with at most ``max_pairs`` (set, member) pairs, or one set."""
+        cum = np.concatenate([[0], np.cumsum(self.counts[self.counts > 0])])
+        out, r0 = [], 0
+        while r0 < cum.size - 1:
+            r1 = max(int(np.searchsorted(cum, cum[r0] + max_pairs, side="right")) - 1, r0 + 1)
+            out.append((r0, r1))
+            r0 = r1
+        return out
 
-    def pair_member(self) -> np.ndarray:
-        """For each such pair, its member's index into ``window``."""
+    def pairs(self, r0: int, r1: int) -> tuple[np.ndarray, np.ndarray]:
+        """The (set, member) pairs of the sets of ranks r0 to r1 - 1 among those that have
+        members: each pair's set (rank - r0) and its member's index into ``window``."""
         have = self.counts > 0
-        starts = np.repeat(self.offset[have], self.counts[have])
-        within = np.arange(starts.size) - np.repeat(np.cumsum(self.counts[have]) - self.counts[have], self.counts[have])
-        return starts + within
+        counts, offset = self.counts[have][r0:r1], self.offset[have][r0:r1]
+        pair_row = np.repeat(np.arange(counts.size), counts)
+        within = np.arange(pair_row.size) - np.repeat(np.cumsum(counts) - counts, counts)
+        return pair_row, np.repeat(offset, counts) + within
 
 
 def _crawl_members(values: np.ndarray, first: np.ndarray, stop: np.ndarray, top: np.ndarray, vehicle: "Vehicle",
@@ -562,18 +583,14 @@ def _widened(values: np.ndarray, width: int) -> np.ndarray:
     return np.pad(values, ((0, 0), (0, width - values.shape[1])), constant_values=np.nan)
 
 
-def _peaks_of_pairs(pair_peaks: np.ndarray, pair_row: np.ndarray, rows: np.ndarray, peaks: np.ndarray
-                    ) -> np.ndarray:
-    """``peaks`` (n, P) with each row in ``rows`` replaced by the distinct peaks of its pairs."""
+def _peaks_of_pairs(pair_peaks: np.ndarray, pair_row: np.ndarray, rows: int) -> np.ndarray:
+    """The distinct peaks (m/s) of each of ``rows`` rows' pairs, sorted, NaN-padded, shape
+    (rows, P): ``pair_peaks`` (pairs, Q) holds each pair's, ``pair_row`` its row."""
     has = ~np.isnan(pair_peaks)
     row = np.broadcast_to(pair_row[:, None], pair_peaks.shape)[has]
     speed = pair_peaks[has]
     pairs = np.unique(np.stack([row.astype(float), speed], axis=1), axis=0)
-    mine = _ragged_to_padded(pairs[:, 0].astype(np.intp), pairs[:, 1], rows.size)
-    width = max(peaks.shape[1], mine.shape[1])
-    out = _widened(peaks, width)
-    out[rows] = _widened(mine, width)
-    return out
+    return _ragged_to_padded(pairs[:, 0].astype(np.intp), pairs[:, 1], rows)
 
 
 def _blocked_bands(terrain: tuple[np.ndarray, ...], vehicle: "Vehicle", model: str) -> SpeedBands:
@@ -614,6 +631,9 @@ def _trimmed(values: np.ndarray) -> np.ndarray:
 
 #: RI values whose bands are found together; the work arrays are (rows x 2 grid points).
 _BLOCK_ROWS = 2048
+#: (segment, window) pairs intersected together (:func:`speed_bands_of_sets`): the work
+#: arrays are a few times this long.
+PAIR_BLOCK = 1 << 18
 
 
 def _stack_padded(parts: list[np.ndarray]) -> np.ndarray:

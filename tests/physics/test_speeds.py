@@ -395,3 +395,22 @@ def test_sets_of_a_force_growing_with_the_ri_are_their_largest_ri() -> None:
         speed = np.linspace(0.1, 9.0, first.size + 1)
         np.testing.assert_array_equal(max_force_of_sets(values, first, stop, speed, vehicle, model=model),
                                       max_force_over_segments(model, vehicle, top, speed, plain.peaks_mps))
+
+
+@pytest.mark.parametrize("block", [1, 7, 50])
+def test_sets_in_blocks_of_pairs_are_the_sets_at_once(monkeypatch, block) -> None:
+    """The (set, member) pairs are intersected a block of sets at a time (PAIR_BLOCK pairs, or
+    one set): each set's bands, peaks and largest force are its own, so any block size gives
+    the same arrays as one block (the random sets: about 40 sets of up to 24 members)."""
+    import profileopt.physics.speeds as speeds
+
+    values, first, stop = _random_sets(4)
+    speed = np.linspace(0.1, 9.0, first.size + 1)
+    whole, _ = speed_bands_of_sets(values, first, stop, RES)
+    whole_force = max_force_of_sets(values, first, stop, speed, RES)
+    monkeypatch.setattr(speeds, "PAIR_BLOCK", block)
+    parts, _ = speed_bands_of_sets(values, first, stop, RES)
+    for name in ("lower_mps", "upper_mps", "count", "peaks_mps"):
+        np.testing.assert_array_equal(getattr(parts, name), getattr(whole, name))
+    np.testing.assert_array_equal(max_force_of_sets(values, first, stop, speed, RES), whole_force)
+    assert whole.count.sum() > first.size  # sets with more than one band: the intersections matter
