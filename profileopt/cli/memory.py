@@ -25,11 +25,20 @@ over ``--max-memory`` (default :data:`MAX_MEMORY_GB`, 1.5 GB: about 600,000 samp
 samples and what would fit.
 
 The fit was measured before the exact simulation computed its forces and rows in chunks
-(:mod:`profileopt.physics.simulate`, 2026-11-28), which lowered the simulation's share: the
-8 km trail above now peaks at 254 MB (352 MB before; estimate 539 MB, 2.1 times), ``drive``
-on it at 345 MB (404 MB before), and the 100,000-segment benchmark route (1 million samples at
-0.5 m, 500 km) at 3.75 GB (estimate 9.4 GB, 2.5 times). So the estimate errs further on the
-safe side than the figures above say, until it is fitted again.
+(:mod:`profileopt.physics.simulate`) and before SBEM:TF's (segment, window) pairs were
+intersected in blocks (:func:`profileopt.physics.speeds.speed_bands_of_sets`), both
+2026-11-28. Measured again after them (``/usr/bin/time -v``, 17 plans: ISO 8608 classes A-E
+at 0.05 and 0.5 m, 2 to 90 km, an x,y,z route, the bundled trail and four of it end to end,
+both atvs, refined and not), the estimate lies 1.03 to 3.8 times above every peak: 2 to 3.8
+times on fast routes (8 km of class C at 0.05 m: 206 MB, estimate 539 MB; 60 km of class A:
+0.97 GB, 2.8 GB), and closest on slow rough ones with the resonant atv, whose plans have 14
+times the uniform segments and a third of the assumed speed (8 km of class E: 616 MB,
+estimate 635 MB; the trail four times: 611 MB, 635 MB; 90 km of class E at 0.5 m: 1.74 GB,
+2.9 GB). Before the blocks the class E plan peaked at 1.49 GB, 2.3 times above its estimate.
+The same plans fit 79 MB + 0.66 kB x samples + 7.5 kB x segments + 0.23 kB x simulation steps
+(within 14 % of every peak but an x,y,z route's, 30 % above it); the estimate keeps the older, larger
+coefficients because it cannot know a plan's segments and travel time before planning, and
+the slow plans need that room.
 """
 
 from __future__ import annotations
