@@ -997,9 +997,11 @@ class SpeedSelector:
             power = DrivePower(self._power.max_power_w / self._power.mass_kg, grade_hi)
         plan_upper = upper.copy()
         plan_upper[0] = v0 * v0
-        # (no lower bounds: where entering a coarse climb fast would stall, the report's plan enters slower)
-        plan = np.sqrt(np.maximum(greatest_profile(np.zeros_like(plan_upper), plan_upper, length, accel, decel,
-                                                   power), 0.0))
+        # no lower bounds but the current speed: where entering a coarse climb fast would stall,
+        # the report's plan enters it slower, never below the speed the vehicle has now
+        plan_lower = np.zeros_like(plan_upper)
+        plan_lower[0] = plan_upper[0]
+        plan = np.sqrt(np.maximum(greatest_profile(plan_lower, plan_upper, length, accel, decel, power), 0.0))
         keep = where.size - (0 if finished else 2)
         note = ""
         if not step.jerk_kept:  # this cycle's braking past the jerk bound, or at it but short

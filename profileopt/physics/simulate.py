@@ -125,16 +125,19 @@ class TooLongToSimulate(InputError):
     total_s : float
         How long the profile takes (s).
     slowest : int
-        Its slowest segment (the index of its first boundary).
+        Its slowest segment (the index of its first boundary), of ``segments``.
+    segments : int
+        The profile's segments.
     segment_m, speeds_mps, segment_s : tuple of float, tuple of float, float
         That segment's ends (m), the speeds there (m/s) and the time on it (s).
     """
 
-    def __init__(self, message: str, *, steps: int, time_step_s: float, total_s: float, slowest: int,
+    def __init__(self, message: str, *, steps: int, time_step_s: float, total_s: float, slowest: int, segments: int,
                  segment_m: tuple[float, float], speeds_mps: tuple[float, float], segment_s: float) -> None:
         super().__init__(message)
         self.steps, self.time_step_s, self.total_s = steps, time_step_s, total_s
-        self.slowest, self.segment_m, self.speeds_mps, self.segment_s = slowest, segment_m, speeds_mps, segment_s
+        self.slowest, self.segments = slowest, segments
+        self.segment_m, self.speeds_mps, self.segment_s = segment_m, speeds_mps, segment_s
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -444,7 +447,7 @@ def simulate_quarter_car(
             f"speed profile: simulating it needs {steps:,} time steps of {time_step_s:.3g} s (at most "
             f"{MAX_STEPS:,}): it takes {total:.4g} s, the longest segment ({b[slowest]:g} to {b[slowest + 1]:g} m) "
             f"{segment_s:.4g} s; verify a profile that keeps moving",
-            steps=steps, time_step_s=time_step_s, total_s=total, slowest=slowest,
+            steps=steps, time_step_s=time_step_s, total_s=total, slowest=slowest, segments=b.size - 1,
             segment_m=(float(b[slowest]), float(b[slowest + 1])), speeds_mps=(float(v[slowest]), float(v[slowest + 1])),
             segment_s=segment_s)
     dt = total / steps

@@ -101,10 +101,11 @@ def _forward_with_power(lower_b: np.ndarray, upper_b: np.ndarray, length_m: np.n
     speed P / (m g sin theta), the vehicle slows down all the way at the power limit), down to
     a stall. Where entering at b_i would end below what the next boundary needs
     (``lower_b``, and at least rest), the pass enters slower if that ends faster: at the best
-    of the entry speeds :func:`_best_entry` names, lowering b_i, and the backward pass then
-    brakes into it. So a climb that a slower entry makes is not refused. Elsewhere it enters
-    as fast as it may, which is faster over the segment itself; either way the profile keeps
-    every limit but may not be the fastest there (the planner says so).
+    of the entry speeds :func:`_best_entry` names, never below the boundary's own lower bound,
+    lowering b_i, and the backward pass then brakes into it. So a climb that a slower entry
+    makes is not refused. Elsewhere it enters as fast as it may, which is faster over the
+    segment itself; either way the profile keeps every limit but may not be the fastest there
+    (the planner says so).
     """
     from ..physics.motion import STANDARD_GRAVITY_MPS2
 
@@ -119,7 +120,7 @@ def _forward_with_power(lower_b: np.ndarray, upper_b: np.ndarray, length_m: np.n
         ds, a_i, gs_i, top = float(length_m[i]), float(accel[i]), float(gs[i]), float(upper_b[i + 1])
         nxt = _exit_b(b, top, ds, a_i, pm, gs_i)
         if coarse[i] and nxt < max(float(lower_b[i + 1]), 0.0):
-            for entry in _best_entry(b, a_i, pm, gs_i):
+            for entry in _best_entry(b, float(lower_b[i]), a_i, pm, gs_i):
                 exit_b = _exit_b(entry, top, ds, a_i, pm, gs_i)
                 if exit_b > nxt:
                     out[i], nxt = entry, exit_b
@@ -139,24 +140,27 @@ def _exit_b(b: float, top: float, ds: float, accel: float, pm: float, gs: float)
     return nxt
 
 
-def _best_entry(b: float, accel: float, pm: float, gs: float) -> tuple[float, ...]:
-    """The entry speeds below b (m^2/s^2) at which a slower entry can end a segment faster
-    than entering at b, with P/m = ``pm``, g sin(theta_hi) = ``gs`` and the acceleration
+def _best_entry(b: float, lowest: float, accel: float, pm: float, gs: float) -> tuple[float, ...]:
+    """The entry speeds in [``lowest``, b) (m^2/s^2) at which a slower entry can end a segment
+    faster than entering at b, with P/m = ``pm``, g sin(theta_hi) = ``gs`` and the acceleration
     bound ``accel`` (m/s^2).
 
     As a function of the entry x, the exit is min(x + 2 a ds, F(x)), with F the power step
     (:func:`_power_step`): increasing up to the steady climbing speed x_s = (P / (m g sin
     theta))^2, where F(x) = x; above it the vehicle slows down at the power limit and F falls,
-    then rises again. Where x + 2 a ds (increasing) and the falling F cross, at
-    (P/m / (a + g sin theta))^2, the exit has a local maximum. So the exit's greatest value
-    over [0, b] is at b, at x_s or at that crossing: the candidates returned (those below b).
+    then rises again. Where a < 0 the line x + 2 a ds (increasing) crosses the falling F at
+    x_c = (P/m / (a + g sin theta))^2 > x_s, a local maximum of the exit (for a >= 0, x_c <=
+    x_s, on the rising part). So over [lowest, b] the exit is greatest at b, at ``lowest`` (the
+    boundary's own lower bound: an entry must keep it), at x_s or at x_c: the candidates
+    returned (those in [lowest, b)).
     """
     if gs <= 0.0:
         return ()
-    candidates = [(pm / gs) ** 2]
+    lowest = max(lowest, 0.0)
+    candidates = [lowest, (pm / gs) ** 2]
     if accel + gs > 0.0:
         candidates.append((pm / (accel + gs)) ** 2)
-    return tuple(x for x in candidates if x < b)
+    return tuple(x for x in candidates if lowest <= x < b)
 
 
 def greatest_profile(

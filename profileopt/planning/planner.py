@@ -296,8 +296,11 @@ def _too_slow_message(source: str, exc: TooLongToSimulate) -> str:
     it takes, its slowest segment, and what to change."""
     (a, b), (va, vb) = exc.segment_m, exc.speeds_mps
     i = exc.slowest
-    if min(va, vb) <= 1e-3 * max(va, vb):  # from or to (almost) a standstill: 2 L / v
-        remedy = "start or end faster (v0_mps, vend_mps) or use shorter segments (segment_length_m)"
+    ends = [name for name, here in (("v0_mps", i == 0), ("vend_mps", i == exc.segments - 1)) if here]
+    if ends and min(va, vb) <= 1e-3 * max(va, vb):  # from or to (almost) a standstill at an end: 2 L / v
+        remedy = f"raise {' or '.join(ends)} or use shorter segments (segment_length_m)"
+    elif min(va, vb) <= 1e-3 * max(va, vb):
+        remedy = "use shorter segments (segment_length_m): the plan comes almost to a standstill there"
     else:
         remedy = "the limits allow almost no speed there: check the route's samples and the vehicle's limits"
     return (f"{source}: the plan takes {exc.total_s:.4g} s, {exc.segment_s:.4g} s of it on segment {i} ({a:g} to "

@@ -191,7 +191,7 @@ def test_a_drop_whose_end_comes_into_view_on_its_lead_in_is_crossed_in_the_upper
     every lead-in the feature's upper band needs. Before, the band was then refused for good and
     the vehicle crawled over the feature at 0.32 m/s (77.5 s, 2.74 times the offline plan's
     28.3 s); now the lead-in runs from the vehicle, judged by its own speed and braking (it
-    cannot fall below 2.9 - 0.39 - 1.52 = 0.98 m/s coming off 3.9 m/s^2 at 5 m/s^3, above the
+    cannot fall below 2.89 - 0.39 - 1.52 = 0.98 m/s coming off 3.9 m/s^2 at 5 m/s^3, above the
     band's 0.49 m/s floor). No window over the limit in the exact simulation, no emergency."""
     ground = iso8608_profile("B", 300.0, SPACING_M, seed=11)
     route = Route(s_m=ground.s_m, z_m=ground.z_m + step(ground.s_m, KERB_AT_M, -0.08), source="drop 8 cm")

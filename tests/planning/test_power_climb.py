@@ -23,7 +23,7 @@ import pytest
 from profileopt import load_vehicle, plan
 from profileopt.core.route import Route
 from profileopt.physics.motion import STANDARD_GRAVITY_MPS2
-from profileopt.planning.bands import DrivePower, greatest_profile
+from profileopt.planning.bands import DrivePower, choose_bands, greatest_profile
 from profileopt.verification.limit_check import check_limits
 
 DATA = Path(__file__).resolve().parent / "data" / "power_climb_50m.csv"
@@ -69,3 +69,36 @@ def test_a_stall_entering_fast_is_avoided_by_entering_at_the_steady_climbing_spe
     np.testing.assert_allclose(fast, [9.0, 9.0 + 20.0 * (2.0 / 3.0 - 1.0)], rtol=1e-12)
     slow = greatest_profile(np.array([0.0, 3.0]), upper, ds, 10.0, 10.0, power)
     np.testing.assert_allclose(slow, [4.0, 4.0], rtol=1e-12)
+
+
+def test_a_slower_entry_keeps_the_boundarys_own_lower_bound() -> None:
+    """A level 1 m segment at b = 9, then the 10 m climb above (P/m = 2 W/kg, g sin(theta) = 1
+    m/s^2), whose exit must reach b = 2.5 while its entry must keep b >= 5 (the bands either
+    side). Entering at 9 ends at 2.33 (short); the steady climbing speed b = 4 is below the
+    entry's bound; entering at the bound, 5, ends at 5 + 20 (2 / sqrt 5 - 1) = 2.89 >= 2.5, so
+    [9, 5, 2.5] keeps every limit (hand calculation). Found by review: the slower entry first
+    ignored the boundary's own lower bound, and the band choice then refused such routes."""
+    power = DrivePower(power_per_mass_w_per_kg=2.0,
+                       grade_hi_rad=np.array([0.0, math.asin(1.0 / STANDARD_GRAVITY_MPS2)]))
+    lower, upper = np.array([9.0, 5.0, 2.5]), np.array([9.0, 9.0, 2.5])
+    found = greatest_profile(lower, upper, np.array([1.0, 10.0]), 10.0, 10.0, power)
+    np.testing.assert_allclose(found, [9.0, 5.0, 2.5], rtol=1e-12)
+    assert 5.0 + 20.0 * (2.0 / math.sqrt(5.0) - 1.0) >= 2.5
+
+
+def test_a_coarse_climb_entered_at_v0_is_never_lowered_below_v0() -> None:
+    """The 10 m climb entered at v0 = 3 m/s (b = 9), then a level 5 m segment with the bands
+    [0, 1] and [sqrt 3, 10] m/s and 20 m to a stop. Entering at 9 ends at 2.33, short of the
+    upper band's 3: the start cannot enter slower (v0 is given), so the band choice takes the
+    lower band, [9, 1, 1, 0] (as before 21be0e0; 21be0e0 lowered the start below v0 and refused
+    with "raise max_decel_mps2", found by review)."""
+    power = DrivePower(power_per_mass_w_per_kg=2.0,
+                       grade_hi_rad=np.array([math.asin(1.0 / STANDARD_GRAVITY_MPS2), 0.0, 0.0]))
+    length = np.array([10.0, 5.0, 20.0])
+    nan = np.nan
+    lower = np.array([[0.0, nan], [0.0, math.sqrt(3.0)], [0.0, nan]])
+    upper = np.array([[10.0, nan], [1.0, 10.0], [10.0, nan]])
+    choice = choose_bands(lower, upper, np.array([1, 2, 1]), length, 10.0, 10.0, 3.0, 0.0,
+                          np.concatenate([[0.0], np.cumsum(length)]), power)
+    np.testing.assert_array_equal(choice.band, [0, 0, 0])
+    np.testing.assert_allclose(choice.greatest_b, [9.0, 1.0, 1.0, 0.0], rtol=1e-12)
