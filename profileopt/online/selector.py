@@ -928,7 +928,7 @@ class SpeedSelector:
                 closed.append((k, i0, i1))
                 continue
             lead = self._upper_band_lead_in(where, top, decel, upper_lo, upper_hi, trial_chosen, trial_decel,
-                                            final, end_b, v0, a0, i0, i1)
+                                            final, end_b, v0, a0, i0, i1, accel=accel)
             if lead is not None:
                 j0, d_lead, lag_in = lead
                 trial_chosen[i0:i1] = True
@@ -1066,7 +1066,8 @@ class SpeedSelector:
 
     def _upper_band_lead_in(self, where: np.ndarray, top: np.ndarray, decel: np.ndarray, upper_lo: np.ndarray,
                             upper_hi: np.ndarray, chosen: np.ndarray, envelope_decel: np.ndarray, final: np.ndarray,
-                            end_b: float, v0: float, a0: float, i0: int, i1: int) -> tuple[int, float, float] | None:
+                            end_b: float, v0: float, a0: float, i0: int, i1: int, *, accel: np.ndarray
+                            ) -> tuple[int, float, float] | None:
         """Whether the upper band may be chosen for the feature of pieces [i0, i1) of the horizon
         (module docstring, "The upper band"), and if so the first piece of its lead-in, the
         deceleration (m/s^2) the envelope assumes on the lead-in and the feature, and how far
@@ -1104,7 +1105,11 @@ class SpeedSelector:
         than v_low = v0 - D0 dt - D0^2 / (2 J), and speeds up after; on it, it comes off D0 to
         d_f, falling (D0 - d_f)^2 / (2 J) + (D0 - d_f) dt behind (the entry lag, as above).
         So (b) is asked with that entry lag and (c) as v_low at least the band's lower edge at
-        every boundary of the feature."""
+        every boundary of the feature. Not where another feature chosen in its upper band lies
+        between the vehicle and this one (the lead-in's gentler braking would lower the
+        envelope over it, whose own (b) is not asked again), nor where a piece up to the
+        feature's end has a negative acceleration bound ``accel`` (m/s^2, per piece: a climb
+        steeper than the drive holds, where the vehicle cannot come off its braking)."""
         if i0 == 0 or i1 >= final.size or not final[i1]:  # inside it already, or (a)
             return None
         width = float(np.min(np.diff(self._feature_floor(upper_lo, upper_hi, i0, i1), axis=0)))
@@ -1137,7 +1142,10 @@ class SpeedSelector:
                 return j0, d_f, entry_lag
         else:
             return None
-        # a lead-in already begun: from the vehicle, (c) asked of its own state (docstring)
+        # a lead-in already begun: from the vehicle, (c) asked of its own state (docstring); not
+        # over another chosen feature, whose own (b) the gentler braking here would not recheck
+        if np.any(chosen[:i0]) or np.any(accel[:i1] < 0):
+            return None
         trial_decel = envelope_decel.copy()
         trial_decel[:i1] = np.minimum(trial_decel[:i1], d_f)
         braking = braking_profile(upper, np.diff(where), np.minimum(decel, trial_decel))
