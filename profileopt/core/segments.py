@@ -164,6 +164,13 @@ def segment_route(route: "Route", vehicle: "Vehicle", segment_length_m: float = 
     if total - n_full * length > 1e-9 * max(total, 1.0):
         bounds = np.append(bounds, s[-1])
     bounds[-1] = s[-1]
+    # a boundary that lands on a sample but for rounding (0.1 x 3 = 0.30000000000000004 against
+    # a sample at 0.3) is that sample: a segment holds the samples from its start up to its end,
+    # excluded, and rounding must not move a sample to the segment before
+    nearest = np.clip(np.searchsorted(s, bounds), 1, s.size - 1)
+    nearest = np.where(np.abs(s[nearest - 1] - bounds) < np.abs(s[nearest] - bounds), nearest - 1, nearest)
+    snap = np.abs(s[nearest] - bounds) <= 1e-9 * np.maximum(np.abs(bounds), 1.0)
+    bounds[snap] = s[nearest[snap]]
     starts, stops = segment_samples(s, bounds)
     counts = stops - starts
     if counts.size > 1 and counts[-1] < MIN_SAMPLES_PER_SEGMENT:

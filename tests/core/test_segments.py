@@ -96,3 +96,20 @@ def test_the_plan_keeps_the_force_limit_in_every_window_at_any_offset(vehicle_na
     assert worst.max() <= 1.0 + 1e-6, f"{worst.max():.6f} of the limit in the window from {a[worst.argmax()]:.4f} m"
     # and the plan is held by the force there (so the test can tell): within 1 % of the limit
     assert worst.max() > 0.99
+
+
+@pytest.mark.parametrize("segment_length_m", [0.1, 0.3, 0.7])
+def test_segments_of_twice_or_more_the_sample_spacing_hold_their_samples_despite_rounding(segment_length_m) -> None:
+    """Samples every 0.05 m as a file gives them (0.3 is the double nearest 0.3), cut into
+    0.1 m segments: each holds the two samples from its start (0.3 and 0.35 for the fourth).
+    0.1 x 3 = 0.30000000000000004 put the sample 0.3 into the segment before, and the route
+    was refused (segment 3 held 1 sample), though the refusal had said to use at least 0.1 m
+    (an outside test, 2026-11-28). A boundary within rounding of a sample is that sample."""
+    s = np.array([float(f"{0.05 * k:.2f}") for k in range(2001)])
+    route = Route(s_m=s, z_m=np.zeros_like(s), source="flat.csv")
+    vehicle = load_vehicle("atv")
+    segments = segment_route(route, vehicle, segment_length_m)
+    inside = np.diff(np.searchsorted(s, segments.boundaries_m, side="left"))
+    per_segment = round(segment_length_m / 0.05)
+    assert np.all(inside[:-1] == per_segment), np.flatnonzero(inside[:-1] != per_segment)[:3]
+    assert np.all(np.isin(segments.boundaries_m, s))  # every boundary on a sample
