@@ -392,7 +392,8 @@ def choose_bands(
         lowerable = culprits[band[culprits] > 0]
         if lowerable.size == 0:
             error = InfeasibleError(_infeasible_message(int(j[0]), b, lower, where, v0_mps, vend_mps,
-                                                        (bands_lower_mps, bands_upper_mps, count)))
+                                                        (bands_lower_mps, bands_upper_mps, count),
+                                                        power=power is not None))
             error.position_m = float(where[int(j[0])])  # where the profile fell short, for hints
             raise error
         band[lowerable] -= 1
@@ -405,10 +406,13 @@ def _bands_text(lower_mps: np.ndarray, upper_mps: np.ndarray, count: int) -> str
 
 
 def _infeasible_message(j: int, b: np.ndarray, lower: np.ndarray, where: np.ndarray, v0: float, vend: float,
-                        bands: tuple[np.ndarray, np.ndarray, np.ndarray]) -> str:
+                        bands: tuple[np.ndarray, np.ndarray, np.ndarray], *, power: bool = False) -> str:
     """Why boundary j cannot be reached, named from the segments' full band lists ``bands``
-    (lower edges (N, B), upper edges (N, B), counts (N,)), not from the lowered assignment."""
+    (lower edges (N, B), upper edges (N, B), counts (N,)), not from the lowered assignment;
+    ``power``: a drive power limit holds the acceleration too (its key is named beside
+    max_accel_mps2)."""
     n = where.size - 1
+    drive = "max_accel_mps2 or max_power_w" if power else "max_accel_mps2"
     reach = math.sqrt(max(b[j], 0.0))
     if j in (0, n):
         i, flag, speed = (0, "v0_mps", v0) if j == 0 else (n - 1, "vend_mps", vend)
@@ -423,7 +427,7 @@ def _infeasible_message(j: int, b: np.ndarray, lower: np.ndarray, where: np.ndar
                 return (f"starting at v0_mps = {speed:g} m/s the vehicle cannot brake in time for the limits "
                         f"ahead (it can only be at {reach:.3g} m/s); start slower or raise max_decel_mps2")
             return (f"the route cannot end at vend_mps = {speed:g} m/s: the vehicle can reach only {reach:.3g} "
-                    "m/s there; lower vend_mps or raise max_accel_mps2")
+                    f"m/s there; lower vend_mps or raise {drive}")
         if not inside:
             return (f"{flag} = {speed:g} m/s is not an admissible speed of the {where_text} segment, whose "
                     f"admissible speeds are {_bands_text(lo_row, hi_row, cnt)}; choose {flag} in one of them")
@@ -436,7 +440,7 @@ def _infeasible_message(j: int, b: np.ndarray, lower: np.ndarray, where: np.ndar
         return (f"the route cannot end at vend_mps = {speed:g} m/s (in the band [{lo_row[inside[0]]:.3g}, "
                 f"{hi_row[inside[0]]:.3g}] m/s of the last segment): the vehicle can only be at {reach:.3g} "
                 "m/s there (reaching that band would pass through speeds the force limit forbids, or "
-                "needs more acceleration); choose another vend_mps or raise max_accel_mps2")
+                f"needs more acceleration); choose another vend_mps or raise {drive}")
     return (f"at s = {where[j]:g} m the speed must be at least {math.sqrt(lower[j]):.3g} m/s but the "
             f"acceleration bounds allow only {reach:.3g} m/s; relax v0_mps/vend_mps or the vehicle's "
             "acceleration limits")

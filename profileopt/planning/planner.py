@@ -377,10 +377,11 @@ def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *,
                 raise InfeasibleError(f"{route.source}: no profile found, but the segments are too long for the "
                                       f"power-limited climb {coarse}: use segment_length_m <= "
                                       f"{_shortest_exact(power, seg):.3g} m there and plan again") from None
-            stall = _stall_message(exc, seg, path, accel)
+            grip = _grip_holds(limits, accel_source)
+            stall = _stall_message(exc, seg, path, accel, grip)
             if stall:  # a climb the drive cannot hold explains it: say that, not the generic bound
                 raise InfeasibleError(f"{route.source}: {stall}") from None
-            raise InfeasibleError(f"{route.source}: {exc}{_grade_hint(exc, seg, path, decel, accel)}") from None
+            raise InfeasibleError(f"{route.source}: {exc}{_grade_hint(exc, seg, path, decel, accel, grip)}") from None
         timings["choose"] = timings.get("choose", 0.0) + time.perf_counter() - t
         if not refine or refine_note:
             break
@@ -544,9 +545,24 @@ def _check_grades(source: str, seg: Segments, path: SegmentPath, decel: np.ndarr
         )
 
 
-def _stall_message(exc: Exception, seg: Segments, path: SegmentPath, accel: np.ndarray) -> str:
+def _grip_holds(limits: Sequence[Limit], accel_source: np.ndarray) -> np.ndarray:
+    """Per segment, whether the tyres' grip (the friction limit), not the drive, gives the
+    acceleration bound, shape (N,)."""
+    friction = np.array([limit.name == "friction" for limit in limits], dtype=bool)
+    return friction[accel_source]
+
+
+def _raise_drive(grip: np.ndarray) -> str:
+    """What to raise where a climb is steeper than the acceleration bound allows: the grip's
+    key where ``grip`` holds anywhere in the stretch, else the drive's."""
+    if np.any(grip):
+        return "raise friction_coefficient (the grip holds the drive there: a climb of grade G needs mu >= G)"
+    return "raise max_accel_mps2 (a climb of grade G needs g sin(atan G))"
+
+
+def _stall_message(exc: Exception, seg: Segments, path: SegmentPath, accel: np.ndarray, grip: np.ndarray) -> str:
     """"the vehicle stalls at s = ... m on the climb ...", when the profile fell short of 0 m/s
-    after a climb the drive cannot hold ("" otherwise)."""
+    after a climb the drive (or the grip: ``grip``, per segment) cannot hold ("" otherwise)."""
     at = getattr(exc, "position_m", None)
     if at is None or "must be at least 0 m/s" not in str(exc):
         return ""
@@ -560,12 +576,14 @@ def _stall_message(exc: Exception, seg: Segments, path: SegmentPath, accel: np.n
     return (f"the vehicle stalls at s = {at:g} m on the climb from s = {seg.boundaries_m[first]:g} m (grade up to "
             f"{math.tan(path.grade_hi_rad[first:last + 1].max()):.1%}), steeper than its drive can hold: there it "
             f"loses up to {-accel[first:last + 1].min():.3g} m/s^2 at full drive and no speed it can reach before "
-            "carries it over; raise max_accel_mps2 (a climb of grade G needs g sin(atan G)) or choose a gentler route")
+            f"carries it over; {_raise_drive(grip[first:last + 1])} or choose a gentler route")
 
 
-def _grade_hint(exc: Exception, seg: Segments, path: SegmentPath, decel: np.ndarray, accel: np.ndarray) -> str:
-    """Where the grade makes a route impassable: a climb the drive cannot hold, a descent the
-    brakes cannot hold; appended to an infeasibility message ("" if neither)."""
+def _grade_hint(exc: Exception, seg: Segments, path: SegmentPath, decel: np.ndarray, accel: np.ndarray,
+                grip: np.ndarray) -> str:
+    """Where the grade makes a route impassable: a climb the drive (or the grip: ``grip``, per
+    segment) cannot hold, a descent the brakes cannot hold; appended to an infeasibility
+    message ("" if neither)."""
     parts = []
     at = getattr(exc, "position_m", None)
     climb = np.flatnonzero(accel < 0)
@@ -575,7 +593,7 @@ def _grade_hint(exc: Exception, seg: Segments, path: SegmentPath, decel: np.ndar
         i = int(climb[-1]) if at is not None else int(climb[np.argmin(accel[climb])])
         parts.append(f"the climb at s = {seg.boundaries_m[i]:g} m (grade {math.tan(path.grade_hi_rad[i]):.1%}) "
                      f"is steeper than the drive can hold (it slows the vehicle by {-accel[i]:.3g} m/s^2 at full "
-                     "drive; raise max_accel_mps2 or choose a gentler route)")
+                     f"drive; {_raise_drive(grip[i:i + 1])} or choose a gentler route)")
     descent = np.flatnonzero(decel < 0)
     if at is not None and parts:  # a climb explains it; name a descent only when none does
         descent = descent[:0]

@@ -389,3 +389,20 @@ def test_without_smoothing_or_jerk_bound_every_row_names_a_real_limit():
         profile = plan(route, vehicle, segment_length_m=ds, **EXACT)
         assert "jerk" not in set(profile.binding), route.source
     assert "power" in set(plan(cases[0][0], weak, segment_length_m=1.0, **EXACT).binding)
+
+
+def test_refusals_name_the_key_that_holds_the_vehicle_back():
+    """A climb the grip cannot hold names friction_coefficient, not max_accel_mps2 (mu = 0.05:
+    mu g cos(theta) = 0.48 m/s^2 against the g sin(atan 0.2) = 1.92 m/s^2 a 20 % climb needs,
+    with max_accel 9 m/s^2); an end speed the drive power cannot reach names max_power_w beside
+    max_accel_mps2 (1 kW, 450 kg: 1.155 m/s at most up 20 %, vend 5 m/s). Both named only
+    max_accel_mps2 before (an outside test, 2026-11-28)."""
+    climb = ramp_route([(100.0, 0.2)], ds_m=0.05)
+    slippery = load_vehicle("atv-low-range").replace(friction_coefficient=0.05, max_accel_mps2=9.0)
+    with pytest.raises(InfeasibleError, match=r"raise friction_coefficient") as refused:
+        plan(climb, slippery)
+    assert "max_accel_mps2" not in str(refused.value)
+    weak = load_vehicle("atv").replace(max_power_w=1000.0)
+    with pytest.raises(InfeasibleError, match=r"vend_mps = 5 m/s: the vehicle can reach only 1\.1\d m/s .*"
+                                                r"raise max_accel_mps2 or max_power_w"):
+        plan(climb, weak, segment_length_m=0.5, vend_mps=5.0)
