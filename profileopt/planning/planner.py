@@ -59,7 +59,7 @@ from .nlp.pieces import choose_cuts, cut_scores, solve_pieces
 from .nlp.problem import Scaling, family_rows, objective_s, row_bounds
 from .nlp.solve import solve_nlp
 from .options import SolverOptions
-from .refine import REFINE_AT_CAP, refined_segments
+from .refine import REFINE_AT_CAP, refined_segments, split_long_segments
 
 if TYPE_CHECKING:
     from ..core.route import Route
@@ -334,7 +334,8 @@ def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *,
     the other arguments as :func:`plan`'s. Adds to ``timings`` (s) and tells ``progress``
     its steps."""
     v0_requested, vend_requested = v0_mps, vend_mps
-    refine_note = ""
+    refine_note = split_note = ""
+    split_asked = not refine  # with refine, segments too long for a power-limited climb are cut first
     while True:  # twice with refine: on the segments asked for, then on the refined ones
         t = time.perf_counter()
         progress.step(f"speed bands of {seg.count} segments" + (" (refined)" if refine_note else ""))
@@ -369,6 +370,14 @@ def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *,
                                            int(usable.count[-1]), "vend_mps")
         notes += [note for note in (note_v0, note_vend) if note]
         coarse = _coarse_power_segments(power, seg)
+        if coarse and not split_asked:
+            split_asked = True
+            finer = split_long_segments(seg, power.longest_exact_segment_m(), route.s_m, vehicle)
+            if finer is not seg:
+                split_note = (f"the power-limited climb {coarse} planned on shorter segments, which plan it exactly "
+                              f"({seg.count} -> {finer.count} segments)")
+                seg = finer
+                continue
         try:
             chosen = choose_bands(usable.lower_mps, usable.upper_mps, usable.count, seg.length_m, accel, decel,
                                   v0_mps, vend_mps, seg.boundaries_m, power)
@@ -398,6 +407,8 @@ def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *,
                        f"and the roughness changes, or a step's, a speed limit's or a sharp turn's cap "
                        f"({seg.count} -> {finer.count})")
         seg = finer
+    if split_note:
+        notes.append(split_note)
     if refine_note:
         notes.append(refine_note)
     if coarse:

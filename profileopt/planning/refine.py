@@ -11,7 +11,9 @@ to its speeds over its whole length. After the bands are chosen once, the planne
   (:func:`stretch_cuts`), and where their roughness changes as well: the cap hid
   their band's top, which the pieces off the stretch meet once they are free of it;
 
-then chooses the bands again on the finer segments and solves once.
+then chooses the bands again on the finer segments and solves once. Before the first choice,
+it cuts the segments too long for a drive power limit's climb to be planned exactly
+(:func:`split_long_segments`, with :meth:`.bands.DrivePower.longest_exact_segment_m`).
 """
 
 from __future__ import annotations
@@ -30,8 +32,8 @@ from .limits.base import Limit, PlanContext
 if TYPE_CHECKING:
     from ..core.vehicle import Vehicle
 
-__all__ = ["refined_segments", "refine_segments", "stretch_cuts", "at_force_cap", "at_cap", "REFINE_RI_TOLERANCE",
-           "REFINE_AT_CAP"]
+__all__ = ["refined_segments", "refine_segments", "stretch_cuts", "at_force_cap", "at_cap", "split_long_segments",
+           "REFINE_RI_TOLERANCE", "REFINE_AT_CAP"]
 
 #: :func:`refine_segments` cuts a segment where the RI range of the windows met between two
 #: samples departs by more than this fraction from the range where the piece began.
@@ -245,6 +247,52 @@ def refine_segments(segments: Segments, positions_m: np.ndarray, vehicle: "Vehic
             if j in forced or hi > base_hi * high or hi < base_hi * low or lo > base_lo * high or lo < base_lo * low:
                 cuts.append(j)
                 start, base_lo, base_hi = j, lo, hi
+    if not cuts:
+        return segments
+    bounds = np.union1d(segments.boundaries_m, s[np.asarray(cuts, dtype=np.intp)])
+    starts, stops = segment_samples(s, bounds)
+    return segments_at(bounds, segments.windows, vehicle, starts=starts, stops=stops, notes=segments.notes)
+
+
+def split_long_segments(segments: Segments, longest_m: np.ndarray, s: np.ndarray, vehicle: "Vehicle") -> Segments:
+    """The segments with each one longer than its ``longest_m`` cut at samples into pieces of
+    about equal length, no longer than it where the samples allow (every piece keeps
+    :data:`~profileopt.core.segments.MIN_SAMPLES_PER_SEGMENT` samples).
+
+    Parameters
+    ----------
+    segments : Segments
+        The plan's segments.
+    longest_m : numpy.ndarray, shape (N,)
+        The longest each segment may be (m); inf: any.
+    s : numpy.ndarray, shape (M,)
+        The route's sample positions (m).
+    vehicle : Vehicle
+        As for :func:`~profileopt.core.segments.segments_at`.
+
+    Returns
+    -------
+    Segments
+        ``segments`` itself when none is cut.
+    """
+    least = MIN_SAMPLES_PER_SEGMENT
+    cuts: list[int] = []
+    for k in np.flatnonzero(segments.length_m > longest_m):
+        a = int(segments.first_sample[k])
+        b = a + int(segments.samples[k])  # samples a .. b-1
+        # cut at the last sample at or before each target: a piece is then shorter than the
+        # targets' spacing plus the samples' widest spacing here, so the targets are that much closer
+        spacing = float(np.max(np.diff(s[a:min(b + 1, s.size)]), initial=0.0))
+        target_m = max(float(longest_m[k]) - spacing, spacing, 1e-9)
+        pieces = min(int(math.ceil(segments.length_m[k] / target_m)), (b - a) // least)
+        if pieces < 2:
+            continue
+        targets = segments.boundaries_m[k] + segments.length_m[k] * np.arange(1, pieces) / pieces
+        last = a
+        for j in (np.searchsorted(s[a:b], targets, side="right") - 1 + a).tolist():
+            if j - last >= least and b - j >= least:
+                cuts.append(j)
+                last = j
     if not cuts:
         return segments
     bounds = np.union1d(segments.boundaries_m, s[np.asarray(cuts, dtype=np.intp)])

@@ -322,11 +322,11 @@ def test_a_power_limited_climb_too_coarse_for_the_segments_is_planned_and_says_w
     route = ramp_route([(50.0, 0.0), (60.0, 0.2)], ds_m=0.05)
     longest = (1000.0 / 450.0) ** 2 / (G * math.sin(math.atan(0.2))) ** 3
     steady = 1000.0 / (450.0 * G * math.sin(math.atan(0.2)))
-    # on 5 m segments, entering the climb at the run-up's speed (about 3 m/s) would stall within
-    # the first 5 m (3^2 + 2 * 5 * (2.22 / 3 - 1.92) = -2.8 < 0): the forward pass enters at the steady speed,
-    # which it then holds (the power step from (P / (m g sin theta))^2 is itself), and says the
-    # plan may be slower than the optimum
-    coarse = plan(route, weak, segment_length_m=5.0, **EXACT)
+    # on 5 m segments as asked (refine off), entering the climb at the run-up's speed (about 3 m/s)
+    # would stall within the first 5 m (3^2 + 2 * 5 * (2.22 / 3 - 1.92) = -2.8 < 0): the forward
+    # pass enters at the steady speed, which it then holds (the power step from (P / (m g sin
+    # theta))^2 is itself), and says the plan may be slower than the optimum
+    coarse = plan(route, weak, segment_length_m=5.0, refine=False, **EXACT)
     assert any("power-limited climb" in note and "<= 0.694 m" in note for note in coarse.notes)
     on_climb = coarse.s_m >= 50.0 - 1e-9
     np.testing.assert_allclose(coarse.speed_mps[on_climb][:-1], steady, rtol=1e-9)
@@ -336,6 +336,16 @@ def test_a_power_limited_climb_too_coarse_for_the_segments_is_planned_and_says_w
     assert longest == pytest.approx(0.694, abs=5e-4) and not any("power-limited" in note for note in profile.notes)
     climb = (profile.s_m > 80) & (profile.s_m < 105)
     np.testing.assert_allclose(profile.speed_mps[climb], steady, rtol=1e-3)
+    # refined (the default), the 5 m segments on the climb are cut to at most 0.694 m first, and
+    # the climb is planned exactly: 63.9 s, against 70.0 s on the 5 m segments as asked and
+    # 62.2 s on 0.5 m ones (the rest is the run-up's 5 m grid, where the speed peaks only at a
+    # boundary)
+    split = plan(route, weak, segment_length_m=5.0, **EXACT)
+    assert any("planned on shorter segments" in note for note in split.notes), split.notes
+    assert not any("may be slower" in note for note in split.notes), split.notes
+    assert np.all(np.diff(split.s_m)[split.s_m[:-1] >= 50.0] <= longest + 1e-12)
+    assert profile.travel_time_s < split.travel_time_s < 1.03 * profile.travel_time_s < coarse.travel_time_s
+    assert not check_limits(route, split, weak, max_jerk_mps3=math.inf).breaches
 
 
 @pytest.mark.slow
