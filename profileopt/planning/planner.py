@@ -374,15 +374,16 @@ def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *,
             split_asked = True
             finer = split_long_segments(seg, power.longest_exact_segment_m(), route.s_m, vehicle)
             if finer is not seg:
-                split_note = (f"the power-limited climb {coarse} planned on shorter segments, which plan it exactly "
+                split_note = (f"the power-limited climb {coarse} planned on shorter segments "
                               f"({seg.count} -> {finer.count} segments)")
                 seg = finer
+                progress.expect(1)  # the speed bands again, on the shorter segments
                 continue
         try:
             chosen = choose_bands(usable.lower_mps, usable.upper_mps, usable.count, seg.length_m, accel, decel,
                                   v0_mps, vend_mps, seg.boundaries_m, power)
         except InfeasibleError as exc:  # name the route, as every input message does
-            if coarse:
+            if coarse and _exact_possible(power, seg, route.s_m):
                 raise InfeasibleError(f"{route.source}: no profile found, but the segments are too long for the "
                                       f"power-limited climb {coarse}: use segment_length_m <= "
                                       f"{_shortest_exact(power, seg):.3g} m there and plan again") from None
@@ -408,13 +409,15 @@ def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *,
                        f"({seg.count} -> {finer.count})")
         seg = finer
     if split_note:
-        notes.append(split_note)
+        notes.append(split_note + ("" if coarse else ", which plan it exactly"))
     if refine_note:
         notes.append(refine_note)
     if coarse:
+        exact = _shortest_exact(power, seg)
+        fix = (f"segment_length_m <= {exact:.3g} m plans it exactly" if _exact_possible(power, seg, route.s_m) else
+               f"the route's samples are too far apart there for segments that plan it exactly ({exact:.3g} m)")
         notes.append(f"the segments are longer than the power-limited climb {coarse} resolves exactly: the plan "
-                     f"keeps every limit but may be slower than the optimum; segment_length_m <= "
-                     f"{_shortest_exact(power, seg):.3g} m plans it exactly")
+                     f"keeps every limit but may be slower than the optimum; {fix}")
 
     iterations = pieces = 0
     solver = ""
@@ -630,6 +633,21 @@ def _coarse_power_segments(power: DrivePower | None, seg: Segments) -> str:
 def _shortest_exact(power: DrivePower, seg: Segments) -> float:
     """The longest segment length (m) that keeps the power forward pass exact everywhere."""
     return float(np.min(power.longest_exact_segment_m()))
+
+
+def _exact_possible(power: DrivePower, seg: Segments, s: np.ndarray) -> bool:
+    """Whether segments short enough for the power forward pass to be exact can hold
+    :data:`~profileopt.core.segments.MIN_SAMPLES_PER_SEGMENT` samples where it is not: the
+    samples there at most half that length apart."""
+    from ..core.segments import MIN_SAMPLES_PER_SEGMENT
+
+    longest = power.longest_exact_segment_m()
+    for k in np.flatnonzero(seg.length_m > longest):
+        a, b = int(seg.first_sample[k]), int(seg.first_sample[k] + seg.samples[k])
+        spacing = float(np.max(np.diff(s[a:min(b + 1, s.size)]), initial=0.0))
+        if MIN_SAMPLES_PER_SEGMENT * spacing > longest[k]:
+            return False
+    return True
 
 
 def _drive_power(limits: Sequence[Limit], context: PlanContext) -> DrivePower | None:
