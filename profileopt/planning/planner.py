@@ -59,7 +59,7 @@ from .nlp.pieces import choose_cuts, cut_scores, solve_pieces
 from .nlp.problem import Scaling, family_rows, objective_s, row_bounds
 from .nlp.solve import solve_nlp
 from .options import SolverOptions
-from .refine import REFINE_AT_CAP, refined_segments, split_long_segments
+from .refine import REFINE_AT_CAP, SPLIT_MAX_FACTOR, refined_segments, split_long_segments
 
 if TYPE_CHECKING:
     from ..core.route import Route
@@ -372,7 +372,9 @@ def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *,
         coarse = _coarse_power_segments(power, seg)
         if coarse and not split_asked:
             split_asked = True
-            finer = split_long_segments(seg, power.longest_exact_segment_m(), route.s_m, vehicle)
+            budget = SPLIT_MAX_FACTOR * max(seg.count, math.ceil(route.length_m / DEFAULT_SEGMENT_LENGTH_M))
+            finer = split_long_segments(seg, power.longest_exact_segment_m(), route.s_m, vehicle,
+                                        max_segments=budget)
             if finer is not seg:
                 split_note = (f"the power-limited climb {coarse} planned on shorter segments "
                               f"({seg.count} -> {finer.count} segments)")

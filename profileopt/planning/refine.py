@@ -254,23 +254,25 @@ def refine_segments(segments: Segments, positions_m: np.ndarray, vehicle: "Vehic
     return segments_at(bounds, segments.windows, vehicle, starts=starts, stops=stops, notes=segments.notes)
 
 
-#: Most segments :func:`split_long_segments` leaves, per segment it is given: enough for a
-#: 20 % climb with 2.2 W/kg on 5 m segments (0.69 m pieces), and a bound on a plan's size where
-#: the exact length is centimetres (20 km of a 25 % climb with 1 W/kg: 0.07 m, 50 times).
-#: The command line's memory estimate assumes 4 per uniform segment (``profileopt.cli.memory``):
-#: a plan cut more than that needs more memory than it estimates for its segments.
+#: Most segments the planner lets :func:`split_long_segments` leave, per segment of the
+#: plan's grid or of the default 5 m grid, whichever has more: enough for a 20 % climb with
+#: 2.2 W/kg (0.69 m pieces), and a bound on a plan's size where the exact length is
+#: centimetres (20 km of a 25 % climb with 1 W/kg: 0.07 m, 70 times the 5 m grid). The
+#: command line's memory estimate assumes 4 per segment of the plan's grid
+#: (``profileopt.cli.memory``): a plan cut more than that needs more memory than it estimates
+#: for its segments.
 SPLIT_MAX_FACTOR = 8
 
 
-def split_long_segments(segments: Segments, longest_m: np.ndarray, s: np.ndarray, vehicle: "Vehicle") -> Segments:
+def split_long_segments(segments: Segments, longest_m: np.ndarray, s: np.ndarray, vehicle: "Vehicle", *,
+                        max_segments: int) -> Segments:
     """The segments with each one longer than its ``longest_m`` cut at samples into pieces of
     about equal length, no longer than it where the samples allow (every piece keeps
     :data:`~profileopt.core.segments.MIN_SAMPLES_PER_SEGMENT` samples).
 
-    At most :data:`SPLIT_MAX_FACTOR` times the segments given result: where cutting every
-    long segment would leave more, only the first of each run of long segments is cut (where
-    a climb is entered, maybe faster than it can be held), and where that too would leave
-    more, none.
+    At most ``max_segments`` result: where cutting every long segment would leave more, only
+    the first of each run of long segments is cut (where a climb is entered, maybe faster
+    than it can be held), and where that too would leave more, none.
 
     Parameters
     ----------
@@ -282,6 +284,9 @@ def split_long_segments(segments: Segments, longest_m: np.ndarray, s: np.ndarray
         The route's sample positions (m).
     vehicle : Vehicle
         As for :func:`~profileopt.core.segments.segments_at`.
+    max_segments : int
+        Most segments to leave (the planner: :data:`SPLIT_MAX_FACTOR` per segment of its grid
+        or of the default grid).
 
     Returns
     -------
@@ -290,10 +295,9 @@ def split_long_segments(segments: Segments, longest_m: np.ndarray, s: np.ndarray
     """
     long = segments.length_m > longest_m
     first_of_run = long & ~np.concatenate([[False], long[:-1]])
-    budget = SPLIT_MAX_FACTOR * segments.count
     for chosen in (long, first_of_run):
         cuts = _split_cuts(segments, longest_m, s, np.flatnonzero(chosen))
-        if segments.count + len(cuts) <= budget:
+        if segments.count + len(cuts) <= max_segments:
             break
     else:
         return segments

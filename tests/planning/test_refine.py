@@ -163,29 +163,31 @@ def test_segments_too_long_are_cut_at_samples_into_pieces_no_longer_than_asked()
     0.694 m (a power-limited climb's exact length) and the fourth 0.12 m: pieces of at most
     that (ceil(10 / (0.694 - 0.05)) = 16, cut at the last sample before each target: 0.6 or
     0.65 m; 0.12 m allows pieces of 2 samples, 0.1 m: 100), every piece with at least 2
-    samples. Within SPLIT_MAX_FACTOR (8) times the 4 segments given, 32: the 0.694 m one is
-    cut (19 segments), the 0.12 m one would make 118 and is not; where every long segment
-    cut would be too many (three of 0.694 m in a row: 49), only the first of the run is."""
+    samples. Within 32 segments at most: the 0.694 m one is cut (19 segments), the 0.12 m one
+    would make 103 and is not; where every long segment cut would be too many (three of
+    0.694 m in a row: 49), only the first of the run is."""
     from profileopt import load_vehicle
     from profileopt.core.segments import segment_route
-    from profileopt.planning.refine import SPLIT_MAX_FACTOR, split_long_segments
+    from profileopt.planning.refine import split_long_segments
 
     s = np.round(np.arange(0.0, 40.0 + 1e-9, 0.05), 2)
     route = Route(s_m=s, z_m=np.zeros_like(s), source="flat")
     vehicle = load_vehicle("atv")
     segments = segment_route(route, vehicle, 10.0)
-    assert SPLIT_MAX_FACTOR == 8
+    most = 32
 
     def pieces(split, a: float, b: float) -> np.ndarray:
         inside = (split.boundaries_m[:-1] >= a - 1e-9) & (split.boundaries_m[1:] <= b + 1e-9)
         return split.length_m[inside]
 
-    alone = split_long_segments(segments, np.array([np.inf, 0.694, np.inf, np.inf]), s, vehicle)
+    alone = split_long_segments(segments, np.array([np.inf, 0.694, np.inf, np.inf]), s, vehicle, max_segments=most)
     assert pieces(alone, 10.0, 20.0).size == 16 and np.all(pieces(alone, 10.0, 20.0) <= 0.694)
     assert np.all(alone.samples >= 2) and alone.count == 19
-    fine = split_long_segments(segments, np.array([np.inf, np.inf, np.inf, 0.12]), s, vehicle)
+    fine = split_long_segments(segments, np.array([np.inf, np.inf, np.inf, 0.12]), s, vehicle, max_segments=most)
     assert fine is segments  # 103 > 32, and the first of its run is all of it
-    run = split_long_segments(segments, np.array([np.inf, 0.694, 0.694, 0.694]), s, vehicle)
+    run = split_long_segments(segments, np.array([np.inf, 0.694, 0.694, 0.694]), s, vehicle, max_segments=most)
     assert pieces(run, 10.0, 20.0).size == 16 and run.count == 19
     np.testing.assert_array_equal(pieces(run, 20.0, 40.0), [10.0, 10.0])
-    assert split_long_segments(segments, np.full(4, np.inf), s, vehicle) is segments
+    assert split_long_segments(segments, np.full(4, np.inf), s, vehicle, max_segments=most) is segments
+    assert split_long_segments(segments, np.array([np.inf, np.inf, np.inf, 0.12]), s, vehicle,
+                               max_segments=104).count == 103
