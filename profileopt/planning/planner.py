@@ -589,9 +589,10 @@ def _stall_message(exc: Exception, seg: Segments, path: SegmentPath, accel: np.n
     first = last
     while first > 0 and accel[first - 1] < 0:
         first -= 1
+    holder = "grip" if np.any(grip[first:last + 1]) else "drive"
     return (f"the vehicle stalls at s = {at:g} m on the climb from s = {seg.boundaries_m[first]:g} m (grade up to "
-            f"{math.tan(path.grade_hi_rad[first:last + 1].max()):.1%}), steeper than its drive can hold: there it "
-            f"loses up to {-accel[first:last + 1].min():.3g} m/s^2 at full drive and no speed it can reach before "
+            f"{math.tan(path.grade_hi_rad[first:last + 1].max()):.1%}), steeper than its {holder} can hold: there it "
+            f"loses up to {-accel[first:last + 1].min():.3g} m/s^2 at full {holder} and no speed it can reach before "
             f"carries it over; {_raise_drive(grip[first:last + 1])} or choose a gentler route")
 
 
