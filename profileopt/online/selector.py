@@ -1128,6 +1128,13 @@ class SpeedSelector:
         trial_top[i0:i1] = upper_hi[i0:i1]
         upper = _boundary_b(trial_top * trial_top, end_b=end_b)
         h = float(upper[i0])  # the most b the envelope has where the feature starts
+
+        def braking_from(j0: int) -> np.ndarray:
+            """The envelope's braking profile with the lead-in from piece j0 braking at d_f."""
+            trial_decel = envelope_decel.copy()
+            trial_decel[j0:i1] = np.minimum(trial_decel[j0:i1], d_f)
+            return braking_profile(upper, np.diff(where), np.minimum(decel, trial_decel))
+
         for lead_s, entry_lag in leads:
             # the lead-in's length L: T at the envelope's speed v there, v^2 <= h + 2 d_f L
             lead_m = lead_s * lead_s * d_f + math.sqrt(lead_s ** 4 * d_f * d_f + lead_s * lead_s * h)
@@ -1135,10 +1142,8 @@ class SpeedSelector:
             if start_m < where[0]:
                 break  # the vehicle is on this lead-in already (and on the longer one): below
             j0 = int(np.searchsorted(where, start_m, side="right")) - 1
-            trial_decel = envelope_decel.copy()
-            trial_decel[j0:i1] = np.minimum(trial_decel[j0:i1], d_f)
-            braking = braking_profile(upper, np.diff(where), np.minimum(decel, trial_decel))
-            if self._upper_band_holds(braking, upper_lo, upper_hi, decel, d_f, v0, i0, i1, entry_lag_mps=entry_lag):
+            if self._upper_band_holds(braking_from(j0), upper_lo, upper_hi, decel, d_f, v0, i0, i1,
+                                      entry_lag_mps=entry_lag):
                 return j0, d_f, entry_lag
         else:
             return None
@@ -1146,9 +1151,6 @@ class SpeedSelector:
         # over another chosen feature, whose own (b) the gentler braking here would not recheck
         if np.any(chosen[:i0]) or np.any(accel[:i1] < 0):
             return None
-        trial_decel = envelope_decel.copy()
-        trial_decel[:i1] = np.minimum(trial_decel[:i1], d_f)
-        braking = braking_profile(upper, np.diff(where), np.minimum(decel, trial_decel))
         braking_now = max(-a0, 0.0)
         ramp = max(braking_now - d_f, 0.0)
         v_low, entry_lag = v0 - braking_now * dt, ramp * dt
@@ -1156,8 +1158,8 @@ class SpeedSelector:
             v_low -= braking_now ** 2 / (2.0 * jerk)
             entry_lag += ramp * ramp / (2.0 * jerk)
         floor = self._feature_floor(upper_lo, upper_hi, i0, i1)[0]
-        if v_low >= float(np.max(floor)) and self._upper_band_holds(braking, upper_lo, upper_hi, decel, d_f, None,
-                                                                    i0, i1, entry_lag_mps=entry_lag):
+        if v_low >= float(np.max(floor)) and self._upper_band_holds(braking_from(0), upper_lo, upper_hi, decel, d_f,
+                                                                    None, i0, i1, entry_lag_mps=entry_lag):
             return 0, d_f, entry_lag
         return None
 

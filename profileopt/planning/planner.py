@@ -59,7 +59,7 @@ from .nlp.pieces import choose_cuts, cut_scores, solve_pieces
 from .nlp.problem import Scaling, family_rows, objective_s, row_bounds
 from .nlp.solve import solve_nlp
 from .options import SolverOptions
-from .refine import REFINE_AT_CAP, SPLIT_MAX_FACTOR, refined_segments, split_long_segments
+from .refine import REFINE_AT_CAP, SPLIT_MAX_FACTOR, can_split_to, refined_segments, split_long_segments
 
 if TYPE_CHECKING:
     from ..core.route import Route
@@ -385,7 +385,7 @@ def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *,
             chosen = choose_bands(usable.lower_mps, usable.upper_mps, usable.count, seg.length_m, accel, decel,
                                   v0_mps, vend_mps, seg.boundaries_m, power)
         except InfeasibleError as exc:  # name the route, as every input message does
-            if coarse and _exact_possible(power, seg, route.s_m):
+            if coarse and can_split_to(seg, power.longest_exact_segment_m(), route.s_m):
                 raise InfeasibleError(f"{route.source}: no profile found, but the segments are too long for the "
                                       f"power-limited climb {coarse}: use segment_length_m <= "
                                       f"{_shortest_exact(power, seg):.3g} m there and plan again") from None
@@ -416,8 +416,10 @@ def _plan_once(route: "Route", vehicle: "Vehicle", limits: tuple[Limit, ...], *,
         notes.append(refine_note)
     if coarse:
         exact = _shortest_exact(power, seg)
-        fix = (f"segment_length_m <= {exact:.3g} m plans it exactly" if _exact_possible(power, seg, route.s_m) else
-               f"the route's samples are too far apart there for segments that plan it exactly ({exact:.3g} m)")
+        if can_split_to(seg, power.longest_exact_segment_m(), route.s_m):
+            fix = f"segment_length_m <= {exact:.3g} m plans it exactly"
+        else:
+            fix = f"the route's samples are too far apart there for segments that plan it exactly ({exact:.3g} m)"
         notes.append(f"the segments are longer than the power-limited climb {coarse} resolves exactly: the plan "
                      f"keeps every limit but may be slower than the optimum; {fix}")
 
@@ -636,21 +638,6 @@ def _coarse_power_segments(power: DrivePower | None, seg: Segments) -> str:
 def _shortest_exact(power: DrivePower, seg: Segments) -> float:
     """The longest segment length (m) that keeps the power forward pass exact everywhere."""
     return float(np.min(power.longest_exact_segment_m()))
-
-
-def _exact_possible(power: DrivePower, seg: Segments, s: np.ndarray) -> bool:
-    """Whether segments short enough for the power forward pass to be exact can hold
-    :data:`~profileopt.core.segments.MIN_SAMPLES_PER_SEGMENT` samples where it is not: the
-    samples there at most half that length apart."""
-    from ..core.segments import MIN_SAMPLES_PER_SEGMENT
-
-    longest = power.longest_exact_segment_m()
-    for k in np.flatnonzero(seg.length_m > longest):
-        a, b = int(seg.first_sample[k]), int(seg.first_sample[k] + seg.samples[k])
-        spacing = float(np.max(np.diff(s[a:min(b + 1, s.size)]), initial=0.0))
-        if MIN_SAMPLES_PER_SEGMENT * spacing > longest[k]:
-            return False
-    return True
 
 
 def _drive_power(limits: Sequence[Limit], context: PlanContext) -> DrivePower | None:

@@ -33,7 +33,7 @@ if TYPE_CHECKING:
     from ..core.vehicle import Vehicle
 
 __all__ = ["refined_segments", "refine_segments", "stretch_cuts", "at_force_cap", "at_cap", "split_long_segments",
-           "REFINE_RI_TOLERANCE", "REFINE_AT_CAP", "SPLIT_MAX_FACTOR"]
+           "can_split_to", "REFINE_RI_TOLERANCE", "REFINE_AT_CAP", "SPLIT_MAX_FACTOR"]
 
 #: :func:`refine_segments` cuts a segment where the RI range of the windows met between two
 #: samples departs by more than this fraction from the range where the piece began.
@@ -308,6 +308,35 @@ def split_long_segments(segments: Segments, longest_m: np.ndarray, s: np.ndarray
     return segments_at(bounds, segments.windows, vehicle, starts=starts, stops=stops, notes=segments.notes)
 
 
+def can_split_to(segments: Segments, longest_m: np.ndarray, s: np.ndarray) -> bool:
+    """Whether every segment longer than its ``longest_m`` could be cut into pieces no longer
+    than it, each with :data:`~profileopt.core.segments.MIN_SAMPLES_PER_SEGMENT` samples: the
+    samples there at most that many times closer than it (:func:`split_long_segments`).
+
+    Parameters
+    ----------
+    segments : Segments
+        The plan's segments.
+    longest_m : numpy.ndarray, shape (N,)
+        The longest each segment may be (m); inf: any.
+    s : numpy.ndarray, shape (M,)
+        The route's sample positions (m).
+
+    Returns
+    -------
+    bool
+    """
+    return all(MIN_SAMPLES_PER_SEGMENT * _widest_spacing_m(segments, int(k), s) <= longest_m[k]
+               for k in np.flatnonzero(segments.length_m > longest_m))
+
+
+def _widest_spacing_m(segments: Segments, k: int, s: np.ndarray) -> float:
+    """The widest spacing (m) of the samples ``s`` in segment k, to the next segment's first."""
+    a = int(segments.first_sample[k])
+    b = a + int(segments.samples[k])
+    return float(np.max(np.diff(s[a:min(b + 1, s.size)]), initial=0.0))
+
+
 def _split_cuts(segments: Segments, longest_m: np.ndarray, s: np.ndarray, which: np.ndarray) -> list[int]:
     """The samples where :func:`split_long_segments` cuts the segments ``which``."""
     least = MIN_SAMPLES_PER_SEGMENT
@@ -317,7 +346,7 @@ def _split_cuts(segments: Segments, longest_m: np.ndarray, s: np.ndarray, which:
         b = a + int(segments.samples[k])  # samples a .. b-1
         # cut at the last sample at or before each target: a piece is then shorter than the
         # targets' spacing plus the samples' widest spacing here, so the targets are that much closer
-        spacing = float(np.max(np.diff(s[a:min(b + 1, s.size)]), initial=0.0))
+        spacing = _widest_spacing_m(segments, int(k), s)
         target_m = max(float(longest_m[k]) - spacing, spacing, 1e-9)
         pieces = min(int(math.ceil(segments.length_m[k] / target_m)), (b - a) // least)
         if pieces < 2:
